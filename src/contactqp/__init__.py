@@ -1,0 +1,71 @@
+"""contactqp: fast elastic contact with friction on reduced (compliance-matrix) models."""
+
+from .contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
+from .errors import (
+    ContactError,
+    ContactWarning,
+    FileFormatError,
+    InvalidInputError,
+    MissingDependencyError,
+    NotPositiveDefiniteError,
+    UnsupportedProblemError,
+)
+from .model import ReducedModel, unit_load_compliance
+from .problem import ContactProblem
+from .result import Certificate, ContactResult
+from .solvers import SOLVERS, solve
+
+__all__ = [
+    "ReducedModel",
+    "unit_load_compliance",
+    "ContactProblem",
+    "ContactResult",
+    "Certificate",
+    "GapObstacle",
+    "PlaneObstacle",
+    "ProfileObstacle",
+    "NodePairs",
+    "solve",
+    "solve_gaps",
+    "SOLVERS",
+    "ContactError",
+    "ContactWarning",
+    "InvalidInputError",
+    "NotPositiveDefiniteError",
+    "FileFormatError",
+    "UnsupportedProblemError",
+    "MissingDependencyError",
+]
+
+__version__ = "0.1.0"
+
+
+def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_per_node=1,
+               solver="active-set", **options) -> ContactResult:
+    """Solve the common case in one call: a flexibility matrix, loads and per-node gaps.
+
+    Parameters
+    ----------
+    flexibility : array_like, shape (n, n)
+        ``R`` (m/N), freedoms ordered node by node.
+    loads : array_like, shape (n,)
+        External forces ``P`` (N).
+    gaps : array_like, shape (k,)
+        Initial gap of each contact node along its direction (m).
+    directions : array_like, shape (d,) or (k, d)
+        Directions towards the obstacle (default ``[1.0]``, for one freedom per node).
+    nodes : sequence of int, optional
+        Contact nodes (default: every node, then ``k`` must equal the node count).
+    dofs_per_node : int
+    solver : str
+        See :func:`solve`.
+
+    Returns
+    -------
+    ContactResult
+    """
+    model = ReducedModel(flexibility=flexibility, dofs_per_node=dofs_per_node)
+    if nodes is None:
+        nodes = range(model.n_nodes)
+    problem = ContactProblem(model, loads, [GapObstacle(list(nodes), gaps, directions)])
+    return solve(problem, solver=solver, **options)

@@ -1,0 +1,353 @@
+"""The local frictional-contact problem ``u = W r + q`` with one Coulomb cone per contact.
+
+This is the form used by FCLIB and Siconos: for ``n_contacts`` contacts in dimension ``dim``
+(2 or 3) the unknowns are the reactions ``r`` and the relative velocities (or displacement
+increments) ``u``, both of length ``m = dim * n_contacts``, ordered contact by contact with the
+normal component first, then the tangential ones.
+
+The module also condenses a global problem ``M v = H r + f, u = H^T v + w`` to its local form
+and measures the accuracy of a candidate solution with the natural-map error used by Siconos.
+"""
+
+from __future__ import annotations
+
+import operator
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
+
+__all__ = [
+    "LocalProblem",
+    "GlobalProblem",
+    "condense_global",
+    "natural_map_error",
+    "projection_on_cones",
+]
+
+
+def _check_dim(dim):
+    try:
+        d = operator.index(dim)
+    except TypeError:
+        raise InvalidInputError(f"dim must be 2 or 3, got {dim!r}") from None
+    if isinstance(dim, bool) or d not in (2, 3):
+        raise InvalidInputError(f"dim must be 2 or 3, got {dim!r}")
+    return d
+
+
+def _as_vector(name, value):
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{name} must be a real 1-D array: {exc}") from None
+    if arr.ndim != 1:
+        raise InvalidInputError(f"{name} must be 1-D, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    return arr
+
+
+def _as_matrix(name, value):
+    """Return ``value`` as a csr_matrix (if sparse) or a 2-D float ndarray, checked finite."""
+    try:
+        if sp.issparse(value):
+            mat = sp.csr_matrix(value, dtype=float)
+            data = mat.data
+        else:
+            mat = np.asarray(value, dtype=float)
+            if type(mat) is not np.ndarray:  # e.g. numpy.matrix
+                mat = mat.view(np.ndarray)
+            data = mat
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{name} must be a real matrix: {exc}") from None
+    if mat.ndim != 2:
+        raise InvalidInputError(f"{name} must be 2-D, got shape {mat.shape}")
+    if not np.all(np.isfinite(data)):
+        raise InvalidInputError(f"{name} contains NaN or inf")
+    return mat
+
+
+@dataclass(frozen=True)
+class LocalProblem:
+    """A local frictional-contact problem in FCLIB form.
+
+    Find ``r`` and ``u`` with ``u = W r + q`` and, for each contact ``i``,
+    ``r_i`` in the Coulomb cone ``K_i = {||r_T|| <= mu_i r_N}``, ``u_i + mu_i ||u_iT|| e_N``
+    in its dual cone, and the two orthogonal.
+
+    Parameters
+    ----------
+    W : scipy.sparse.csr_matrix or numpy.ndarray, shape (m, m)
+        Delassus operator, ``m = dim * n_contacts``. Any scipy sparse matrix or array is
+        stored as a ``csr_matrix``; anything else as a float ``ndarray``.
+    q : array_like, shape (m,)
+        Free velocity (or free gap increment).
+    mu : array_like, shape (n_contacts,)
+        Friction coefficients, ``>= 0``.
+    dim : int
+        Space dimension, 2 or 3 (the size of each contact block).
+    title : str, optional
+        Free text, e.g. the FCLIB ``info/title``.
+
+    Raises
+    ------
+    InvalidInputError
+        If a shape is inconsistent, a value is NaN or infinite, ``mu < 0`` or ``dim``
+        is not 2 or 3.
+    """
+
+    W: sp.csr_matrix | np.ndarray
+    q: np.ndarray
+    mu: np.ndarray
+    dim: int
+    title: str = field(default="")
+
+    def __post_init__(self):
+        dim = _check_dim(self.dim)
+        W = _as_matrix("W", self.W)
+        q = _as_vector("q", self.q)
+        mu = _as_vector("mu", self.mu)
+        nc = mu.shape[0]
+        m = dim * nc
+        if q.shape != (m,):
+            raise InvalidInputError(
+                f"q must have length dim*n_contacts = {dim}*{nc} = {m}, got shape {q.shape}"
+            )
+        if W.shape != (m, m):
+            raise InvalidInputError(
+                f"W must be square of size dim*n_contacts = {m}, got shape {W.shape}"
+            )
+        if np.any(mu < 0):
+            raise InvalidInputError(f"mu must be >= 0, got min(mu) = {mu.min():g}")
+        if not isinstance(self.title, str):
+            raise InvalidInputError(f"title must be a str, got {type(self.title).__name__}")
+        object.__setattr__(self, "dim", dim)
+        object.__setattr__(self, "W", W)
+        object.__setattr__(self, "q", q)
+        object.__setattr__(self, "mu", mu)
+
+    @property
+    def n_contacts(self) -> int:
+        """Number of contacts, ``len(mu)``."""
+        return int(self.mu.shape[0])
+
+
+@dataclass(frozen=True)
+class GlobalProblem:
+    """A global frictional-contact problem ``M v = H r + f``, ``u = H^T v + w``.
+
+    Kept as read from a file; :meth:`condense` gives the equivalent :class:`LocalProblem`.
+
+    Parameters
+    ----------
+    M : scipy.sparse matrix or numpy.ndarray, shape (ndof, ndof)
+        Mass (or stiffness) matrix, nonsingular.
+    H : scipy.sparse matrix or numpy.ndarray, shape (ndof, m)
+        Transpose of the contact Jacobian, ``m = dim * n_contacts``.
+    f : numpy.ndarray, shape (ndof,)
+    w : numpy.ndarray, shape (m,)
+    mu : numpy.ndarray, shape (n_contacts,)
+    dim : int
+        2 or 3.
+    title : str, optional
+    """
+
+    M: sp.csr_matrix | np.ndarray
+    H: sp.csr_matrix | np.ndarray
+    f: np.ndarray
+    w: np.ndarray
+    mu: np.ndarray
+    dim: int
+    title: str = field(default="")
+
+    def condense(self) -> LocalProblem:
+        """Return the local problem, see :func:`condense_global`."""
+        return condense_global(self.M, self.H, self.f, self.w, self.mu, self.dim, self.title)
+
+
+def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
+    r"""Condense a global problem to its local form with one sparse LU factorisation of M.
+
+    .. math::  W = H^T M^{-1} H, \qquad q = H^T M^{-1} f + w
+
+    ``M^{-1} [H, f]`` is obtained by one ``scipy.sparse.linalg.splu`` factorisation and
+    multi-right-hand-side solves (by blocks of columns to bound memory). ``W`` is returned
+    symmetrised, ``0.5 (W + W^T)``.
+
+    Parameters
+    ----------
+    M : scipy.sparse matrix or array_like, shape (ndof, ndof)
+    H : scipy.sparse matrix or array_like, shape (ndof, m)
+    f : array_like, shape (ndof,)
+    w : array_like, shape (m,)
+    mu : array_like, shape (n_contacts,), with ``m = dim * n_contacts``
+    dim : int
+        2 or 3.
+    title : str, optional
+
+    Returns
+    -------
+    LocalProblem
+        ``W`` is a ``csr_matrix`` (exact zeros removed) when ``H`` is sparse, else an ndarray.
+
+    Raises
+    ------
+    InvalidInputError
+        On inconsistent shapes or non-finite values.
+    NotPositiveDefiniteError
+        If ``M`` is singular (exactly, or numerically: a pivot below ``ndof * eps`` times the
+        largest one, or a non-finite solve).
+    """
+    from scipy.sparse.linalg import splu
+
+    dim = _check_dim(dim)
+    Mm = _as_matrix("M", M)
+    Hm = _as_matrix("H", H)
+    fv = _as_vector("f", f)
+    wv = _as_vector("w", w)
+    muv = _as_vector("mu", mu)
+    ndof = Mm.shape[0]
+    m = dim * muv.shape[0]
+    if Mm.shape != (ndof, ndof):
+        raise InvalidInputError(f"M must be square, got shape {Mm.shape}")
+    if Hm.shape != (ndof, m):
+        raise InvalidInputError(
+            f"H must have shape (ndof, dim*n_contacts) = ({ndof}, {m}), got {Hm.shape}"
+        )
+    if fv.shape != (ndof,):
+        raise InvalidInputError(f"f must have length ndof = {ndof}, got shape {fv.shape}")
+    if wv.shape != (m,):
+        raise InvalidInputError(f"w must have length dim*n_contacts = {m}, got shape {wv.shape}")
+
+    if ndof == 0:  # no freedoms: H is empty, nothing to condense
+        W = sp.csr_matrix((m, m)) if sp.issparse(Hm) else np.zeros((m, m))
+        return LocalProblem(W, wv, muv, dim, title)
+    try:
+        lu = splu(sp.csc_matrix(Mm))
+    except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
+        raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: {exc}") from None
+    pivots = np.abs(lu.U.diagonal())
+    if pivots.min() <= ndof * np.finfo(float).eps * pivots.max():
+        raise NotPositiveDefiniteError(
+            f"M ({ndof}x{ndof}) is numerically singular: smallest/largest LU pivot = "
+            f"{pivots.min() / pivots.max():.3g}"
+        )
+    sparse_h = sp.issparse(Hm)
+    Hc = sp.csc_matrix(Hm) if sparse_h else Hm
+    Wd = np.empty((m, m))
+    block = max(1, (1 << 24) // ndof)  # at most ~128 MB of dense right-hand sides at once
+    for start in range(0, m, block):
+        stop = min(m, start + block)
+        rhs = Hc[:, start:stop].toarray() if sparse_h else np.array(Hc[:, start:stop])
+        Wd[:, start:stop] = Hc.T @ lu.solve(rhs)
+    qv = np.asarray(Hc.T @ lu.solve(fv)).ravel() + wv
+    Wd = 0.5 * (Wd + Wd.T)
+    if not (np.all(np.isfinite(Wd)) and np.all(np.isfinite(qv))):
+        raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: the solve is not finite")
+    if sparse_h:
+        W = sp.csr_matrix(Wd)
+        W.eliminate_zeros()
+    else:
+        W = Wd
+    return LocalProblem(W, qv, muv, dim, title)
+
+
+def projection_on_cones(x, mu, dim):
+    """Project, contact by contact, on the Coulomb cones ``{||x_T|| <= mu x_N}``.
+
+    Parameters
+    ----------
+    x : array_like, shape (dim * n_contacts,)
+        Stacked contact vectors, normal component first in each block.
+    mu : array_like, shape (n_contacts,)
+        Friction coefficients, finite and ``>= 0``; ``mu = 0`` gives the ray
+        ``{x_T = 0, x_N >= 0}``.
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    numpy.ndarray, shape (dim * n_contacts,)
+        The Euclidean projection ``P_K(x)``.
+
+    Notes
+    -----
+    Per contact, with ``t = ||x_T||``: inside the cone (``t <= mu x_N``, ``x_N >= 0``) ``x`` is
+    kept; in the polar cone (``mu t <= -x_N``) the projection is 0; otherwise it is
+    ``a (1, mu x_T / t)`` with ``a = (x_N + mu t) / (1 + mu^2)``.
+    """
+    dim = _check_dim(dim)
+    muv = _as_vector("mu", mu)
+    xv = _as_vector("x", x)
+    nc = muv.shape[0]
+    if xv.shape != (dim * nc,):
+        raise InvalidInputError(
+            f"x must have length dim*n_contacts = {dim * nc}, got shape {xv.shape}"
+        )
+    if np.any(muv < 0):
+        raise InvalidInputError(f"mu must be >= 0, got min(mu) = {muv.min():g}")
+    X = xv.reshape(nc, dim)
+    xn = X[:, 0]
+    xt = X[:, 1:]
+    t = np.sqrt(np.sum(xt * xt, axis=1))
+    inside = (t <= muv * xn) & (xn >= 0)
+    polar = (muv * t <= -xn) & ~inside
+    a = (xn + muv * t) / (1.0 + muv * muv)
+    scale = np.divide(muv * a, t, out=np.zeros_like(t), where=t > 0)
+    P = np.empty_like(X)
+    P[:, 0] = a
+    P[:, 1:] = xt * scale[:, None]
+    P[inside] = X[inside]
+    P[polar] = 0.0
+    return P.reshape(-1)
+
+
+def natural_map_error(problem: LocalProblem, r, u=None) -> float:
+    r"""Relative natural-map error of a candidate solution (the current Siconos measure).
+
+    .. math::
+
+        e = \frac{\| r - P_K(r - (u + \mu \|u_T\| e_N)) \|}{\max(\|q\|, \|r\|, \|u\|)}
+
+    with :math:`P_K` the projection on the product of Coulomb cones
+    (:func:`projection_on_cones`). The denominator is replaced by 1 when all three norms are 0.
+
+    Parameters
+    ----------
+    problem : LocalProblem
+    r : array_like, shape (m,)
+        Reactions.
+    u : array_like, shape (m,), optional
+        Relative velocities; ``W r + q`` when not given.
+
+    Returns
+    -------
+    float
+        0 exactly at a solution, positive otherwise.
+    """
+    d = problem.dim
+    nc = problem.n_contacts
+    m = d * nc
+    rv = _as_vector("r", r)
+    if rv.shape != (m,):
+        raise InvalidInputError(f"r must have length dim*n_contacts = {m}, got shape {rv.shape}")
+    if u is None:
+        uv = np.asarray(problem.W @ rv).ravel() + problem.q
+    else:
+        uv = _as_vector("u", u)
+        if uv.shape != (m,):
+            raise InvalidInputError(
+                f"u must have length dim*n_contacts = {m}, got shape {uv.shape}"
+            )
+    U = uv.reshape(nc, d)
+    ut = np.sqrt(np.sum(U[:, 1:] ** 2, axis=1))
+    shifted = U.copy()
+    shifted[:, 0] += problem.mu * ut
+    residual = rv - projection_on_cones(rv - shifted.reshape(-1), problem.mu, d)
+    denom = max(np.linalg.norm(problem.q), np.linalg.norm(rv), np.linalg.norm(uv))
+    if denom == 0.0:
+        denom = 1.0
+    return float(np.linalg.norm(residual) / denom)

@@ -1,0 +1,266 @@
+"""Reduced models: computational nodes and the compliance (or stiffness) linking their freedoms.
+
+A reduced model replaces a body, or an assembly, by its linear response at a few computational nodes
+in the zone where contact may occur: ``U = R P`` with ``R`` the flexibility (compliance) matrix, or
+``P = K U`` with ``K = R^{-1}`` the rigidity (stiffness) matrix.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+import scipy.linalg
+
+from .errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
+
+__all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix"]
+
+#: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised silently-with-warning.
+SYMMETRY_RTOL = 1e-6
+
+
+def _finite_array(value, name: str, ndim: int) -> np.ndarray:
+    array = np.asarray(value, dtype=float)
+    if array.ndim != ndim:
+        raise InvalidInputError(f"{name} must be {ndim}-D, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise InvalidInputError(f"{name} contains NaN or inf (shape {array.shape})")
+    return array
+
+
+def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
+    """Validate a symmetric positive definite matrix and return it as a float array.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (n, n)
+    name : str
+        The argument's name, used in error messages.
+    symmetry_rtol : float
+        Largest accepted relative asymmetry ``max|M - M^T| / max|M|``. A matrix within it is
+        replaced by ``(M + M^T) / 2`` with a :class:`~contactqp.errors.SymmetrizedWarning`.
+
+    Raises
+    ------
+    InvalidInputError
+        Wrong shape, NaN or inf, asymmetry beyond ``symmetry_rtol``, or a singular matrix.
+    NotPositiveDefiniteError
+        The Cholesky factorisation fails; the message gives the failed pivot and the smallest
+        eigenvalue.
+    """
+    array = _finite_array(matrix, name, 2)
+    n, m = array.shape
+    if n != m or n == 0:
+        raise InvalidInputError(f"{name} must be a non-empty square matrix, got shape {array.shape}")
+    scale = np.max(np.abs(array))
+    if scale == 0.0:
+        raise InvalidInputError(f"{name} is singular: all its entries are zero (shape {array.shape})")
+    asymmetry = np.max(np.abs(array - array.T)) / scale
+    if asymmetry > symmetry_rtol:
+        raise InvalidInputError(
+            f"{name} is not symmetric: max|M - M^T| / max|M| = {asymmetry:.3g} > {symmetry_rtol:g}"
+        )
+    if asymmetry > 0.0:
+        warnings.warn(
+            f"{name} symmetrised: relative asymmetry {asymmetry:.3g} is within {symmetry_rtol:g}",
+            SymmetrizedWarning,
+            stacklevel=3,
+        )
+        array = 0.5 * (array + array.T)
+    try:
+        factor = scipy.linalg.cholesky(array, lower=True, check_finite=False)
+    except np.linalg.LinAlgError as exc:
+        smallest = scipy.linalg.eigvalsh(array, subset_by_index=[0, 0], check_finite=False)[0]
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive definite: Cholesky failed ({exc}); "
+            f"smallest eigenvalue {smallest:.6g}"
+        ) from None
+    pivots = np.diag(factor) ** 2
+    if pivots.min() <= 1e-14 * pivots.max():
+        raise InvalidInputError(
+            f"{name} is singular to working precision: smallest Cholesky pivot {pivots.min():.3g}, "
+            f"largest {pivots.max():.3g}"
+        )
+    return array
+
+
+@dataclass(frozen=True)
+class UnitLoadCompliance:
+    """Outcome of the unit-load procedure.
+
+    Attributes
+    ----------
+    flexibility : ndarray, shape (n, n)
+        Column ``j`` is the displacement of every freedom under a unit load on freedom ``j``, as
+        measured (not symmetrised).
+    reciprocity_error : float
+        Largest relative deviation from Maxwell-Betti reciprocity, ``max|R - R^T| / max|R|``.
+    """
+
+    flexibility: np.ndarray
+    reciprocity_error: float
+
+
+def unit_load_compliance(solve: Callable[[np.ndarray], np.ndarray], n_freedoms: int,
+                         unit: float = 1.0) -> UnitLoadCompliance:
+    """Assemble the flexibility matrix by applying a unit load to each freedom in turn.
+
+    Parameters
+    ----------
+    solve : callable
+        ``solve(P) -> U``: displacements (shape ``(n_freedoms,)``, metres) of the computational
+        freedoms under the load vector ``P`` (newtons), e.g. one finite-element analysis.
+    n_freedoms : int
+        Number of computational freedoms (nodes times freedoms per node).
+    unit : float
+        Magnitude of the unit load (1 N by default); columns are divided by it.
+
+    Returns
+    -------
+    UnitLoadCompliance
+    """
+    if int(n_freedoms) < 1:
+        raise InvalidInputError(f"n_freedoms must be >= 1, got {n_freedoms}")
+    n = int(n_freedoms)
+    columns = []
+    for j in range(n):
+        load = np.zeros(n)
+        load[j] = unit
+        response = np.asarray(solve(load), dtype=float).reshape(-1)
+        if response.shape != (n,):
+            raise InvalidInputError(
+                f"solve returned shape {response.shape} for unit load {j}, expected ({n},)"
+            )
+        columns.append(response / unit)
+    flexibility = np.column_stack(columns)
+    scale = np.max(np.abs(flexibility))
+    deviation = float(np.max(np.abs(flexibility - flexibility.T)) / scale) if scale > 0 else 0.0
+    return UnitLoadCompliance(flexibility, deviation)
+
+
+class ReducedModel:
+    """Computational nodes with 1, 2 or 3 freedoms each and the matrix linking them.
+
+    Give exactly one of ``flexibility`` (``U = R P``) or ``stiffness`` (``P = K U``); the other is
+    computed only when an algorithm asks for it, by a Cholesky factorisation.
+
+    Parameters
+    ----------
+    flexibility, stiffness : array_like, shape (n, n)
+        Symmetric positive definite, in metres per newton (resp. newtons per metre), freedoms ordered
+        node by node.
+    dofs_per_node : int or sequence of int
+        Freedoms of every node (1, 2 or 3), or one count per node.
+    coordinates : array_like, shape (n_nodes, d), optional
+        Node coordinates in metres (needed by geometric obstacles).
+    symmetry_rtol : float
+        See :func:`check_spd_matrix`.
+    """
+
+    def __init__(self, flexibility=None, stiffness=None, dofs_per_node: int | Sequence[int] = 1,
+                 coordinates=None, symmetry_rtol: float = SYMMETRY_RTOL):
+        if (flexibility is None) == (stiffness is None):
+            raise InvalidInputError("give exactly one of flexibility or stiffness")
+        name = "flexibility" if flexibility is not None else "stiffness"
+        matrix = check_spd_matrix(flexibility if flexibility is not None else stiffness, name,
+                                  symmetry_rtol)
+        self._flexibility = matrix if name == "flexibility" else None
+        self._stiffness = matrix if name == "stiffness" else None
+        self._factor = None
+        n = matrix.shape[0]
+        counts = self._dof_counts(dofs_per_node, n)
+        self.dofs_per_node = counts
+        self.offsets = np.concatenate(([0], np.cumsum(counts)))
+        self.coordinates = None
+        if coordinates is not None:
+            coords = _finite_array(coordinates, "coordinates", 2)
+            if coords.shape[0] != len(counts):
+                raise InvalidInputError(
+                    f"coordinates has {coords.shape[0]} rows for {len(counts)} nodes "
+                    f"(shape {coords.shape})"
+                )
+            self.coordinates = coords
+
+    @staticmethod
+    def _dof_counts(dofs_per_node, n_freedoms: int) -> np.ndarray:
+        if np.isscalar(dofs_per_node):
+            per = int(dofs_per_node)
+            if per not in (1, 2, 3):
+                raise InvalidInputError(f"dofs_per_node must be 1, 2 or 3, got {dofs_per_node}")
+            if n_freedoms % per:
+                raise InvalidInputError(
+                    f"matrix size {n_freedoms} is not a multiple of dofs_per_node={per}"
+                )
+            return np.full(n_freedoms // per, per, dtype=int)
+        counts = np.asarray(dofs_per_node, dtype=int).reshape(-1)
+        if counts.size == 0 or np.any((counts < 1) | (counts > 3)):
+            raise InvalidInputError("dofs_per_node entries must each be 1, 2 or 3")
+        if counts.sum() != n_freedoms:
+            raise InvalidInputError(
+                f"dofs_per_node sums to {counts.sum()} freedoms but the matrix has {n_freedoms}"
+            )
+        return counts
+
+    @property
+    def n_freedoms(self) -> int:
+        """Number of computational freedoms."""
+        return int(self.offsets[-1])
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of computational nodes."""
+        return len(self.dofs_per_node)
+
+    def freedoms(self, node: int) -> np.ndarray:
+        """Indices of the freedoms of ``node`` in the global vectors."""
+        if not 0 <= node < self.n_nodes:
+            raise InvalidInputError(f"node {node} out of range 0..{self.n_nodes - 1}")
+        return np.arange(self.offsets[node], self.offsets[node + 1])
+
+    def _cholesky(self):
+        if self._factor is None:
+            matrix = self._flexibility if self._flexibility is not None else self._stiffness
+            self._factor = scipy.linalg.cho_factor(matrix, lower=True, check_finite=False)
+        return self._factor
+
+    @property
+    def given(self) -> str:
+        """Which matrix the model was built from: ``"flexibility"`` or ``"stiffness"``."""
+        return "flexibility" if self._flexibility is not None else "stiffness"
+
+    @property
+    def flexibility(self) -> np.ndarray:
+        """``R``, computed from ``K`` on first use when the model was built from a stiffness."""
+        if self._flexibility is None:
+            eye = np.eye(self.n_freedoms)
+            self._flexibility = scipy.linalg.cho_solve(self._cholesky(), eye, check_finite=False)
+        return self._flexibility
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """``K``, computed from ``R`` on first use when the model was built from a flexibility."""
+        if self._stiffness is None:
+            eye = np.eye(self.n_freedoms)
+            self._stiffness = scipy.linalg.cho_solve(self._cholesky(), eye, check_finite=False)
+        return self._stiffness
+
+    def displacements(self, loads) -> np.ndarray:
+        """``U = R P`` without forming ``R`` when only ``K`` is known. ``loads``: (n,) or (n, k)."""
+        loads = np.asarray(loads, dtype=float)
+        if self._flexibility is not None:
+            return self._flexibility @ loads
+        return scipy.linalg.cho_solve(self._cholesky(), loads, check_finite=False)
+
+    def forces(self, displacements) -> np.ndarray:
+        """``P = K U`` without forming ``K`` when only ``R`` is known."""
+        displacements = np.asarray(displacements, dtype=float)
+        if self._stiffness is not None:
+            return self._stiffness @ displacements
+        return scipy.linalg.cho_solve(self._cholesky(), displacements, check_finite=False)
+
+    def __repr__(self) -> str:
+        return (f"ReducedModel({self.n_nodes} nodes, {self.n_freedoms} freedoms, "
+                f"given {self.given})")
