@@ -12,9 +12,10 @@ Method: primal-dual active set, i.e. semismooth Newton on ``x = P_[l,u](x - sigm
 [HIK2002]_. Each iteration fixes the bounded variables and solves the free block by a LAPACK
 Cholesky factorisation, kept in a small cache so that a free set seen again costs no new
 factorisation. The plain iteration converges in a few steps on contact problems but may cycle on
-general ``W``; a repeated active set switches to Bertsekas' projected Newton method with an Armijo
-search along the projection arc [Ber1982]_, which decreases the objective at every step and
-converges globally. A singular free block (a positive semidefinite ``W``) is regularised by a tiny
+general ``W`` (it does on the spring chain); each step is therefore taken as the best point of a
+projected search along the Newton direction, so the objective decreases monotonically. Should no
+step decrease it, Bertsekas' projected Newton method with an Armijo search along the projection
+arc [Ber1982]_ takes over; it converges globally. A singular free block (a positive semidefinite ``W``) is regularised by a tiny
 multiple of the identity.
 
 References
@@ -40,6 +41,7 @@ __all__ = ["BoxQPSolution", "solve_box_qp"]
 AT_LOWER, FREE, AT_UPPER = -1, 0, 1
 _REGULARISATION = 1e-11  # relative to the largest diagonal entry, for singular free blocks
 _CACHE_SIZE = 6
+_STEPS = 0.5 ** np.arange(12)  # step lengths tried along the active-set direction
 
 
 @dataclass(frozen=True)
@@ -170,29 +172,32 @@ class _BoxQP:
 
 
 def _active_set_phase(qp: _BoxQP, x, max_iter):
-    """Primal-dual active set iterations; stops on convergence, a repeated set or the limit."""
+    """Primal-dual active set iterations made monotone by a search along the projected path.
+
+    The Newton point of the current active set is the trial direction; the best of the projected
+    points ``P(x + alpha d)``, ``alpha = 1, 1/2, ..., 2^-11`` (evaluated together in one matrix
+    product), is kept if it lowers the objective. With ``alpha = 1`` this is the plain primal-dual
+    active set step, so nothing is lost where that converges; elsewhere the objective still
+    decreases at every step and no active set can cycle.
+    """
+    x = qp.project(x)
     g = qp.gradient(x)
-    state = qp.state(x, g)
-    seen = set()
-    best_residual, best_x = np.inf, qp.project(x)
+    f = qp.objective(x)
     for iteration in range(1, max_iter + 1):
-        seen.add(state.tobytes())
-        x = qp.newton_point(state)
-        g = qp.gradient(x)
-        new_state = qp.state(x, g)
-        feasible = qp.project(x)
-        moved = not np.array_equal(feasible, x)
-        residual = qp.residual(feasible, qp.gradient(feasible) if moved else g)
-        if residual < best_residual:
-            best_residual, best_x = residual, feasible
-        if residual <= qp.tol:
-            return best_x, iteration, True, "active set converged"
-        if np.array_equal(new_state, state):
-            return best_x, iteration, False, "active set settled above the tolerance"
-        if new_state.tobytes() in seen:
-            return best_x, iteration, False, "active set cycled"
-        state = new_state
-    return best_x, max_iter, False, "active set iteration limit"
+        if qp.residual(x, g) <= qp.tol:
+            return x, iteration - 1, True, "active set converged"
+        direction = qp.newton_point(qp.state(x, g)) - x
+        trials = np.clip(x[:, None] + direction[:, None] * _STEPS[None, :],
+                         qp.lower[:, None], qp.upper[:, None])
+        products = qp.W @ trials
+        values = np.einsum("ij,ij->j", trials, 0.5 * products + qp.c[:, None])
+        best = int(np.argmin(values))
+        if not values[best] < f:
+            return x, iteration, False, "active set step gave no decrease"
+        x, g, f = trials[:, best], products[:, best] + qp.c, float(values[best])
+    converged = qp.residual(x, g) <= qp.tol
+    return x, max_iter, converged, ("active set converged" if converged
+                                    else "active set iteration limit")
 
 
 def _projected_newton_phase(qp: _BoxQP, x, max_iter):
