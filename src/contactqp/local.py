@@ -135,11 +135,37 @@ class LocalProblem:
         return int(self.mu.shape[0])
 
 
+def _check_global(M, H, f, w, mu, dim):
+    """Validate and normalise the data of a global problem."""
+    dim = _check_dim(dim)
+    Mm = _as_matrix("M", M)
+    Hm = _as_matrix("H", H)
+    fv = _as_vector("f", f)
+    wv = _as_vector("w", w)
+    muv = _as_vector("mu", mu)
+    ndof = Mm.shape[0]
+    m = dim * muv.shape[0]
+    if Mm.shape != (ndof, ndof):
+        raise InvalidInputError(f"M must be square, got shape {Mm.shape}")
+    if Hm.shape != (ndof, m):
+        raise InvalidInputError(
+            f"H must have shape (ndof, dim*n_contacts) = ({ndof}, {m}), got {Hm.shape}"
+        )
+    if fv.shape != (ndof,):
+        raise InvalidInputError(f"f must have length ndof = {ndof}, got shape {fv.shape}")
+    if wv.shape != (m,):
+        raise InvalidInputError(f"w must have length dim*n_contacts = {m}, got shape {wv.shape}")
+    if np.any(muv < 0):
+        raise InvalidInputError(f"mu must be >= 0, got min(mu) = {muv.min():g}")
+    return Mm, Hm, fv, wv, muv, dim
+
+
 @dataclass(frozen=True)
 class GlobalProblem:
     """A global frictional-contact problem ``M v = H r + f``, ``u = H^T v + w``.
 
     Kept as read from a file; :meth:`condense` gives the equivalent :class:`LocalProblem`.
+    Shapes and values are validated as in :func:`condense_global` (``InvalidInputError``).
 
     Parameters
     ----------
@@ -162,6 +188,18 @@ class GlobalProblem:
     mu: np.ndarray
     dim: int
     title: str = field(default="")
+
+    def __post_init__(self):
+        Mm, Hm, fv, wv, muv, dim = _check_global(self.M, self.H, self.f, self.w, self.mu, self.dim)
+        for name, value in zip(
+            ("M", "H", "f", "w", "mu", "dim"), (Mm, Hm, fv, wv, muv, dim), strict=True
+        ):
+            object.__setattr__(self, name, value)
+
+    @property
+    def n_contacts(self) -> int:
+        """Number of contacts, ``len(mu)``."""
+        return int(self.mu.shape[0])
 
     def condense(self) -> LocalProblem:
         """Return the local problem, see :func:`condense_global`."""
@@ -198,43 +236,39 @@ def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
     InvalidInputError
         On inconsistent shapes or non-finite values.
     NotPositiveDefiniteError
-        If ``M`` is singular (exactly, or numerically: a pivot below ``ndof * eps`` times the
-        largest one, or a non-finite solve).
+        If ``M`` is singular: exactly, or numerically (an LU pivot of the Jacobi-scaled
+        ``M`` below ``ndof * eps`` times the largest one), or the solve is not finite.
     """
     from scipy.sparse.linalg import splu
 
-    dim = _check_dim(dim)
-    Mm = _as_matrix("M", M)
-    Hm = _as_matrix("H", H)
-    fv = _as_vector("f", f)
-    wv = _as_vector("w", w)
-    muv = _as_vector("mu", mu)
+    Mm, Hm, fv, wv, muv, dim = _check_global(M, H, f, w, mu, dim)
     ndof = Mm.shape[0]
-    m = dim * muv.shape[0]
-    if Mm.shape != (ndof, ndof):
-        raise InvalidInputError(f"M must be square, got shape {Mm.shape}")
-    if Hm.shape != (ndof, m):
-        raise InvalidInputError(
-            f"H must have shape (ndof, dim*n_contacts) = ({ndof}, {m}), got {Hm.shape}"
-        )
-    if fv.shape != (ndof,):
-        raise InvalidInputError(f"f must have length ndof = {ndof}, got shape {fv.shape}")
-    if wv.shape != (m,):
-        raise InvalidInputError(f"w must have length dim*n_contacts = {m}, got shape {wv.shape}")
+    m = Hm.shape[1]
 
     if ndof == 0:  # no freedoms: H is empty, nothing to condense
         W = sp.csr_matrix((m, m)) if sp.issparse(Hm) else np.zeros((m, m))
         return LocalProblem(W, wv, muv, dim, title)
+    # Jacobi scaling S M S (S = |diag M|^-1/2) makes the singularity test scale-invariant,
+    # e.g. a diagonal mass matrix with masses and inertias of very different sizes passes.
+    diag = np.abs(Mm.diagonal())
+    s = np.ones(ndof)
+    s[diag > 0] = 1.0 / np.sqrt(diag[diag > 0])
+    S = sp.diags(s)
     try:
-        lu = splu(sp.csc_matrix(Mm))
+        lu = splu(sp.csc_matrix(S @ sp.csc_matrix(Mm) @ S))
     except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
         raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: {exc}") from None
     pivots = np.abs(lu.U.diagonal())
     if pivots.min() <= ndof * np.finfo(float).eps * pivots.max():
         raise NotPositiveDefiniteError(
-            f"M ({ndof}x{ndof}) is numerically singular: smallest/largest LU pivot = "
-            f"{pivots.min() / pivots.max():.3g}"
+            f"M ({ndof}x{ndof}) is numerically singular: smallest/largest LU pivot of the "
+            f"scaled matrix = {pivots.min() / pivots.max():.3g}"
         )
+
+    def solve(rhs):  # M^-1 rhs = S (S M S)^-1 S rhs
+        sc = s[:, None] if rhs.ndim == 2 else s
+        return sc * lu.solve(sc * rhs)
+
     sparse_h = sp.issparse(Hm)
     Hc = sp.csc_matrix(Hm) if sparse_h else Hm
     Wd = np.empty((m, m))
@@ -242,8 +276,8 @@ def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
     for start in range(0, m, block):
         stop = min(m, start + block)
         rhs = Hc[:, start:stop].toarray() if sparse_h else np.array(Hc[:, start:stop])
-        Wd[:, start:stop] = Hc.T @ lu.solve(rhs)
-    qv = np.asarray(Hc.T @ lu.solve(fv)).ravel() + wv
+        Wd[:, start:stop] = Hc.T @ solve(rhs)
+    qv = np.asarray(Hc.T @ solve(fv)).ravel() + wv
     Wd = 0.5 * (Wd + Wd.T)
     if not (np.all(np.isfinite(Wd)) and np.all(np.isfinite(qv))):
         raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: the solve is not finite")
