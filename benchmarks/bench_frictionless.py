@@ -1,0 +1,318 @@
+"""Dense frictionless contact: the own dual solver against qpsolvers backends and one Cholesky.
+
+The problem is a square grid of surface cells of an elastic half-space
+(:func:`contactqp.compliance.normal_influence`) pressed by a rigid paraboloid, the approach
+chosen so that about half of the cells close (Hertz: contact radius ``a = sqrt(Rs d)``), given to
+:class:`contactqp.ContactProblem` with one freedom per cell. Its dual
+``min 1/2 l^T W l - b^T l, l >= 0`` (``W = A R A^T`` dense) is assembled once, before any timing.
+
+For each size the script times
+
+* assembly: ``problem.dual()`` (``W = A R A^T`` and ``b``), reported, never added to a solve;
+* own: ``contactqp.solve(problem)`` (default solver), first call and best of the repetitions
+  (the first call also pays one-off work cached in the model);
+* core: :func:`contactqp.solvers.box_qp.solve_box_qp` on ``(W, -b)`` alone;
+* chol: one dense ``scipy.linalg.cho_factor(W)``, the yardstick of the project's target;
+* every installed qpsolvers backend on the same dual box QP with contactqp's tight tolerances
+  (:func:`contactqp.solvers.qp.backend_options`), each run in a forked child process (killed after
+  ``--timeout`` seconds). A backend's answer counts only when its forces agree with the own
+  solver's to ``1e-6`` relative (``max|l - l_own| / max l_own``).
+
+The backends get the QP in scaled units, as a careful user would give it to them (in SI units
+``W`` is ~1e-7 m/N and absolute tolerances lose their meaning): ``W' = W / w`` with ``w`` the mean
+diagonal of ``W`` and ``c' = c / max|c|``, whose solution ``l'`` gives ``l = l' max|c| / w``.
+``--raw-units`` hands them ``W`` and ``c`` unscaled instead. The own solver always gets SI units.
+
+A backend is skipped at a size when its time at the previous size times the cube of the size
+ratio (dense interior-point and active-set work grows like ``m^3``) exceeds ``--budget``.
+
+Run ``python benchmarks/bench_frictionless.py --help`` for the options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing
+import os
+import platform
+import sys
+import time
+import traceback
+import warnings
+
+import numpy as np
+import scipy.linalg
+
+import contactqp
+from contactqp import ContactProblem, GapObstacle, ReducedModel
+from contactqp.compliance import grid, normal_influence
+from contactqp.solvers import solve_box_qp
+from contactqp.solvers.qp import available_backends, backend_options
+
+__all__ = ["build_problem", "main"]
+
+YOUNG, POISSON = 210e9, 0.3  # steel half-space (Pa, -)
+CELL = 10e-6  # cell size (m)
+SPHERE_RADIUS = 5e-3  # rigid paraboloid radius of curvature (m)
+CLOSED_FRACTION = 0.5  # target fraction of closed contacts
+ACCURACY = 1e-6  # max|l - l_own| / max l_own accepted from a backend
+WAVY_INTERFERENCE = 10.0  # approach of the wavy surface, in amplitudes (about half closed)
+SHORT_RUN = 0.5  # s: runs shorter than this are repeated and the best time kept
+
+
+def build_problem(n_contacts: int, *, surface: str = "paraboloid") -> ContactProblem:
+    """A half-space grid of ``n_contacts`` cells (a perfect square) pressed by a rigid body.
+
+    Parameters
+    ----------
+    n_contacts : int
+        Number of cells, ``side**2``.
+    surface : {"paraboloid", "wavy"}
+        ``"paraboloid"``: a sphere of radius 5 mm pushed so that the Hertz contact area covers
+        half of the grid (one round patch). ``"wavy"``: an egg-box rigid surface
+        ``A (2 - cos kx - cos ky)`` with 4 x 4 waves over the grid, pushed ``10 A`` into the
+        half-space, so that about half of the cells close in 16 patches that start to merge
+        (a less regular active set).
+
+    Returns
+    -------
+    ContactProblem
+        One freedom per cell, zero external load, gaps along the outward normal (m).
+    """
+    side = math.isqrt(n_contacts)
+    if side * side != n_contacts:
+        raise SystemExit(f"--sizes: {n_contacts} is not a perfect square (the grid is square)")
+    x, y = grid(side, side, CELL, CELL)
+    R = normal_influence(x, y, CELL, CELL, YOUNG, POISSON)
+    if surface == "paraboloid":
+        radius = side * CELL * math.sqrt(CLOSED_FRACTION / math.pi)
+        approach = radius**2 / SPHERE_RADIUS
+        gaps = (x**2 + y**2) / (2 * SPHERE_RADIUS) - approach
+    elif surface == "wavy":
+        wavelength = side * CELL / 4
+        amplitude = 5e-9 * side  # geometrically similar at every size
+        k = 2 * np.pi / wavelength
+        height = amplitude * (2 - np.cos(k * x) - np.cos(k * y))
+        gaps = height - WAVY_INTERFERENCE * amplitude
+    else:
+        raise SystemExit(f"--surface must be paraboloid or wavy, got {surface!r}")
+    model = ReducedModel(flexibility=R)
+    return ContactProblem(model, np.zeros(n_contacts), [GapObstacle(np.arange(n_contacts), gaps)])
+
+
+def best_time(run, budget: float = 2.0, max_repeat: int = 7):
+    """Run ``run()`` once, repeat while short, and return ``(best seconds, first value, first s)``."""
+    start = time.perf_counter()
+    value = run()
+    first = time.perf_counter() - start
+    best, spent, count = first, first, 1
+    while best < SHORT_RUN and spent < budget and count < max_repeat:
+        start = time.perf_counter()
+        run()
+        elapsed = time.perf_counter() - start
+        best, spent, count = min(best, elapsed), spent + elapsed, count + 1
+    return best, value, first
+
+
+def _backend_child(connection, backend, W, c, unscale):
+    """Solve the dual box QP with one backend; send back ``(seconds, forces * unscale, note)``."""
+    try:
+        import qpsolvers
+        import scipy.sparse
+
+        matrix = W
+        if backend not in qpsolvers.dense_solvers:  # sparse-only backends: convert untimed
+            matrix = scipy.sparse.csc_matrix(W)
+        problem = qpsolvers.Problem(P=matrix, q=c, lb=np.zeros(c.size))
+        settings = backend_options(backend)
+
+        def run():
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return qpsolvers.solve_problem(problem, solver=backend, **settings)
+
+        seconds, solution, _ = best_time(run)
+        forces = None if solution.x is None else unscale * np.asarray(solution.x, dtype=float)
+        connection.send((seconds, forces, "" if solution.found is not False else "not found"))
+    except Exception as exc:  # a backend error is a table entry, not a crash
+        connection.send((math.nan, None, f"error: {type(exc).__name__}: {exc}".splitlines()[0]))
+        traceback.print_exc(file=sys.stderr)
+    finally:
+        connection.close()
+
+
+def run_backend(backend, W, c, unscale, timeout):
+    """Fork a child that times ``backend``; ``(seconds, forces, note)``, note "timeout" if killed."""
+    context = multiprocessing.get_context("fork")
+    parent, child = context.Pipe(duplex=False)
+    process = context.Process(target=_backend_child, args=(child, backend, W, c, unscale), daemon=True)
+    process.start()
+    child.close()
+    outcome = (math.nan, None, "timeout")
+    if parent.poll(timeout):
+        try:
+            outcome = parent.recv()
+        except EOFError:
+            outcome = (math.nan, None, f"crashed (exit code {process.exitcode})")
+    if process.is_alive():
+        process.kill()
+    process.join()
+    return outcome
+
+
+def _fmt_seconds(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "-"
+    if seconds < 1e-2:
+        return f"{seconds * 1e3:.2f}ms"
+    if seconds < 1.0:
+        return f"{seconds * 1e3:.0f}ms"
+    return f"{seconds:.2f}s"
+
+
+def _print_table(headers, rows):
+    widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
+    line = "  ".join(str(h).rjust(w) for h, w in zip(headers, widths))
+    print(line)
+    print("-" * len(line))
+    for row in rows:
+        print("  ".join(str(v).rjust(w) for v, w in zip(row, widths)))
+
+
+def main(argv=None) -> int:
+    """Run the benchmark and print its tables; returns the exit code."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sizes", default="400,1600,6400",
+                        help="comma-separated contact counts, perfect squares (default 400,1600,6400)")
+    parser.add_argument("--backends", default=None,
+                        help="comma-separated qpsolvers backends (default: every installed one); "
+                             "'none' for the own solver and Cholesky only")
+    parser.add_argument("--surface", default="paraboloid", choices=["paraboloid", "wavy"])
+    parser.add_argument("--budget", type=float, default=60.0,
+                        help="s: skip a backend when its predicted time exceeds this (default 60)")
+    parser.add_argument("--raw-units", action="store_true",
+                        help="give the backends W and c in SI units instead of scaled ones")
+    parser.add_argument("--timeout", type=float, default=None,
+                        help="s: kill a backend run after this (default 3 x budget)")
+    args = parser.parse_args(argv)
+
+    sizes = [int(s) for s in args.sizes.split(",") if s.strip()]
+    installed = available_backends()
+    if args.backends is None:
+        backends = installed
+    elif args.backends.strip().lower() == "none":
+        backends = []
+    else:
+        backends = [b.strip() for b in args.backends.split(",") if b.strip()]
+        missing = [b for b in backends if b not in installed]
+        if missing:
+            parser.error(f"--backends: not installed: {', '.join(missing)}; "
+                         f"installed: {', '.join(installed)}")
+    timeout = args.timeout if args.timeout is not None else 3 * args.budget
+
+    print(f"contactqp {contactqp.__version__}, numpy {np.__version__}, scipy {scipy.__version__}, "
+          f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {platform.machine()}")
+    print(f"problem: half-space grid ({CELL * 1e6:.0f} um cells, E = {YOUNG / 1e9:.0f} GPa, "
+          f"nu = {POISSON}), rigid {args.surface}, dense dual W = A R A^T; "
+          f"backends on the dual box QP, accepted when max|l - l_own| / max l_own < {ACCURACY:g}")
+    threads = {k: os.environ[k] for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                          "MKL_NUM_THREADS") if k in os.environ}
+    print(f"BLAS threads: {threads or 'library default'}; backends get "
+          f"{'SI units' if args.raw_units else 'scaled W / mean diag W, c / max|c|'}")
+    print(f"skip rule: time at previous size x (size ratio)^3 > {args.budget:g} s; "
+          f"hard timeout {timeout:g} s\n")
+
+    rows, notes, summary = [], [], {}
+    previous = {}  # backend -> (size, seconds) of its last completed run
+    for size in sizes:
+        start = time.perf_counter()
+        problem = build_problem(size, surface=args.surface)
+        build = time.perf_counter() - start
+        start = time.perf_counter()
+        dual = problem.dual()
+        assembly = time.perf_counter() - start
+        W, c = dual.W, -dual.b
+        if args.raw_units:
+            W_backend, c_backend, unscale = W, c, 1.0
+        else:
+            w_scale, c_scale = float(np.mean(np.diag(W))), float(np.max(np.abs(c)))
+            W_backend, c_backend, unscale = W / w_scale, c / c_scale, c_scale / w_scale
+
+        own_best, result, own_first = best_time(lambda: contactqp.solve(problem))
+        if not result.success:
+            notes.append(f"{size}: own solver did not succeed: {result.message}")
+        reference = result.forces
+        scale = float(np.max(np.abs(reference)))
+        core_best, core, _ = best_time(lambda: solve_box_qp(W, c, lower=0.0))
+        chol_best, _, _ = best_time(lambda: scipy.linalg.cho_factor(W, lower=True, check_finite=False))
+
+        row = {"contacts": size, "closed": int(np.count_nonzero(result.closed)),
+               "build R": _fmt_seconds(build), "assembly": _fmt_seconds(assembly),
+               "own 1st": _fmt_seconds(own_first), "own": _fmt_seconds(own_best),
+               "core": _fmt_seconds(core_best), "it/fact": f"{core.iterations}/{core.factorizations}",
+               "chol": _fmt_seconds(chol_best), "own/chol": f"{own_best / chol_best:.2f}"}
+        summary[size] = {"own": own_best, "chol": chol_best, "backends": {}}
+        for backend in backends:
+            if backend in previous:
+                last_size, last_seconds = previous[backend]
+                predicted = last_seconds * (size / last_size) ** 3
+                if predicted > args.budget:
+                    row[backend] = "skipped"
+                    notes.append(f"{size}: {backend} skipped, predicted {predicted:.0f} s "
+                                 f"> budget {args.budget:g} s ({_fmt_seconds(last_seconds)} "
+                                 f"at {last_size} x ({size}/{last_size})^3)")
+                    continue
+            seconds, forces, note = run_backend(backend, W_backend, c_backend, unscale, timeout)
+            if note == "timeout":
+                row[backend] = "timeout"
+                notes.append(f"{size}: {backend} killed after {timeout:g} s")
+                previous[backend] = (size, timeout)
+                continue
+            if forces is None or forces.shape != reference.shape or not np.all(np.isfinite(forces)):
+                row[backend] = f"failed ({note or 'no solution'})"
+                if math.isfinite(seconds):
+                    previous[backend] = (size, seconds)
+                continue
+            previous[backend] = (size, seconds)
+            error = float(np.max(np.abs(forces - reference))) / scale
+            if error > ACCURACY:
+                row[backend] = f"{_fmt_seconds(seconds)} inaccurate (err={error:.1e})"
+            else:
+                row[backend] = f"{_fmt_seconds(seconds)} x{seconds / own_best:.1f}"
+                summary[size]["backends"][backend] = seconds
+        rows.append(row)
+        print(f"[{size} contacts done: own {_fmt_seconds(own_best)}, chol {_fmt_seconds(chol_best)}]",
+              file=sys.stderr, flush=True)
+
+    headers = ["contacts", "closed", "build R", "assembly", "own 1st", "own", "core", "it/fact",
+               "chol", "own/chol"] + backends
+    _print_table(headers, [[row.get(h, "-") for h in headers] for row in rows])
+    print("\nown: contactqp.solve(problem), best of repeats; own 1st: its first call; core: "
+          "solve_box_qp(W, -b) alone;\nit/fact: core iterations / Cholesky factorisations of free "
+          "blocks; chol: one cho_factor of the full W;\nbackend cells: best time and ratio to own "
+          "(x > 1: slower than own).")
+    for note in notes:
+        print(f"note: {note}")
+
+    target = 1600 if 1600 in summary else (sizes[len(sizes) // 2] if sizes else None)
+    if target is not None:
+        entry = summary[target]
+        if entry["backends"]:
+            fastest = min(entry["backends"], key=entry["backends"].get)
+            speedup = entry["backends"][fastest] / entry["own"]
+            versus = (f"speed-up {speedup:.1f}x over the fastest accurate backend ({fastest}, "
+                      f"{_fmt_seconds(entry['backends'][fastest])} vs {_fmt_seconds(entry['own'])})")
+        else:
+            speedup, versus = math.nan, "no accurate backend to compare with"
+        ratio = entry["own"] / entry["chol"]
+        met = speedup >= 10 and ratio <= 1.0
+        met_text = "met" if met else ("missed" if math.isfinite(speedup) or ratio > 1.0
+                                      else "not assessed")
+        print(f"\nsummary at {target} contacts: own solver: {versus}; own / Cholesky = {ratio:.2f} "
+              f"(target: >= 10x and <= 1.00: {met_text})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
