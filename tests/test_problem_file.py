@@ -271,8 +271,8 @@ def test_example_two_springs_matches_its_derivation():
        interference=st.booleans())
 def test_single_node_property(r, P, gap, interference):
     # Inline matrix, any r > 0, load of either sign, gap of either sign (negative: interference):
-    # U = min(r P, g), F = max(P - g / r, 0). A gap of exactly zero is left to the xfail test
-    # below (a certificate scaling problem, not a problem-file one).
+    # U = min(r P, g), F = max(P - g / r, 0). A gap of exactly zero has its own test
+    # below.
     gap = -gap if interference else gap
     with tempfile.TemporaryDirectory() as directory:
         path = write_toml(Path(directory), f"""
@@ -294,10 +294,6 @@ gaps = [{gap!r}]
                                atol=1e-9 * scale_f)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "contactqp.result.certify: with a zero gap and a closed contact, U is rounding noise "
-    "(~1e-20 m) and is also the certificate's length scale, so complementarity reads 1.0; the "
-    "length scale should include max|R| times the force scale"))
 def test_zero_gap_closed_contact_is_certified(tmp_path):
     # U = min(r P, 0) = 0, F = P: a perfectly ordinary answer that the solver finds.
     path = write_toml(tmp_path, """
@@ -311,6 +307,7 @@ nodes = [0]
 gaps = [0.0]
 """)
     result = load_problem_file(path).solve()
+    assert result.success, result.message
     np.testing.assert_allclose(result.forces, [1.0], rtol=RTOL)
     assert abs(result.x[0]) < 1e-15
     assert result.success, result.message

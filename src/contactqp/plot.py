@@ -45,6 +45,7 @@ def plot_spring_chain(results, path) -> Path:
     axes.legend()
     figure.tight_layout()
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path

@@ -73,11 +73,16 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     lam = np.asarray(forces, dtype=float)
     A, gaps, P = problem.constraints.matrix, problem.constraints.gaps, problem.loads
     tiny = np.finfo(float).tiny
-    length = max(np.max(np.abs(U), initial=0.0), np.max(np.abs(gaps), initial=0.0), tiny)
+    model = problem.model
     force = max(np.max(np.abs(P), initial=0.0), np.max(np.abs(lam), initial=0.0), tiny)
+    compliance = (np.max(np.diag(model.flexibility)) if model.given == "flexibility"
+                  else 1.0 / np.max(np.diag(model.stiffness)))
+    # the displacement the force scale would cause keeps the scale meaningful when gaps and
+    # displacements are both (near) zero, e.g. a closed contact with zero initial gap
+    length = max(np.max(np.abs(U), initial=0.0), np.max(np.abs(gaps), initial=0.0),
+                 compliance * force, tiny)
     final_gaps = gaps - A @ U
     net_load = P - A.T @ lam
-    model = problem.model
     if model.given == "flexibility":
         equilibrium = np.max(np.abs(U - model.flexibility @ net_load), initial=0.0) / length
     else:

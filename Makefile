@@ -1,0 +1,33 @@
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP_DEMO := $(VENV)/.demo-installed
+STAMP_TEST := $(VENV)/.test-installed
+
+.PHONY: demo test bench clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(STAMP_DEMO): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[demo]"
+	touch $@
+
+$(STAMP_TEST): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[test]"
+	touch $@
+
+demo: $(STAMP_DEMO)
+	$(BIN)/contactqp springs --n 3 --stiffness 1 --mu 0.2 --mass 2 --g 10 --force 3,6,9,14 --plot out/demo/springs.png
+	$(BIN)/contactqp solve examples/problems/two_springs.toml --out out/demo/two_springs
+	@echo "demo outputs in out/demo/"
+
+test: $(STAMP_TEST)
+	$(BIN)/python -m pytest -q
+
+bench: $(STAMP_TEST)
+	$(BIN)/python benchmarks/bench_frictionless.py
+
+clean:
+	rm -rf $(VENV) out build src/*.egg-info
