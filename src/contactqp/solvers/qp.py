@@ -69,20 +69,28 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
             f"qp backend {backend!r} is not installed; available: {', '.join(available_backends())}"
         )
     start = time.perf_counter()
+    # scaled unknowns U = s_u V and multipliers lambda = s_f z keep the backend's tolerances
+    # meaningful in SI units (stiffnesses of 1e6..1e9 N/m)
     K = problem.model.stiffness
+    stiffness_scale = float(np.max(np.diag(K)))
+    force_scale = float(np.max(np.abs(problem.loads), initial=0.0)) or 1.0
+    length_scale = force_scale / stiffness_scale
     A = problem.constraints.matrix
+    K_scaled = K / stiffness_scale
     if backend in qpsolvers.sparse_solvers:
-        K, G = scipy.sparse.csc_matrix(K), A.tocsc()
+        K_scaled, G = scipy.sparse.csc_matrix(K_scaled), A.tocsc()
     else:
         G = A.toarray()
-    qp = qpsolvers.Problem(P=K, q=-problem.loads, G=G, h=problem.constraints.gaps)
+    qp = qpsolvers.Problem(P=K_scaled, q=-problem.loads / force_scale, G=G,
+                           h=problem.constraints.gaps / length_scale)
     settings = backend_options(backend)
     settings.update(options)
     solution = qpsolvers.solve_problem(qp, solver=backend, **settings)
     elapsed = time.perf_counter() - start
     found = solution.x is not None and solution.z is not None and solution.found is not False
-    U = solution.x if found else np.full(problem.model.n_freedoms, np.nan)
-    forces = np.maximum(solution.z, 0.0) if found else np.full(problem.n_constraints, np.nan)
+    U = length_scale * solution.x if found else np.full(problem.model.n_freedoms, np.nan)
+    forces = (force_scale * np.maximum(solution.z, 0.0) if found
+              else np.full(problem.n_constraints, np.nan))
     return problem.make_result(
         U, forces, solver=f"qp:{backend}", converged=bool(found),
         message="backend found a solution" if found else "backend found no solution",
