@@ -52,6 +52,7 @@ def test_single_contact_closed_form():
     assert result.x[0] == pytest.approx(g, rel=1e-12)
     assert result.forces[0] == pytest.approx(P - g / r, rel=1e-12)
     assert result.status_labels == ["closed"]
+    assert result.energy == pytest.approx(0.5 * g * g / r - P * g, rel=1e-12)
 
 
 def test_certificate_rejects_a_wrong_answer():

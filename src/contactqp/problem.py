@@ -46,7 +46,12 @@ class DualForm:
 
     def __init__(self, model: ReducedModel, constraints: Constraints, loads: np.ndarray):
         A = constraints.matrix
-        self.influence = model.displacements(A.T.toarray())
+        if model.given == "flexibility":
+            # only the freedoms the constraints touch enter R A^T
+            used = np.unique(A.indices)
+            self.influence = model.flexibility[:, used] @ A[:, used].T.toarray()
+        else:
+            self.influence = model.displacements(A.T.toarray())
         W = np.asarray(A @ self.influence)
         self.W = 0.5 * (W + W.T)
         self.free_displacements = model.displacements(loads)
@@ -102,10 +107,15 @@ class ContactProblem:
             self._dual = DualForm(self.model, self.constraints, self.loads)
         return self._dual
 
-    def energy(self, displacements: np.ndarray) -> float:
-        """Potential energy ``1/2 U^T K U - P^T U`` (J), using ``K U`` without forming ``K``."""
+    def energy(self, displacements: np.ndarray, forces: np.ndarray) -> float:
+        """Potential energy ``1/2 U^T K U - P^T U`` (J) at equilibrium.
+
+        Uses ``K U = P - A^T lambda`` (checked by the certificate) so that no factorisation of the
+        model's matrix is needed.
+        """
         U = np.asarray(displacements, dtype=float)
-        return float(0.5 * U @ self.model.forces(U) - self.loads @ U)
+        internal = self.loads - self.constraints.matrix.T @ np.asarray(forces, dtype=float)
+        return float(0.5 * U @ internal - self.loads @ U)
 
     def make_result(self, displacements, forces, *, solver: str, converged: bool, message: str,
                     nit: int, wall_time: float, info: dict | None = None) -> ContactResult:
@@ -125,7 +135,7 @@ class ContactProblem:
         A = self.constraints.matrix
         return ContactResult(
             x=U, forces=lam, nodal_forces=-(A.T @ lam), gaps=self.constraints.gaps - A @ U,
-            closed=lam > CLOSED_RTOL * force_scale, energy=self.energy(U), success=success,
+            closed=lam > CLOSED_RTOL * force_scale, energy=self.energy(U, lam), success=success,
             status=status, message=message, nit=int(nit), wall_time=float(wall_time),
             solver=solver, certificate=certificate, info=dict(info or {}),
         )

@@ -1,0 +1,93 @@
+"""The command line, run as a user would: exit codes, one-line errors, JSON output."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from contactqp.io.fclib import read_problem, write_problem
+from contactqp.local import LocalProblem, natural_map_error
+
+ROOT = Path(__file__).resolve().parents[1]
+FCLIB = ROOT.parent / "shared" / "data" / "fclib"
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "contactqp.cli", *args], capture_output=True,
+                          text=True, cwd=ROOT)
+
+
+def assert_one_line_error(proc, code):
+    assert proc.returncode == code, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("contactqp: error:"), proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_springs_json_reproduces_the_published_table():
+    proc = run("springs", "--n", "3", "--stiffness", "1", "--mu", "0.2", "--mass", "2", "--g", "10",
+               "--force", "3,6,9,14", "--json")
+    assert proc.returncode == 0, proc.stderr
+    rows = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert [r["force"] for r in rows] == [3, 6, 9, 14]
+    np.testing.assert_allclose([r["x"] for r in rows],
+                               [[0, 0, 0], [0, 0, 2], [0, 1, 6], [2, 8, 18]], atol=1e-12)
+
+
+def test_springs_plot_and_table(tmp_path):
+    figure = tmp_path / "chain.png"
+    proc = run("springs", "--plot", str(figure))
+    assert proc.returncode == 0, proc.stderr
+    assert "18" in proc.stdout and figure.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("args", [
+    ("springs", "--mu", "-1"), ("springs", "--force", "x"), ("springs", "--n", "0"),
+    ("solve", "missing.toml"), ("fclib", "missing.hdf5"), ("nonsense",),
+])
+def test_bad_input_is_one_line_and_exit_2(args):
+    assert_one_line_error(run(*args), 2)
+
+
+def test_solve_example_writes_results(tmp_path):
+    proc = run("solve", "examples/problems/two_springs.toml", "--json", "--out", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)
+    assert summary["success"] and summary["certificate"]["passed"]
+    assert (tmp_path / "contacts.csv").exists() and (tmp_path / "summary.json").exists()
+
+
+def frictionless_copy(source, target):
+    problem = read_problem(source)
+    write_problem(target, LocalProblem(problem.W, problem.q, np.zeros_like(problem.mu), problem.dim))
+    return target
+
+
+def test_fclib_frictionless_problems_are_solved(tmp_path):
+    # the shared files all have friction; their frictionless twins are solved to the README's
+    # measure, recomputed here from the written solution (independent of the solver's report)
+    files = [frictionless_copy(FCLIB / name, tmp_path / name.replace(".dat", ".hdf5"))
+             for name in ("fc2d_granularflowonwall_02020_00213.dat", "Capsules-i122-1617.dat",
+                          "Spheres-i099-356-679.hdf5", "Rover1041.dat")]
+    out = tmp_path / "solutions"
+    proc = run("fclib", *map(str, files), "--json", "--solution-dir", str(out))
+    assert proc.returncode == 0, proc.stderr
+    rows = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert [r["contacts"] for r in rows] == [2020, 296, 356, 5]
+    for path, row in zip(files, rows):
+        assert row["converged"] and row["error"] <= 1e-8
+        with h5py.File(out / f"{path.stem}.hdf5") as solution:
+            r, u = solution["solution/r"][()], solution["solution/u"][()]
+        assert natural_map_error(read_problem(path), r, u) <= 1e-8
+
+
+def test_fclib_with_friction_says_so_and_keeps_other_results(tmp_path):
+    twin = frictionless_copy(FCLIB / "Rover4516.dat", tmp_path / "rover.hdf5")
+    proc = run("fclib", str(FCLIB / "FrictionContact3D_1c.dat"), str(twin), "--json")
+    assert proc.returncode == 1
+    assert "friction not supported yet" in proc.stderr
+    assert json.loads(proc.stdout)["converged"] is True
