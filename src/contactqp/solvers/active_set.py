@@ -34,6 +34,10 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
         )
     start = time.perf_counter()
     dual = problem.dual()
+    if forces0 is None:
+        # a cold start guess whose support is close to the contact zone: each interpenetration
+        # shared over the row of W, so that the first free block is not the whole overlap
+        forces0 = np.maximum(dual.b, 0.0) / np.abs(dual.W).sum(axis=1)
     solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol, max_iter=max_iter)
     forces = solution.x
     displacements = dual.displacements(forces)

@@ -166,7 +166,10 @@ class _BoxQP:
         x = np.where(state == AT_LOWER, self.lower, np.where(state == AT_UPPER, self.upper, 0.0))
         free = state == FREE
         if free.any():
-            rhs = -(self.c[free] + self.W[free] @ x)
+            rhs = -self.c[free]
+            loaded = np.flatnonzero(x)  # bounded variables away from zero couple into the block
+            if loaded.size:
+                rhs -= self.W[np.ix_(free, loaded)] @ x[loaded]
             x[free] = self.cache.solve(free, rhs)
         return x
 
