@@ -11,7 +11,8 @@ For each size the script times
 * assembly: ``problem.dual()`` (``W = A R A^T`` and ``b``), reported, never added to a solve;
 * own: ``contactqp.solve(problem)`` (default solver), first call and best of the repetitions
   (the first call also pays one-off work cached in the model);
-* core: :func:`contactqp.solvers.box_qp.solve_box_qp` on ``(W, -b)`` alone;
+* core: :func:`contactqp.solvers.box_qp.solve_box_qp` on ``(W, -b)`` alone, from the same cold
+  start as the own solver;
 * chol: one dense ``scipy.linalg.cho_factor(W)``, the yardstick of the project's target;
 * every installed qpsolvers backend on the same dual box QP with contactqp's tight tolerances
   (:func:`contactqp.solvers.qp.backend_options`), each run in a forked child process (killed after
@@ -48,6 +49,7 @@ import contactqp
 from contactqp import ContactProblem, GapObstacle, ReducedModel
 from contactqp.compliance import grid, normal_influence
 from contactqp.solvers import solve_box_qp
+from contactqp.solvers.active_set import cold_start
 from contactqp.solvers.qp import available_backends, backend_options
 
 __all__ = ["build_problem", "main"]
@@ -244,7 +246,7 @@ def main(argv=None) -> int:
             notes.append(f"{size}: own solver did not succeed: {result.message}")
         reference = result.forces
         scale = float(np.max(np.abs(reference)))
-        core_best, core, _ = best_time(lambda: solve_box_qp(W, c, lower=0.0))
+        core_best, core, _ = best_time(lambda: solve_box_qp(W, c, lower=0.0, x0=cold_start(W, -c)))
         chol_best, _, _ = best_time(lambda: scipy.linalg.cho_factor(W, lower=True, check_finite=False))
 
         row = {"contacts": size, "closed": int(np.count_nonzero(result.closed)),

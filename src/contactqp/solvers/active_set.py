@@ -9,7 +9,16 @@ import numpy as np
 from ..errors import InvalidInputError
 from .box_qp import solve_box_qp
 
-__all__ = ["solve_active_set"]
+__all__ = ["solve_active_set", "cold_start"]
+
+
+def cold_start(W, b):
+    """A first guess of the contact forces whose support is close to the contact zone.
+
+    Each interpenetration ``b_i > 0`` is shared over the row of ``W``, so that the first free
+    block is smaller than the whole overlap; only the first active set depends on it.
+    """
+    return np.maximum(b, 0.0) / np.abs(W).sum(axis=1)
 
 
 def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int = 500):
@@ -35,9 +44,7 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     start = time.perf_counter()
     dual = problem.dual()
     if forces0 is None:
-        # a cold start guess whose support is close to the contact zone: each interpenetration
-        # shared over the row of W, so that the first free block is not the whole overlap
-        forces0 = np.maximum(dual.b, 0.0) / np.abs(dual.W).sum(axis=1)
+        forces0 = cold_start(dual.W, dual.b)
     solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol, max_iter=max_iter)
     forces = solution.x
     displacements = dual.displacements(forces)
