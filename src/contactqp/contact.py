@@ -92,6 +92,16 @@ def _node_freedoms(model: ReducedModel, node: int, direction: np.ndarray, name: 
     return dofs
 
 
+def _node_rows(model: ReducedModel, nodes, gaps, directions, name: str, label: str):
+    """One constraint row per node: ``(node, freedoms, direction, gap, label)``.
+
+    ``directions`` is one unit vector for all nodes, shape (d,), or one per node, shape (k, d).
+    """
+    directions = np.broadcast_to(directions, (len(nodes), np.shape(directions)[-1]))
+    return [(int(k), _node_freedoms(model, k, d, name), d, float(g), f"node {k}{label}")
+            for k, g, d in zip(nodes, gaps, directions)]
+
+
 def _coordinates(model: ReducedModel, name: str) -> np.ndarray:
     if model.coordinates is None:
         raise InvalidInputError(f"{name} needs node coordinates: give coordinates to the model")
@@ -127,8 +137,7 @@ class GapObstacle:
         if not np.all(np.isfinite(gaps)):
             raise InvalidInputError("GapObstacle.gaps contains NaN or inf")
         dirs = _unit_directions(self.directions, len(nodes), "GapObstacle.directions")
-        return [(int(k), _node_freedoms(model, k, d, "GapObstacle"), d, float(g), f"node {k}")
-                for k, g, d in zip(nodes, gaps, dirs)]
+        return _node_rows(model, nodes, gaps, dirs, "GapObstacle", "")
 
 
 @dataclass
@@ -161,8 +170,7 @@ class PlaneObstacle:
                 f"(d={coords.shape[1]}) must share one dimension"
             )
         gaps = (point - coords[nodes]) @ normal
-        return [(int(k), _node_freedoms(model, k, normal, "PlaneObstacle"), normal, float(g),
-                 f"node {k} / plane") for k, g in zip(nodes, gaps)]
+        return _node_rows(model, nodes, gaps, normal, "PlaneObstacle", " / plane")
 
 
 @dataclass
@@ -200,8 +208,7 @@ class ProfileObstacle:
                 f"ProfileObstacle.profile must return {nodes.size} finite values, got shape {surface.shape}"
             )
         gaps = surface - coords[nodes] @ direction
-        return [(int(k), _node_freedoms(model, k, direction, "ProfileObstacle"), direction,
-                 float(g), f"node {k} / profile") for k, g in zip(nodes, gaps)]
+        return _node_rows(model, nodes, gaps, direction, "ProfileObstacle", " / profile")
 
 
 @dataclass

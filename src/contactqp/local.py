@@ -18,6 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
+from contactqp.model import finite_array
 
 __all__ = [
     "LocalProblem",
@@ -36,18 +37,6 @@ def _check_dim(dim):
     if isinstance(dim, bool) or d not in (2, 3):
         raise InvalidInputError(f"dim must be 2 or 3, got {dim!r}")
     return d
-
-
-def _as_vector(name, value):
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} must be a real 1-D array: {exc}") from None
-    if arr.ndim != 1:
-        raise InvalidInputError(f"{name} must be 1-D, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise InvalidInputError(f"{name} contains NaN or inf")
-    return arr
 
 
 def _as_matrix(name, value):
@@ -108,8 +97,8 @@ class LocalProblem:
     def __post_init__(self):
         dim = _check_dim(self.dim)
         W = _as_matrix("W", self.W)
-        q = _as_vector("q", self.q)
-        mu = _as_vector("mu", self.mu)
+        q = finite_array(self.q, "q", 1)
+        mu = finite_array(self.mu, "mu", 1)
         nc = mu.shape[0]
         m = dim * nc
         if q.shape != (m,):
@@ -140,9 +129,9 @@ def _check_global(M, H, f, w, mu, dim):
     dim = _check_dim(dim)
     Mm = _as_matrix("M", M)
     Hm = _as_matrix("H", H)
-    fv = _as_vector("f", f)
-    wv = _as_vector("w", w)
-    muv = _as_vector("mu", mu)
+    fv = finite_array(f, "f", 1)
+    wv = finite_array(w, "w", 1)
+    muv = finite_array(mu, "mu", 1)
     ndof = Mm.shape[0]
     m = dim * muv.shape[0]
     if Mm.shape != (ndof, ndof):
@@ -314,8 +303,8 @@ def projection_on_cones(x, mu, dim):
     ``a (1, mu x_T / t)`` with ``a = (x_N + mu t) / (1 + mu^2)``.
     """
     dim = _check_dim(dim)
-    muv = _as_vector("mu", mu)
-    xv = _as_vector("x", x)
+    muv = finite_array(mu, "mu", 1)
+    xv = finite_array(x, "x", 1)
     nc = muv.shape[0]
     if xv.shape != (dim * nc,):
         raise InvalidInputError(
@@ -365,13 +354,13 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
     d = problem.dim
     nc = problem.n_contacts
     m = d * nc
-    rv = _as_vector("r", r)
+    rv = finite_array(r, "r", 1)
     if rv.shape != (m,):
         raise InvalidInputError(f"r must have length dim*n_contacts = {m}, got shape {rv.shape}")
     if u is None:
         uv = np.asarray(problem.W @ rv).ravel() + problem.q
     else:
-        uv = _as_vector("u", u)
+        uv = finite_array(u, "u", 1)
         if uv.shape != (m,):
             raise InvalidInputError(
                 f"u must have length dim*n_contacts = {m}, got shape {uv.shape}"

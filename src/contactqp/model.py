@@ -16,14 +16,19 @@ import scipy.linalg
 
 from .errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
 
-__all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix"]
+__all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix",
+           "finite_array"]
 
 #: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised silently-with-warning.
 SYMMETRY_RTOL = 1e-6
 
 
-def _finite_array(value, name: str, ndim: int) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
+def finite_array(value, name: str, ndim: int) -> np.ndarray:
+    """``value`` as a float array of ``ndim`` dimensions, all finite; errors name ``name``."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{name} must be a real {ndim}-D array: {exc}") from None
     if array.ndim != ndim:
         raise InvalidInputError(f"{name} must be {ndim}-D, got shape {array.shape}")
     if not np.all(np.isfinite(array)):
@@ -51,7 +56,7 @@ def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) ->
         The Cholesky factorisation fails; the message gives the failed pivot and the smallest
         eigenvalue.
     """
-    array = _finite_array(matrix, name, 2)
+    array = finite_array(matrix, name, 2)
     n, m = array.shape
     if n != m or n == 0:
         raise InvalidInputError(f"{name} must be a non-empty square matrix, got shape {array.shape}")
@@ -176,7 +181,7 @@ class ReducedModel:
         self.offsets = np.concatenate(([0], np.cumsum(counts)))
         self.coordinates = None
         if coordinates is not None:
-            coords = _finite_array(coordinates, "coordinates", 2)
+            coords = finite_array(coordinates, "coordinates", 2)
             if coords.shape[0] != len(counts):
                 raise InvalidInputError(
                     f"coordinates has {coords.shape[0]} rows for {len(counts)} nodes "
@@ -231,20 +236,22 @@ class ReducedModel:
         """Which matrix the model was built from: ``"flexibility"`` or ``"stiffness"``."""
         return "flexibility" if self._flexibility is not None else "stiffness"
 
+    def _inverse(self) -> np.ndarray:
+        """The inverse of the given matrix, from its Cholesky factor."""
+        return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms), check_finite=False)
+
     @property
     def flexibility(self) -> np.ndarray:
         """``R``, computed from ``K`` on first use when the model was built from a stiffness."""
         if self._flexibility is None:
-            eye = np.eye(self.n_freedoms)
-            self._flexibility = scipy.linalg.cho_solve(self._cholesky(), eye, check_finite=False)
+            self._flexibility = self._inverse()
         return self._flexibility
 
     @property
     def stiffness(self) -> np.ndarray:
         """``K``, computed from ``R`` on first use when the model was built from a flexibility."""
         if self._stiffness is None:
-            eye = np.eye(self.n_freedoms)
-            self._stiffness = scipy.linalg.cho_solve(self._cholesky(), eye, check_finite=False)
+            self._stiffness = self._inverse()
         return self._stiffness
 
     def displacements(self, loads) -> np.ndarray:

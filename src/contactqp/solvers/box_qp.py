@@ -261,7 +261,7 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
     """
     W, c, lower, upper, x0 = _validated(W, c, lower, upper, x0)
     qp = _BoxQP(W, c, lower, upper, tol)
-    start = qp.project(np.zeros(c.size) if x0 is None else x0)
+    start = np.zeros(c.size) if x0 is None else x0
     x, iterations, converged, message = _active_set_phase(qp, start, max_iter)
     if not converged:
         x, more, converged, message = _projected_newton_phase(qp, x, max_iter)
