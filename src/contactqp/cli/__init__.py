@@ -1,0 +1,6 @@
+"""The ``contactqp`` command line: one module per command, each registering on :data:`cli`."""
+
+from . import fclib, solve, springs  # noqa: F401  (register the commands)
+from .app import cli, main
+
+__all__ = ["cli", "main"]

@@ -1,0 +1,71 @@
+"""The ``contactqp`` command group, its exit codes and the shared output helpers.
+
+Exit status: 0 success; 1 a solve did not converge (or its certificate failed, or the problem asks
+for what this version cannot do); 2 unreadable or invalid input. Errors are one line on stderr,
+never a traceback.
+"""
+
+from __future__ import annotations
+
+
+import click
+
+from ..errors import ContactError
+
+__all__ = ["main", "cli", "fail", "console", "float_list"]
+
+EXIT_OK, EXIT_NOT_SOLVED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def fail(message: str) -> None:
+    click.echo(f"contactqp: error: {message}", err=True)
+
+
+def console():
+    from rich.console import Console
+
+    return Console()
+
+
+def float_list(ctx, param, text: str) -> list[float]:
+    """Click callback: parse comma-separated numbers."""
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}") from None
+    if not values:
+        raise click.BadParameter("expected at least one number")
+    return values
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="contactqp")
+def cli():
+    """Fast elastic contact with friction on reduced (compliance-matrix) models."""
+
+
+def main(argv=None) -> int:
+    """Run the command line; return the exit status instead of raising."""
+    try:
+        cli.main(args=argv, prog_name="contactqp", standalone_mode=False)
+    except click.exceptions.Exit as exc:
+        return exc.exit_code
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else EXIT_NOT_SOLVED
+    except click.exceptions.Abort:
+        fail("interrupted")
+        return 130
+    except click.ClickException as exc:
+        fail(exc.format_message().replace("\n", " "))
+        return EXIT_BAD_INPUT
+    except ContactError as exc:
+        fail(str(exc).replace("\n", " "))
+        return EXIT_BAD_INPUT
+    except OSError as exc:
+        fail(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": "))
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        fail("interrupted")
+        return 130
+    return EXIT_OK
+
