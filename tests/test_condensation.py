@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from contactqp.condensation import RigidBodyModeError, condense
+from contactqp.compliance.condensation import RigidBodyModeError, condense
 from contactqp.errors import InvalidInputError
 from contactqp.model import unit_load_compliance
 

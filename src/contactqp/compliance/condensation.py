@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .errors import InvalidInputError, NotPositiveDefiniteError
+from ..errors import InvalidInputError, NotPositiveDefiniteError
 
 __all__ = ["condense", "RigidBodyModeError"]
 
