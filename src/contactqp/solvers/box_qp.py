@@ -9,14 +9,14 @@ with ``W`` symmetric positive (semi)definite. This is the dual of frictionless c
 (``-mu m g <= x <= mu m g``).
 
 Method: primal-dual active set, i.e. semismooth Newton on ``x = P_[l,u](x - sigma (W x + c))``
-[HIK2002]_. Each iteration fixes the bounded variables and solves the free block by a LAPACK
-Cholesky factorisation, kept in a small cache so that a free set seen again costs no new
-factorisation. The plain iteration converges in a few steps on contact problems but may cycle on
-general ``W`` (it does on the spring chain); each step is therefore taken as the best point of a
-projected search along the Newton direction, so the objective decreases monotonically. Should no
-step decrease it, Bertsekas' projected Newton method with an Armijo search along the projection
-arc [Ber1982]_ takes over; it converges globally. A singular free block (a positive semidefinite ``W``) is regularised by a tiny
-multiple of the identity.
+[HIK2002]_. Each iteration fixes the bounded variables and solves the free block through
+:class:`~contactqp.solvers.free_block.FreeBlockSolver`, which borders or trims one LAPACK
+Cholesky factor instead of factoring every new free set. The plain iteration converges in a few
+steps on contact problems but may cycle on general ``W`` (it does on the spring chain); a step
+that does not lower the objective is therefore replaced by the best point of a projected search
+along the Newton direction, so the objective decreases monotonically. Should no step decrease it,
+Bertsekas' projected Newton method with an Armijo search along the projection arc [Ber1982]_
+takes over; it converges globally.
 
 References
 ----------
@@ -28,20 +28,17 @@ References
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import InvalidInputError
+from .free_block import FreeBlockSolver
 
 __all__ = ["BoxQPSolution", "solve_box_qp"]
 
 AT_LOWER, FREE, AT_UPPER = -1, 0, 1
-_REGULARISATION = 1e-11  # relative to the largest diagonal entry, for singular free blocks
-_CACHE_SIZE = 6
-_STEPS = 0.5 ** np.arange(12)  # step lengths tried along the active-set direction
+_SHORTER_STEPS = 0.5 ** np.arange(1, 12)  # tried when the full active-set step fails
 
 
 @dataclass(frozen=True)
@@ -76,35 +73,6 @@ class BoxQPSolution:
     message: str
 
 
-class _FactorCache:
-    """Cholesky factors of principal blocks of ``W``, keyed by the free set."""
-
-    def __init__(self, matrix: np.ndarray):
-        self.matrix = matrix
-        self.shift = _REGULARISATION * max(float(np.max(np.diag(matrix))), np.finfo(float).tiny)
-        self.factors: OrderedDict[bytes, tuple] = OrderedDict()
-        self.count = 0
-
-    def solve(self, free: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        key = np.packbits(free).tobytes()
-        factor = self.factors.get(key)
-        if factor is None:
-            index = np.flatnonzero(free)
-            block = self.matrix[np.ix_(index, index)]
-            try:
-                factor = scipy.linalg.cho_factor(block, lower=True, check_finite=False)
-            except np.linalg.LinAlgError:
-                block[np.diag_indices_from(block)] += self.shift
-                factor = scipy.linalg.cho_factor(block, lower=True, check_finite=False)
-            self.count += 1
-            self.factors[key] = factor
-            if len(self.factors) > _CACHE_SIZE:
-                self.factors.popitem(last=False)
-        else:
-            self.factors.move_to_end(key)
-        return scipy.linalg.cho_solve(factor, rhs, check_finite=False)
-
-
 def _validated(W, c, lower, upper, x0):
     W = np.asarray(W, dtype=float)
     c = np.asarray(c, dtype=float).reshape(-1)
@@ -135,7 +103,7 @@ class _BoxQP:
         positive = diagonal[diagonal > 0]
         self.sigma = 1.0 / float(np.mean(positive)) if positive.size else 1.0
         self.tol = tol
-        self.cache = _FactorCache(W)
+        self.blocks = FreeBlockSolver(W)
         bounds = np.concatenate([lower[np.isfinite(lower)], upper[np.isfinite(upper)]])
         self.x_scale = max(self.sigma * float(np.max(np.abs(c), initial=0.0)),
                            float(np.max(np.abs(bounds), initial=0.0)))
@@ -170,18 +138,18 @@ class _BoxQP:
             loaded = np.flatnonzero(x)  # bounded variables away from zero couple into the block
             if loaded.size:
                 rhs -= self.W[np.ix_(free, loaded)] @ x[loaded]
-            x[free] = self.cache.solve(free, rhs)
+            x[free] = self.blocks.solve(free, rhs)
         return x
 
 
 def _active_set_phase(qp: _BoxQP, x, max_iter):
     """Primal-dual active set iterations made monotone by a search along the projected path.
 
-    The Newton point of the current active set is the trial direction; the best of the projected
-    points ``P(x + alpha d)``, ``alpha = 1, 1/2, ..., 2^-11`` (evaluated together in one matrix
-    product), is kept if it lowers the objective. With ``alpha = 1`` this is the plain primal-dual
-    active set step, so nothing is lost where that converges; elsewhere the objective still
-    decreases at every step and no active set can cycle.
+    The Newton point of the current active set is tried first (the plain primal-dual active set
+    step, so nothing is lost where that converges). If it does not lower the objective, the best
+    of the projected points ``P(x + alpha d)``, ``alpha = 1/2, ..., 2^-11`` (evaluated together
+    in one matrix product) is taken if it does; so the objective decreases at every step and no
+    active set can cycle.
     """
     x = qp.project(x)
     g = qp.gradient(x)
@@ -189,8 +157,14 @@ def _active_set_phase(qp: _BoxQP, x, max_iter):
     for iteration in range(1, max_iter + 1):
         if qp.residual(x, g) <= qp.tol:
             return x, iteration - 1, True, "active set converged"
-        direction = qp.newton_point(qp.state(x, g)) - x
-        trials = np.clip(x[:, None] + direction[:, None] * _STEPS[None, :],
+        newton = qp.newton_point(qp.state(x, g))
+        product = qp.W @ newton
+        value = float(newton @ (0.5 * product + qp.c))
+        if value < f:
+            x, g, f = newton, product + qp.c, value
+            continue
+        direction = newton - x
+        trials = np.clip(x[:, None] + direction[:, None] * _SHORTER_STEPS[None, :],
                          qp.lower[:, None], qp.upper[:, None])
         products = qp.W @ trials
         values = np.einsum("ij,ij->j", trials, 0.5 * products + qp.c[:, None])
@@ -216,7 +190,7 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
         free = ~binding
         direction = -qp.sigma * g
         if free.any():
-            direction[free] = -qp.cache.solve(free, g[free])
+            direction[free] = -qp.blocks.solve(free, g[free])
         f0 = qp.objective(x)
         alpha = 1.0
         while True:
@@ -270,5 +244,5 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
     g = qp.gradient(x)
     state = np.where(x <= lower, AT_LOWER, np.where(x >= upper, AT_UPPER, FREE)).astype(np.int8)
     return BoxQPSolution(x=x, gradient=g, state=state, converged=converged, iterations=iterations,
-                         factorizations=qp.cache.count, residual=qp.residual(x, g),
+                         factorizations=qp.blocks.factorizations, residual=qp.residual(x, g),
                          message=message)

@@ -1,0 +1,160 @@
+"""Solves with principal blocks ``W_FF`` of one dense SPD matrix, re-using a Cholesky factor.
+
+An active-set method solves ``W_FF x = r`` for a sequence of free sets ``F`` that differ by a few
+indices from one step to the next. Factoring each block costs ``|F|^3 / 3``. Here one *base*
+block ``W_BB = L L^T`` is factored and a nearby ``F = (B \\ D) ∪ A`` is solved through it:
+
+* the added indices ``A`` border the factor, ``C = L^{-1} W_BA`` and ``S = W_AA - C^T C = L_S L_S^T``,
+  giving the factor :math:`\\mathcal{L} = [[L, 0], [C^T, L_S]]` of ``W`` on ``B ∪ A``;
+* the dropped indices ``D`` are held at zero by multipliers ``s``: with
+  ``V = \\mathcal{L}^{-1} E_D`` and ``y = \\mathcal{L}^{-1} r``, ``s = -(V^T V)^{-1} V^T y`` and
+  ``x = \\mathcal{L}^{-T} (y + V s)``.
+
+That costs about ``|B|^2 (|A| + |D|)``; when that is more than a sixth of a new factorisation, the
+block ``W_FF`` is factored and becomes the base. A block that is not numerically positive
+definite (``W`` only semidefinite) is factored with a tiny diagonal shift.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+import scipy.linalg
+
+__all__ = ["FreeBlockSolver"]
+
+_REGULARISATION = 1e-11  # relative to the largest diagonal entry, for singular blocks
+_PLANS_KEPT = 6
+
+
+def _cholesky(block: np.ndarray) -> np.ndarray:
+    return scipy.linalg.cholesky(block, lower=True, overwrite_a=True, check_finite=False)
+
+
+def _forward(L, rhs):
+    return scipy.linalg.solve_triangular(L, rhs, lower=True, check_finite=False)
+
+
+def _backward(L, rhs):
+    return scipy.linalg.solve_triangular(L, rhs, lower=True, trans="T", check_finite=False)
+
+
+class _Plan:
+    """How to solve with one free set: the base factor, its border and the dropped rows."""
+
+    def __init__(self, L, positions, C=None, L_S=None, V=None, L_G=None):
+        self.L, self.positions = L, positions
+        self.C, self.L_S, self.V, self.L_G = C, L_S, V, L_G
+        self.size = L.shape[0] + (0 if C is None else C.shape[1])
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        n_base = self.L.shape[0]
+        extended = np.zeros(self.size)
+        extended[self.positions] = rhs
+        y = _forward(self.L, extended[:n_base])
+        if self.C is not None:
+            y = np.concatenate([y, _forward(self.L_S, extended[n_base:] - self.C.T @ y)])
+        if self.V is not None:
+            multipliers = scipy.linalg.cho_solve((self.L_G, True), -(self.V.T @ y),
+                                                 check_finite=False)
+            y = y + self.V @ multipliers
+        if self.C is not None:
+            z_added = _backward(self.L_S, y[n_base:])
+            z = np.concatenate([_backward(self.L, y[:n_base] - self.C @ z_added), z_added])
+        else:
+            z = _backward(self.L, y)
+        return z[self.positions]
+
+
+class FreeBlockSolver:
+    """Solve ``W[F, F] x = r`` for boolean masks ``F``, re-using factorisations.
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (n, n)
+        Symmetric positive (semi)definite ``W``; not copied, not modified.
+
+    Attributes
+    ----------
+    factorizations : int
+        Cholesky factorisations of a base block (updates and re-used plans excluded).
+    updates : int
+        Free sets solved through the base factor by bordering and dropping rows.
+    """
+
+    def __init__(self, matrix: np.ndarray):
+        self.matrix = matrix
+        self.shift = _REGULARISATION * max(float(np.max(np.diag(matrix), initial=0.0)),
+                                           np.finfo(float).tiny)
+        self.base: np.ndarray | None = None
+        self.base_index = np.empty(0, dtype=np.intp)
+        self.base_factor: np.ndarray | None = None
+        self.base_shifted = False
+        self.plans: OrderedDict[bytes, _Plan] = OrderedDict()
+        self.factorizations = 0
+        self.updates = 0
+
+    def solve(self, free: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """Solve with the block of the free set ``free`` (bool, shape (n,)); ``rhs`` in its order."""
+        key = np.packbits(free).tobytes()
+        plan = self.plans.get(key)
+        if plan is None:
+            plan = self._plan(free)
+            self.plans[key] = plan
+            if len(self.plans) > _PLANS_KEPT:
+                self.plans.popitem(last=False)
+        else:
+            self.plans.move_to_end(key)
+        return plan.solve(rhs)
+
+    def _plan(self, free: np.ndarray) -> _Plan:
+        if self.base is not None:
+            added = np.flatnonzero(free & ~self.base)
+            dropped = np.flatnonzero(self.base[self.base_index] & ~free[self.base_index])
+            n_free, n_base = int(np.count_nonzero(free)), self.base_index.size
+            if n_base ** 2 * (added.size + dropped.size) <= n_free ** 3 / 6:
+                plan = self._updated_plan(free, added, dropped)
+                if plan is not None:
+                    return plan
+        return self._refactored_plan(free)
+
+    def _refactored_plan(self, free: np.ndarray) -> _Plan:
+        index = np.flatnonzero(free)
+        block = self.matrix.take(index, axis=0).take(index, axis=1)
+        try:
+            factor, shifted = _cholesky(block.copy()), False
+        except np.linalg.LinAlgError:
+            block[np.diag_indices_from(block)] += self.shift
+            factor, shifted = _cholesky(block), True
+        self.factorizations += 1
+        self.base, self.base_index = free.copy(), index
+        self.base_factor, self.base_shifted = factor, shifted
+        self.plans.clear()
+        return _Plan(factor, np.arange(index.size))
+
+    def _updated_plan(self, free, added, dropped) -> _Plan | None:
+        """The plan through the base factor, or None when a bordered block is not definite."""
+        L, base_index = self.base_factor, self.base_index
+        C = L_S = V = L_G = None
+        try:
+            if added.size:
+                C = _forward(L, self.matrix.take(added, axis=1)[base_index])
+                schur = self.matrix[np.ix_(added, added)] - C.T @ C
+                if self.base_shifted:
+                    schur[np.diag_indices_from(schur)] += self.shift
+                L_S = _cholesky(schur)
+            if dropped.size:
+                unit = np.zeros((base_index.size, dropped.size))
+                unit[dropped, np.arange(dropped.size)] = 1.0
+                V = _forward(L, unit)
+                if C is not None:
+                    V = np.vstack([V, -_forward(L_S, C.T @ V)])
+                L_G = _cholesky(V.T @ V)
+        except np.linalg.LinAlgError:
+            return None
+        extended_index = np.concatenate([base_index, added])
+        order = np.argsort(extended_index, kind="stable")
+        kept = free[extended_index[order]]
+        self.updates += 1
+        return _Plan(L, order[kept], C, L_S, V, L_G)
