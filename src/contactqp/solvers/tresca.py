@@ -1,0 +1,320 @@
+r"""Coulomb friction on a local problem as a fixed point of Tresca problems solved by Clarabel.
+
+With the friction bound of each contact frozen at ``s_i`` the law becomes Tresca's, and for a
+symmetric ``W`` the local problem is the convex second-order cone program
+
+.. math::
+
+    \min_r \tfrac12 r^T W r + q^T r \quad \text{s.t.} \quad
+    r_{N,i} \ge 0, \quad \|r_{T,i}\| \le s_i ,
+
+whose optimality conditions are exactly those of the Coulomb problem at ``s_i = mu_i r_N,i``
+(``u_N >= 0`` complementary to ``r_N``, sliding opposite to ``r_T`` on the bound, sticking
+inside). Updating ``s = mu r_N`` and solving again is the Tresca fixed point; it converges for
+small ``mu`` (where the Coulomb solution is unique) and is a classical reference route.
+A slightly unsymmetric ``W`` (e.g. FCLIB files written with few digits) is split into its
+symmetric part, kept in the cone program, and its skew part, moved to the right-hand side with
+the previous reactions, so that a fixed point solves the problem with the given ``W``.
+
+References
+----------
+.. [1] P. D. Panagiotopoulos, "A nonlinear programming approach to the unilateral contact-, and
+   friction-boundary value problem in the theory of elasticity", Ing. Arch. 44, 421-432, 1975.
+.. [2] V. Acary, M. Brémond, O. Huber, "On solving contact problems with Coulomb friction:
+   formulations and numerical comparisons", INRIA RR-9118, 2018 (the TFP family).
+.. [3] P. J. Goulart, Y. Chen, "Clarabel: an interior-point solver for conic programs with
+   quadratic objectives", arXiv:2405.12762, 2024.
+"""
+
+from __future__ import annotations
+
+import numbers
+import time
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import spsolve
+
+from ..errors import InvalidInputError, MissingDependencyError
+from ..local import LocalProblem, natural_map_error
+from .local import LocalSolution
+
+__all__ = ["solve_tresca_fixed_point"]
+
+#: Clarabel tolerances on the scaled cone program (O(1) data); the Newton polish does the rest.
+_CLARABEL_TOL = 1e-9
+#: A bound below this fraction of the largest one is treated as zero (tangential force fixed at 0).
+_ZERO_BOUND_RTOL = 1e-12
+#: The fixed point stops as stalled after this many iterations without halving its best error.
+_PATIENCE = 4
+
+
+def check_fixed_point_arguments(problem, tol, max_iter, r0):
+    """Validate the common arguments of the fixed-point routes; return ``r0`` as an array or None."""
+    if not isinstance(problem, LocalProblem):
+        raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
+    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not 0.0 < tol < 1.0:
+        raise InvalidInputError(f"tol must be a number in (0, 1), got {tol!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 1:
+        raise InvalidInputError(f"max_iter must be a positive integer, got {max_iter!r}")
+    if r0 is None:
+        return None
+    m = problem.dim * problem.n_contacts
+    start = np.asarray(r0, dtype=float)
+    if start.shape != (m,) or not np.all(np.isfinite(start)):
+        raise InvalidInputError(
+            f"r0 must be a finite array of shape ({m},), got shape {start.shape}")
+    return start
+
+
+def symmetric_split(W):
+    """``(W_sym, W_skew)`` with ``W = W_sym + W_skew``; ``W_skew`` is None when W is symmetric."""
+    skew = 0.5 * (W - W.T)
+    if (skew.count_nonzero() if sp.issparse(skew) else np.count_nonzero(skew)) == 0:
+        return W, None
+    return W - skew, skew
+
+
+def run_fixed_point(problem, tresca, *, tol, max_iter, r0, exact):
+    """Iterate ``s = mu r_N`` over a Tresca sub-solver; the loop shared by the fixed-point routes.
+
+    Parameters
+    ----------
+    problem : LocalProblem
+    tresca : callable
+        ``tresca(q, s) -> r``: reactions (N, shape (m,)) of the Tresca problem with the symmetric
+        part of ``W``, right-hand side ``q`` (shape (m,)) and friction bounds ``s`` (shape (nc,)).
+    tol : float
+    max_iter : int
+    r0 : ndarray or None
+        Start; None starts from the frictionless bounds ``s = 0``.
+    exact : bool
+        True when the sub-problem's cone is the Coulomb disc: convergence is then a natural-map
+        error at most ``tol``. False (polygonal cones) when it is the fixed point itself: the
+        relative change of ``r`` between two iterations at most ``tol``.
+
+    Returns
+    -------
+    LocalSolution
+        The best iterate by natural-map error when ``exact``, the last one otherwise; ``error``
+        is always the natural-map error against the exact Coulomb cones.
+    """
+    start_time = time.perf_counter()
+    d = problem.dim
+    _, skew = symmetric_split(problem.W)
+    r = np.zeros(problem.W.shape[0]) if r0 is None else r0.copy()
+    best = (np.inf, r)
+    message, converged, stalled = "", False, 0
+    iteration = 0
+    for iteration in range(1, max_iter + 1):
+        s = problem.mu * np.maximum(r[::d], 0.0)
+        q = problem.q if skew is None else problem.q + np.asarray(skew @ r).ravel()
+        previous, r = r, tresca(q, s)
+        error = natural_map_error(problem, r)
+        if exact:
+            if error < 0.5 * best[0]:
+                stalled = 0
+            else:
+                stalled += 1
+            if error < best[0]:
+                best = (error, r)
+            if error <= tol:
+                converged, message = True, f"natural-map error {error:.2e} <= tol"
+                break
+            if stalled >= _PATIENCE:
+                message = f"stalled at natural-map error {best[0]:.2e} (sub-solver accuracy)"
+                break
+        else:
+            best = (error, r)
+            change = np.linalg.norm(r - previous) / max(np.linalg.norm(r), np.finfo(float).tiny)
+            if change <= tol:
+                converged = True
+                message = (f"fixed point reached (relative change {change:.1e}); natural-map "
+                           f"error against the exact cones {error:.2e}")
+                break
+    if not message:
+        message = f"max_iter = {max_iter} reached, natural-map error {best[0]:.2e}"
+    error, r = best
+    u = np.asarray(problem.W @ r).ravel() + problem.q
+    return LocalSolution(r=r, u=u, error=float(error), converged=converged, iterations=iteration,
+                         seconds=time.perf_counter() - start_time, message=message)
+
+
+def scales(W_sym, q):
+    """``(w, f)``: a compliance scale (largest diagonal of W) and a force scale ``max|q| / w``.
+
+    Solving for ``r / f`` with ``W / w`` and ``q / (f w)`` gives sub-problems with O(1) data,
+    so that absolute tolerances of the backends mean the same thing on every problem.
+    """
+    diagonal = np.abs(W_sym.diagonal())
+    w = float(diagonal.max()) if diagonal.size and diagonal.max() > 0 else 1.0
+    f = float(np.max(np.abs(q), initial=0.0)) / w or 1.0
+    return w, f
+
+
+def free_unknowns(s, d):
+    """The unknowns left free by the bounds ``s`` (shape (nc,)): tangential ones need ``s > 0``.
+
+    Returns
+    -------
+    keep : ndarray of int
+        Indices of the free unknowns in ``r`` (normal ones always, tangential ones of sliding
+        contacts).
+    sliding : ndarray of bool, shape (nc,)
+        Contacts whose bound is positive (above ``1e-12`` times the largest).
+    normal : ndarray of int, shape (nc,)
+        Position of each normal unknown in ``r[keep]``.
+    tangent : ndarray of int, shape (sliding.sum(), d - 1)
+        Position of the tangential unknowns of the sliding contacts in ``r[keep]``.
+    """
+    nc = s.size
+    sliding = s > _ZERO_BOUND_RTOL * max(float(s.max(initial=0.0)), np.finfo(float).tiny)
+    free = np.zeros((nc, d), dtype=bool)
+    free[:, 0] = True
+    free[sliding, 1:] = True
+    keep = np.flatnonzero(free.ravel())
+    position = np.full(nc * d, -1)
+    position[keep] = np.arange(keep.size)
+    return keep, sliding, position[::d], position.reshape(nc, d)[sliding, 1:]
+
+
+class _ClarabelTresca:
+    """The Tresca cone program with Clarabel, on the contacts' free unknowns (scaled).
+
+    Tangential unknowns of contacts whose bound is zero are removed (they are zero), so that
+    every second-order cone left has an interior.
+    """
+
+    def __init__(self, problem: LocalProblem):
+        try:
+            import clarabel
+        except ImportError:
+            raise MissingDependencyError(
+                "the Tresca fixed point needs Clarabel: pip install clarabel") from None
+        self._clarabel = clarabel
+        W_sym, _ = symmetric_split(problem.W)
+        self.w, self.f = scales(W_sym, problem.q)
+        self.W = W_sym / self.w  # scaled, full (for the polish)
+        self.P = sp.triu(sp.csc_matrix(self.W), format="csc")
+        self.d = problem.dim
+        self.nc = problem.n_contacts
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = _CLARABEL_TOL
+        settings.tol_ktratio = 1e-9
+        settings.max_iter = 200
+        self.settings = settings
+
+    def __call__(self, q, s):
+        clarabel = self._clarabel
+        d, nc = self.d, self.nc
+        m = d * nc
+        keep, sliding, normal, tangent = free_unknowns(s, d)
+        n_slide = tangent.shape[0]
+        # rows: -x_N <= 0 (nonnegative cone), then per sliding contact (s_i, x_T) in the SOC
+        rows = np.concatenate([np.arange(nc),
+                               nc + (d * np.arange(n_slide)[:, None] + np.arange(1, d)).ravel()])
+        cols = np.concatenate([normal, tangent.ravel()])
+        A = sp.csc_matrix((-np.ones(rows.size), (rows, cols)), shape=(nc + d * n_slide, keep.size))
+        b = np.zeros(nc + d * n_slide)
+        b[nc::d] = s[sliding] / self.f
+        cones = [clarabel.NonnegativeConeT(nc)] + [clarabel.SecondOrderConeT(d)] * n_slide
+        P = self.P[keep][:, keep]
+        solver = clarabel.DefaultSolver(P, q[keep] / (self.f * self.w), A, b, cones,
+                                        self.settings)
+        solution = solver.solve()
+        x = np.zeros(m)
+        x[keep] = np.asarray(solution.x)
+        return self.f * self._polish(q / (self.f * self.w), s / self.f, x)
+
+    def _project(self, z, s):
+        """Projection on ``{x_N >= 0, ||x_T|| <= s}`` per contact and its (generalised) Jacobian."""
+        d, nc = self.d, self.nc
+        Z = z.reshape(nc, d)
+        norm = np.linalg.norm(Z[:, 1:], axis=1)
+        outside = norm > s
+        factor = np.where(outside, s / np.where(outside, norm, 1.0), 1.0)
+        projected = Z.copy()
+        projected[:, 0] = np.maximum(Z[:, 0], 0.0)
+        projected[:, 1:] *= factor[:, None]
+        blocks = np.zeros((nc, d, d))
+        blocks[:, 0, 0] = Z[:, 0] > 0.0
+        direction = Z[:, 1:] / np.where(norm > 0.0, norm, 1.0)[:, None]
+        tangent = np.eye(d - 1) - outside[:, None, None] * direction[:, :, None] * direction[:, None, :]
+        blocks[:, 1:, 1:] = factor[:, None, None] * tangent
+        return projected.ravel(), sp.block_diag(blocks, format="csr")
+
+    def _polish(self, c, s, x, steps: int = 6):
+        """Semismooth Newton steps on the Tresca natural map ``x - P_C(x - (W x + c))``.
+
+        Interior-point solutions are accurate to about 1e-9 relative; from there the active set
+        is identified and two or three Newton steps reach rounding. The best point is kept.
+        """
+        m = x.size
+        dense = not sp.issparse(self.W)
+
+        def residual(x):
+            projected, jacobian = self._project(x - (self.W @ x + c), s)
+            return x - projected, jacobian
+
+        F, D = residual(x)
+        best = np.linalg.norm(F)
+        for _ in range(steps):
+            if best == 0.0:
+                break
+            M = D @ (sp.identity(m) - self.W) if not dense else D @ (np.eye(m) - self.W)
+            J = (np.eye(m) - M) if dense else (sp.identity(m, format="csc") - sp.csc_matrix(M))
+            try:
+                step = np.linalg.solve(J, -F) if dense else spsolve(J, -F)
+            except np.linalg.LinAlgError:
+                break
+            if not np.all(np.isfinite(step)):
+                break
+            candidate = x + step
+            F_new, D_new = residual(candidate)
+            if not np.linalg.norm(F_new) < best:
+                break
+            x, F, D, best = candidate, F_new, D_new, np.linalg.norm(F_new)
+        return x
+
+
+def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
+                             r0=None) -> LocalSolution:
+    """Solve a local Coulomb problem by a fixed point on Tresca cone programs (Clarabel).
+
+    Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the
+    previous reactions as a second-order cone program with Clarabel (``NonnegativeConeT`` for
+    the normal reactions, one ``SecondOrderConeT`` per contact with a positive bound), the data
+    scaled to O(1): reactions in units of ``max|q| / max diag W``.
+
+    Parameters
+    ----------
+    problem : LocalProblem
+        2-D or 3-D; ``W`` symmetric positive semidefinite, or nearly so (its skew part is
+        treated by the outer iteration, see the module notes).
+    tol : float
+        Target natural-map error (:func:`~contactqp.local.natural_map_error`), in (0, 1).
+    max_iter : int
+        Largest number of cone programs solved.
+    r0 : array_like, shape (m,), optional
+        Starting reactions (N): the first bounds are ``mu r0_N``. By default the first
+        sub-problem is frictionless (``s = 0``).
+
+    Returns
+    -------
+    LocalSolution
+        The iterate of least natural-map error; ``converged`` when it is at most ``tol``. The
+        loop also stops when the error has not halved in 4 iterations (the interior-point
+        accuracy of the sub-problems, about 1e-10 relative, bounds what it can reach).
+
+    Raises
+    ------
+    InvalidInputError
+        ``problem`` is not a LocalProblem, ``tol`` not in (0, 1), ``max_iter`` not a positive
+        integer or ``r0`` of the wrong shape.
+    MissingDependencyError
+        Clarabel is not installed.
+    """
+    start = check_fixed_point_arguments(problem, tol, max_iter, r0)
+    return run_fixed_point(problem, _ClarabelTresca(problem), tol=tol, max_iter=max_iter,
+                           r0=start, exact=True)
