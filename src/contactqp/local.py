@@ -26,6 +26,9 @@ __all__ = [
     "condense_global",
     "natural_map_error",
     "projection_on_cones",
+    "project_rows",
+    "contact_status",
+    "check_positive_semidefinite",
 ]
 
 
@@ -61,11 +64,17 @@ def _as_matrix(name, value):
 
 @dataclass(frozen=True)
 class LocalProblem:
-    """A local frictional-contact problem in FCLIB form.
+    r"""A local frictional-contact problem in FCLIB form, optionally with cohesion.
 
-    Find ``r`` and ``u`` with ``u = W r + q`` and, for each contact ``i``,
-    ``r_i`` in the Coulomb cone ``K_i = {||r_T|| <= mu_i r_N}``, ``u_i + mu_i ||u_iT|| e_N``
-    in its dual cone, and the two orthogonal.
+    Find ``r`` and ``u`` with ``u = W r + q`` and, for each contact ``i``, the Coulomb law in
+    its De Saxce form: ``r_i`` in the Mohr-Coulomb cone
+    ``C_i = {||r_T|| <= mu_i r_N + c_i}``, ``u_i + mu_i ||u_iT|| e_N`` in the dual cone of
+    ``C_i``'s direction cone, and the two complementary (see :func:`natural_map_error`).
+
+    With cohesion ``c_i > 0`` the cone is the Coulomb cone translated along the normal, its
+    apex at ``r_N = -c_i / mu_i`` (the tensile strength of the interface): the contact transmits
+    shear up to ``c_i`` under zero normal reaction and opens only when the tensile reaction
+    reaches ``c_i / mu_i``. With ``c = 0`` (the default) this is exactly the FCLIB problem.
 
     Parameters
     ----------
@@ -80,12 +89,15 @@ class LocalProblem:
         Space dimension, 2 or 3 (the size of each contact block).
     title : str, optional
         Free text, e.g. the FCLIB ``info/title``.
+    cohesion : array_like, shape (n_contacts,), optional
+        Cohesion ``c_i >= 0`` per contact, in units of ``r``; ``c_i > 0`` needs ``mu_i > 0``.
+        Stored as zeros when not given.
 
     Raises
     ------
     InvalidInputError
-        If a shape is inconsistent, a value is NaN or infinite, ``mu < 0`` or ``dim``
-        is not 2 or 3.
+        If a shape is inconsistent, a value is NaN or infinite, ``mu < 0``, ``cohesion < 0``,
+        cohesion on a frictionless contact, or ``dim`` is not 2 or 3.
     """
 
     W: sp.csr_matrix | np.ndarray
@@ -93,6 +105,7 @@ class LocalProblem:
     mu: np.ndarray
     dim: int
     title: str = field(default="")
+    cohesion: np.ndarray | None = field(default=None)
 
     def __post_init__(self):
         dim = _check_dim(self.dim)
@@ -111,17 +124,47 @@ class LocalProblem:
             )
         if np.any(mu < 0):
             raise InvalidInputError(f"mu must be >= 0, got min(mu) = {mu.min():g}")
+        if self.cohesion is None:
+            cohesion = np.zeros(nc)
+        else:
+            cohesion = finite_array(self.cohesion, "cohesion", 1)
+            if cohesion.shape != (nc,):
+                raise InvalidInputError(
+                    f"cohesion must have length n_contacts = {nc}, got shape {cohesion.shape}"
+                )
+            if np.any(cohesion < 0):
+                raise InvalidInputError(
+                    f"cohesion must be >= 0, got min(cohesion) = {cohesion.min():g}"
+                )
+            bad = np.flatnonzero((cohesion > 0) & (mu == 0))
+            if bad.size:
+                raise InvalidInputError(
+                    f"cohesion > 0 needs mu > 0 (the cone apex is at r_N = -c/mu): "
+                    f"contact {bad[0]} has mu = 0 and cohesion {cohesion[bad[0]]:g}"
+                )
         if not isinstance(self.title, str):
             raise InvalidInputError(f"title must be a str, got {type(self.title).__name__}")
         object.__setattr__(self, "dim", dim)
         object.__setattr__(self, "W", W)
         object.__setattr__(self, "q", q)
         object.__setattr__(self, "mu", mu)
+        object.__setattr__(self, "cohesion", cohesion)
 
     @property
     def n_contacts(self) -> int:
         """Number of contacts, ``len(mu)``."""
         return int(self.mu.shape[0])
+
+    @property
+    def apex_shift(self) -> np.ndarray:
+        """Shape (m,): ``c_i / mu_i`` on each normal component, 0 elsewhere.
+
+        ``r + apex_shift`` lies in the Coulomb cone exactly when ``r`` lies in the Mohr-Coulomb
+        cone: the translation that turns a cohesive problem into an FCLIB one.
+        """
+        shift = np.zeros((self.n_contacts, self.dim))
+        np.divide(self.cohesion, self.mu, out=shift[:, 0], where=self.cohesion > 0)
+        return shift.reshape(-1)
 
 
 def _check_global(M, H, f, w, mu, dim):
@@ -312,20 +355,38 @@ def projection_on_cones(x, mu, dim):
         )
     if np.any(muv < 0):
         raise InvalidInputError(f"mu must be >= 0, got min(mu) = {muv.min():g}")
-    X = xv.reshape(nc, dim)
+    return project_rows(xv.reshape(nc, dim), muv).reshape(-1)
+
+
+def project_rows(X, mu):
+    """Row-wise :func:`projection_on_cones` of ``X`` (n, d) for ``mu`` (n,), without checks."""
     xn = X[:, 0]
     xt = X[:, 1:]
     t = np.sqrt(np.sum(xt * xt, axis=1))
-    inside = (t <= muv * xn) & (xn >= 0)
-    polar = (muv * t <= -xn) & ~inside
-    a = (xn + muv * t) / (1.0 + muv * muv)
-    scale = np.divide(muv * a, t, out=np.zeros_like(t), where=t > 0)
+    inside = (t <= mu * xn) & (xn >= 0)
+    polar = (mu * t <= -xn) & ~inside
+    a = (xn + mu * t) / (1.0 + mu * mu)
+    scale = np.divide(mu * a, t, out=np.zeros_like(t), where=t > 0)
     P = np.empty_like(X)
     P[:, 0] = a
     P[:, 1:] = xt * scale[:, None]
     P[inside] = X[inside]
     P[polar] = 0.0
-    return P.reshape(-1)
+    return P
+
+
+def _candidate(problem: LocalProblem, r, u):
+    """Validated ``(r, u)`` of length ``m``; ``u = W r + q`` when not given."""
+    m = problem.dim * problem.n_contacts
+    rv = finite_array(r, "r", 1)
+    if rv.shape != (m,):
+        raise InvalidInputError(f"r must have length dim*n_contacts = {m}, got shape {rv.shape}")
+    if u is None:
+        return rv, np.asarray(problem.W @ rv).ravel() + problem.q
+    uv = finite_array(u, "u", 1)
+    if uv.shape != (m,):
+        raise InvalidInputError(f"u must have length dim*n_contacts = {m}, got shape {uv.shape}")
+    return rv, uv
 
 
 def natural_map_error(problem: LocalProblem, r, u=None) -> float:
@@ -333,10 +394,15 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
 
     .. math::
 
-        e = \frac{\| r - P_K(r - (u + \mu \|u_T\| e_N)) \|}{\max(\|q\|, \|r\|, \|u\|)}
+        e = \frac{\| \tilde r - P_K(\tilde r - (u + \mu \|u_T\| e_N)) \|}
+                 {\max(\|q\|, \|r\|, \|u\|)},
+        \qquad \tilde r = r + \frac{c}{\mu} e_N
 
     with :math:`P_K` the projection on the product of Coulomb cones
-    (:func:`projection_on_cones`). The denominator is replaced by 1 when all three norms are 0.
+    (:func:`projection_on_cones`) and :math:`\tilde r` the reaction measured from the apex of
+    the Mohr-Coulomb cone (:attr:`LocalProblem.apex_shift`; ``r`` itself without cohesion, the
+    FCLIB measure). The numerator is zero exactly when ``(r, u)`` satisfies the law of
+    :class:`LocalProblem`. The denominator is replaced by 1 when all three norms are 0.
 
     Parameters
     ----------
@@ -353,24 +419,118 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
     """
     d = problem.dim
     nc = problem.n_contacts
-    m = d * nc
-    rv = finite_array(r, "r", 1)
-    if rv.shape != (m,):
-        raise InvalidInputError(f"r must have length dim*n_contacts = {m}, got shape {rv.shape}")
-    if u is None:
-        uv = np.asarray(problem.W @ rv).ravel() + problem.q
-    else:
-        uv = finite_array(u, "u", 1)
-        if uv.shape != (m,):
-            raise InvalidInputError(
-                f"u must have length dim*n_contacts = {m}, got shape {uv.shape}"
-            )
+    rv, uv = _candidate(problem, r, u)
     U = uv.reshape(nc, d)
     ut = np.sqrt(np.sum(U[:, 1:] ** 2, axis=1))
     shifted = U.copy()
     shifted[:, 0] += problem.mu * ut
-    residual = rv - projection_on_cones(rv - shifted.reshape(-1), problem.mu, d)
+    apex = rv + problem.apex_shift
+    residual = apex - projection_on_cones(apex - shifted.reshape(-1), problem.mu, d)
     denom = max(np.linalg.norm(problem.q), np.linalg.norm(rv), np.linalg.norm(uv))
     if denom == 0.0:
         denom = 1.0
     return float(np.linalg.norm(residual) / denom)
+
+
+def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.ndarray:
+    """Per-contact status of a solution: ``"open"``, ``"stick"`` or ``"slip"``.
+
+    A contact is open when its reaction, measured from the cone apex
+    (``r + apex_shift``), is zero; otherwise it slips when its tangential velocity is nonzero,
+    else it sticks. "Zero" means at most ``rtol * max(||q||, ||r||, ||u||)`` in Euclidean norm,
+    the scale of :func:`natural_map_error`.
+
+    Parameters
+    ----------
+    problem : LocalProblem
+    r : array_like, shape (m,)
+    u : array_like, shape (m,), optional
+        ``W r + q`` when not given.
+    rtol : float
+        Relative threshold for "zero".
+
+    Returns
+    -------
+    numpy.ndarray of str, shape (n_contacts,)
+    """
+    d = problem.dim
+    nc = problem.n_contacts
+    rv, uv = _candidate(problem, r, u)
+    scale = max(np.linalg.norm(problem.q), np.linalg.norm(rv), np.linalg.norm(uv))
+    zero = rtol * (scale if scale > 0 else 1.0)
+    apex = (rv + problem.apex_shift).reshape(nc, d)
+    open_ = np.linalg.norm(apex, axis=1) <= zero
+    slip = np.linalg.norm(uv.reshape(nc, d)[:, 1:], axis=1) > zero
+    return np.where(open_, "open", np.where(slip, "slip", "stick"))
+
+
+#: Diagonal shift, relative to the unit diagonal of the Jacobi-scaled matrix, accepted by
+#: :func:`check_positive_semidefinite`. Matrices written with 6 significant digits (Siconos text
+#: files) are perturbed by ~5e-7 per entry; the scaled granular-flow file has eigenvalues down to
+#: -2.7e-6.
+PSD_SHIFT = 1e-5
+
+
+def check_positive_semidefinite(W, name: str = "W") -> None:
+    r"""Raise unless the symmetric part of ``W`` is positive semidefinite (to a small shift).
+
+    What is checked, with :math:`S = (W + W^T)/2` and :math:`D = \mathrm{diag}(S)`:
+
+    * no diagonal entry is negative, and a row with a zero diagonal entry is zero;
+    * the Jacobi-scaled :math:`D^{-1/2} S D^{-1/2} + \delta I` (rows with a zero diagonal left
+      out, :math:`\delta` = :data:`PSD_SHIFT`) has a Cholesky factorisation: dense LAPACK
+      ``potrf``, or for a sparse ``W`` a SuperLU factorisation with symmetric (diagonal)
+      pivoting whose pivots must all be positive (Sylvester's law of inertia).
+
+    The cost is one factorisation, less than one Newton iteration of the friction solver.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        With the failed test in the message.
+    """
+    import scipy.linalg
+
+    S = 0.5 * (W + W.T)
+    diag = np.asarray(S.diagonal(), dtype=float)
+    if np.any(diag < 0):
+        i = int(np.argmin(diag))
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive semidefinite: diagonal entry {i} is {diag[i]:.3g} < 0"
+        )
+    keep = np.flatnonzero(diag > 0)
+    zero_rows = np.flatnonzero(diag == 0)
+    if zero_rows.size:
+        rows = S[zero_rows]
+        if (rows.count_nonzero() if sp.issparse(rows) else np.count_nonzero(rows)):
+            raise NotPositiveDefiniteError(
+                f"{name} is not positive semidefinite: a row with a zero diagonal entry "
+                f"has nonzero off-diagonal entries"
+            )
+    if keep.size == 0:
+        return
+    s = 1.0 / np.sqrt(diag[keep])
+    if sp.issparse(S):
+        from scipy.sparse.linalg import splu
+
+        Sk = sp.csc_matrix(S)[keep][:, keep]
+        scaled = sp.csc_matrix(sp.diags(s) @ Sk @ sp.diags(s) + PSD_SHIFT * sp.identity(keep.size))
+        try:
+            lu = splu(scaled, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                      options={"SymmetricMode": True})
+            pivots = lu.U.diagonal()
+            ok = np.array_equal(lu.perm_r, lu.perm_c) and bool(np.all(pivots > 0))
+        except RuntimeError:  # exactly singular
+            ok = False
+    else:
+        scaled = s[:, None] * S[np.ix_(keep, keep)] * s[None, :] + PSD_SHIFT * np.eye(keep.size)
+        try:
+            scipy.linalg.cholesky(scaled, check_finite=False)
+            ok = True
+        except np.linalg.LinAlgError:
+            ok = False
+    if not ok:
+        raise NotPositiveDefiniteError(
+            f"{name} ({W.shape[0]}x{W.shape[1]}) is not positive semidefinite: the Cholesky "
+            f"factorisation of its Jacobi-scaled symmetric part + {PSD_SHIFT:g} I fails"
+        )

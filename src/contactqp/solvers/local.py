@@ -1,9 +1,9 @@
-"""Local FCLIB problems ``u = W r + q`` solved by the project's own active-set method.
+"""Local FCLIB problems ``u = W r + q`` solved by the project's own methods.
 
-This version solves the frictionless case (every ``mu`` zero): the cones reduce to rays, the
-tangential reactions vanish and the normal part is the bound-constrained QP
-``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``. Problems with friction raise
-:class:`~contactqp.errors.UnsupportedProblemError`.
+With friction (some ``mu > 0``) :func:`solve_local` calls
+:func:`~contactqp.solvers.coulomb.solve_coulomb`. Without (every ``mu`` zero) the cones reduce to
+rays, the tangential reactions vanish and the normal part is the bound-constrained QP
+``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``, solved by the own box-QP solver.
 """
 
 from __future__ import annotations
@@ -13,8 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import UnsupportedProblemError
-from ..local import LocalProblem, natural_map_error
+from ..local import LocalProblem, check_positive_semidefinite, contact_status, natural_map_error
 from .box_qp import solve_box_qp
 
 __all__ = ["LocalSolution", "solve_local"]
@@ -22,7 +21,23 @@ __all__ = ["LocalSolution", "solve_local"]
 
 @dataclass(frozen=True)
 class LocalSolution:
-    """Reactions ``r`` and velocities/gaps ``u`` of a local problem, with the natural-map error."""
+    """Solution of a local problem, checked by the natural-map error.
+
+    Attributes
+    ----------
+    r, u : numpy.ndarray, shape (m,)
+        Reactions and velocities (or gap increments), ``u = W r + q``.
+    error : float
+        :func:`~contactqp.local.natural_map_error` of ``(r, u)``.
+    converged : bool
+        ``error <= tol``.
+    iterations : int
+    seconds : float
+        Wall time of the solve.
+    message : str
+    status : numpy.ndarray of str, shape (n_contacts,)
+        ``"open"``, ``"stick"`` or ``"slip"`` (:func:`~contactqp.local.contact_status`).
+    """
 
     r: np.ndarray
     u: np.ndarray
@@ -31,6 +46,7 @@ class LocalSolution:
     iterations: int
     seconds: float
     message: str
+    status: np.ndarray
 
 
 def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
@@ -64,7 +80,7 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
 
 
 def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500) -> LocalSolution:
-    """Solve a frictionless local problem to natural-map error ``tol``.
+    """Solve a local problem to natural-map error ``tol``.
 
     Parameters
     ----------
@@ -73,18 +89,20 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
         Target of :func:`~contactqp.local.natural_map_error`; ``converged`` is True only when the
         error, computed independently of the solver, is at most ``tol``.
     max_iter : int
+        Iteration cap of the box-QP solver; with friction, of each Newton run (at most 100).
 
     Raises
     ------
-    UnsupportedProblemError
-        When some ``mu`` is positive (friction is not supported yet).
+    NotPositiveDefiniteError
+        If ``W`` is not positive semidefinite
+        (:func:`~contactqp.local.check_positive_semidefinite`).
     """
-    frictional = int(np.count_nonzero(problem.mu))
-    if frictional:
-        raise UnsupportedProblemError(
-            f"friction not supported yet: mu > 0 on {frictional} of {problem.n_contacts} contacts"
-        )
+    if np.any(problem.mu > 0):
+        from .coulomb import solve_coulomb
+
+        return solve_coulomb(problem, tol=tol, max_iter=min(max_iter, 100))
     start = time.perf_counter()
+    check_positive_semidefinite(problem.W)
     normal = np.arange(problem.n_contacts) * problem.dim
     W = problem.W
     W_nn = W[normal][:, normal]
@@ -99,4 +117,5 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
     seconds = time.perf_counter() - start
     error = natural_map_error(problem, r, u)
     return LocalSolution(r=r, u=u, error=float(error), converged=bool(error <= tol),
-                         iterations=solution.iterations, seconds=seconds, message=solution.message)
+                         iterations=solution.iterations, seconds=seconds, message=solution.message,
+                         status=contact_status(problem, r, u))

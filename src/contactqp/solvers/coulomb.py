@@ -1,0 +1,284 @@
+r"""Coulomb friction on the local form ``u = W r + q``: semismooth Newton with a Gauss-Seidel net.
+
+Formulation (Alart and Curnier 1991). For each contact, with ``rho_i > 0``,
+
+.. math::
+
+    \Phi_N = r_N - \max(0,\ r_N - \rho u_N), \qquad
+    \Phi_T = r_T - P_{B(0,\ \mu \max(0, r_N - \rho u_N))}(r_T - \rho u_T),
+
+and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
+:class:`~contactqp.local.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
+``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
+contact, built for all contacts at once with numpy). Each Newton step factors it with LAPACK
+(``scipy.linalg.lu_factor``, dense ``W``) or SuperLU (``scipy.sparse.linalg.splu``, sparse
+``W``).
+
+Safeguards, for the singular ``W`` of rigid multibody problems (more contact unknowns than body
+freedoms):
+
+* the Newton matrix is regularised as ``A + B (W + eta D)``, ``D`` the mean diagonal of each
+  contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (a
+  Levenberg-Marquardt-like choice: it vanishes at the solution, so convergence stays fast);
+* a non-monotone Armijo line search on the merit ``1/2 ||Phi||^2`` (the reference is the
+  largest merit of the last 5 iterations; Grippo, Lampariello and Lucidi 1986), because the
+  merit has kinks where contacts change status;
+* when Newton stalls, nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.solvers.pgs`) from the best
+  point so far, then Newton again from where they stop.
+
+Convergence is decided only by :func:`~contactqp.local.natural_map_error` (<= ``tol``), never by
+the solver's own residual. Cohesion is handled by translating each cone to its apex
+(:attr:`~contactqp.local.LocalProblem.apex_shift`): ``r~ = r + s`` solves the FCLIB problem with
+``q~ = q - W s``.
+
+References
+----------
+P. Alart, A. Curnier, "A mixed formulation for frictional contact problems prone to Newton like
+solution methods", CMAME 92 (1991). V. Acary, M. Bremond, O. Huber, "On solving contact problems
+with Coulomb friction: formulations and numerical comparisons", INRIA RR-9118 (2018).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+from ..errors import InvalidInputError
+from ..local import (
+    LocalProblem,
+    check_positive_semidefinite,
+    contact_status,
+    natural_map_error,
+)
+from .pgs import GaussSeidel
+
+__all__ = ["solve_coulomb", "alart_curnier"]
+
+REGULARISATION = 1e-2  # largest eta of the Newton matrix A + B (W + eta D)
+MEMORY = 5  # iterations looked back by the non-monotone line search
+ARMIJO = 1e-4  # sufficient-decrease constant
+MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
+PGS_SWEEPS = 200  # Gauss-Seidel sweeps between two Newton runs
+ROUNDS = 3  # Newton / Gauss-Seidel alternations before giving up
+
+
+def alart_curnier(R, U, mu, rho, jacobian: bool = False):
+    """Alart-Curnier function of every contact, and optionally its generalised Jacobian blocks.
+
+    Parameters
+    ----------
+    R, U : numpy.ndarray, shape (n_contacts, dim)
+        Reactions and velocities, normal component first.
+    mu, rho : numpy.ndarray, shape (n_contacts,)
+        Friction coefficients and the (positive) augmentation parameters.
+    jacobian : bool
+        Also return ``A = dPhi/dr`` and ``B = dPhi/du``.
+
+    Returns
+    -------
+    Phi : numpy.ndarray, shape (n_contacts, dim)
+    A, B : numpy.ndarray, shape (n_contacts, dim, dim)
+        Only with ``jacobian=True``.
+    """
+    nc, d = R.shape
+    xn = R[:, 0] - rho * U[:, 0]
+    pressed = xn > 0
+    radius = mu * np.maximum(xn, 0.0)
+    Y = R[:, 1:] - rho[:, None] * U[:, 1:]
+    ny = np.sqrt(np.sum(Y * Y, axis=1))
+    outside = ny > radius
+    s = np.ones(nc)
+    s[outside] = radius[outside] / ny[outside]
+    Phi = np.empty_like(R)
+    Phi[:, 0] = R[:, 0] - np.maximum(xn, 0.0)
+    Phi[:, 1:] = R[:, 1:] - Y * s[:, None]
+    if not jacobian:
+        return Phi
+    yhat = np.zeros_like(Y)
+    yhat[outside] = Y[outside] / ny[outside, None]
+    eye = np.eye(d - 1)
+    P = eye - yhat[:, :, None] * yhat[:, None, :]  # projector orthogonal to the slip direction
+    A = np.zeros((nc, d, d))
+    B = np.zeros((nc, d, d))
+    A[:, 0, 0] = ~pressed
+    B[:, 0, 0] = rho * pressed
+    A[:, 1:, 1:] = eye - s[:, None, None] * P
+    B[:, 1:, 1:] = (rho * s)[:, None, None] * P
+    g = (mu * pressed)[:, None] * yhat  # d(radius)/d(xn) times the slip direction
+    A[:, 1:, 0] = -g
+    B[:, 1:, 0] = rho[:, None] * g
+    return Phi, A, B
+
+
+class _Newton:
+    """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``."""
+
+    def __init__(self, W, q, mu, dim, error_of):
+        self.W, self.q, self.mu, self.d = W, q, mu, dim
+        self.nc = mu.shape[0]
+        self.sparse = sp.issparse(W)
+        diag = np.asarray(W.diagonal(), dtype=float).reshape(self.nc, dim).mean(axis=1)
+        self.scale = np.where(diag > 0, diag, 1.0)  # D: per-contact diagonal scale of W
+        self.rho = 1.0 / self.scale
+        self.error_of = error_of
+        if self.sparse:
+            self.block_pointers = (np.arange(self.nc), np.arange(self.nc + 1))
+
+    def residual(self, r):
+        u = self.W @ r + self.q
+        Phi = alart_curnier(r.reshape(self.nc, self.d), u.reshape(self.nc, self.d), self.mu,
+                            self.rho)
+        return u, Phi.reshape(-1)
+
+    def direction(self, r, u, eta):
+        """Solve ``(A + B (W + eta D)) dr = -Phi``; None if the matrix is singular."""
+        nc, d, m = self.nc, self.d, self.W.shape[0]
+        Phi, A, B = alart_curnier(r.reshape(nc, d), u.reshape(nc, d), self.mu, self.rho, True)
+        A += (eta * self.scale)[:, None, None] * B
+        rhs = -Phi.reshape(-1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # singularity is detected below
+            if self.sparse:
+                from scipy.sparse.linalg import splu
+
+                Bs = sp.bsr_matrix((B, *self.block_pointers), shape=(m, m))
+                As = sp.bsr_matrix((A, *self.block_pointers), shape=(m, m))
+                try:
+                    step = splu(sp.csc_matrix(Bs @ self.W + As)).solve(rhs)
+                except RuntimeError:  # exactly singular
+                    return None
+            else:
+                J = np.einsum("cij,cjm->cim", B, self.W.reshape(nc, d, m)).reshape(m, m)
+                idx = np.arange(nc)
+                J.reshape(nc, d, nc, d)[idx, :, idx, :] += A
+                step = scipy.linalg.lu_solve(scipy.linalg.lu_factor(J, check_finite=False), rhs,
+                                             check_finite=False)
+        return step if np.all(np.isfinite(step)) else None
+
+    def run(self, r, tol, max_iter):
+        """Iterate from ``r``; return ``(best r, its error, iterations, reason)``."""
+        u, Phi = self.residual(r)
+        error = self.error_of(r, u)
+        best = (r, error)
+        history = []
+        for k in range(max_iter):
+            if error <= tol:
+                return r, error, k, "converged"
+            merit = 0.5 * float(Phi @ Phi)
+            history.append(merit)
+            reference = max(history[-MEMORY:])
+            step = self.direction(r, u, min(REGULARISATION, error))
+            if step is None:
+                return best[0], best[1], k, "singular Newton matrix"
+            t = 1.0
+            for _ in range(MAX_HALVINGS):
+                trial = r + t * step
+                u_trial, Phi_trial = self.residual(trial)
+                if 0.5 * float(Phi_trial @ Phi_trial) <= reference - ARMIJO * t * merit:
+                    break
+                t *= 0.5
+            else:
+                return best[0], best[1], k, "line search failed"
+            r, u, Phi = trial, u_trial, Phi_trial
+            error = self.error_of(r, u)
+            if error < best[1]:
+                best = (r, error)
+        return best[0], best[1], max_iter, "iteration limit"
+
+
+def _check_options(problem, r0, tol, max_iter):
+    if not isinstance(problem, LocalProblem):
+        raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
+    if not (isinstance(tol, int | float) and math.isfinite(tol) and tol > 0):
+        raise InvalidInputError(f"tol must be a positive number, got {tol!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+        raise InvalidInputError(f"max_iter must be a positive int, got {max_iter!r}")
+    m = problem.q.shape[0]
+    if r0 is None:
+        return np.zeros(m)
+    r = np.asarray(r0, dtype=float)
+    if r.shape != (m,):
+        raise InvalidInputError(f"r0 must have shape ({m},), got {r.shape}")
+    if not np.all(np.isfinite(r)):
+        raise InvalidInputError("r0 contains NaN or inf")
+    return r
+
+
+def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = 100):
+    """Solve a local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
+
+    Semismooth Newton on the Alart-Curnier formulation with a non-monotone line search, and
+    nonsmooth Gauss-Seidel sweeps when Newton stalls (see the module notes). Works for 2D and
+    3D, dense or sparse ``W``, any ``mu >= 0`` and cohesion.
+
+    Parameters
+    ----------
+    problem : LocalProblem
+    r0 : array_like, shape (m,), optional
+        Warm start (reactions); zero when not given.
+    tol : float
+        Target of :func:`~contactqp.local.natural_map_error` (relative, dimensionless).
+    max_iter : int
+        Newton iterations per run; at most 3 runs alternate with 200 Gauss-Seidel sweeps each.
+
+    Returns
+    -------
+    LocalSolution
+        ``converged`` is True exactly when the independently computed natural-map error is at
+        most ``tol``; otherwise ``r`` is the best point found and ``message`` says where each
+        stage stopped. ``iterations`` counts Newton iterations plus Gauss-Seidel sweeps.
+        ``status`` gives open / stick / slip per contact.
+
+    Raises
+    ------
+    InvalidInputError
+        On a bad ``tol``, ``max_iter`` or ``r0``.
+    NotPositiveDefiniteError
+        If ``W`` is not positive semidefinite
+        (:func:`~contactqp.local.check_positive_semidefinite`).
+    """
+    from .local import LocalSolution
+
+    start = time.perf_counter()
+    r = _check_options(problem, r0, tol, max_iter)
+    check_positive_semidefinite(problem.W)
+    W, d, mu = problem.W, problem.dim, problem.mu
+    shift = problem.apex_shift
+    q = problem.q - W @ shift if np.any(shift) else problem.q
+
+    def error_of(r_apex, u):
+        return natural_map_error(problem, r_apex - shift, u)
+
+    newton = _Newton(W, q, mu, d, error_of)
+    r, error, iterations, reason = newton.run(r + shift, tol, max_iter)
+    stages = [f"newton {iterations} it. ({reason})"]
+    gauss_seidel = None
+    for _ in range(ROUNDS - 1):
+        if error <= tol:
+            break
+        gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
+        for sweep in range(1, PGS_SWEEPS + 1):
+            r = gauss_seidel.sweep(r)
+            if sweep % 10 == 0 and error_of(r, W @ r + q) <= tol:
+                break
+        iterations += sweep
+        stages.append(f"gauss-seidel {sweep} sweeps")
+        r, error, k, reason = newton.run(r, tol, max_iter)
+        iterations += k
+        stages.append(f"newton {k} it. ({reason})")
+    r = r - shift
+    u = np.asarray(W @ r).reshape(-1) + problem.q
+    error = natural_map_error(problem, r, u)
+    converged = error <= tol
+    verdict = "converged" if converged else f"not converged to {tol:g}"
+    return LocalSolution(
+        r=r, u=u, error=error, converged=converged, iterations=iterations,
+        seconds=time.perf_counter() - start,
+        message=f"{verdict}: {', '.join(stages)}; natural-map error {error:.2e}",
+        status=contact_status(problem, r, u),
+    )
