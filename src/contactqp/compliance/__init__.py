@@ -3,9 +3,10 @@
 Submodules
 ----------
 halfspace
-    Analytic influence coefficients of a linear elastic half-space (Boussinesq, Love).
+    Analytic influence coefficients of a linear elastic half-space (Boussinesq, Love;
+    Cerruti tangential and coupling terms).
 """
 
-from .halfspace import grid, normal_influence
+from .halfspace import grid, influence_matrix, normal_influence
 
-__all__ = ["grid", "normal_influence"]
+__all__ = ["grid", "normal_influence", "influence_matrix"]

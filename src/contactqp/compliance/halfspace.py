@@ -1,4 +1,4 @@
-"""Normal influence coefficients of a linear elastic half-space.
+"""Influence coefficients of a linear elastic half-space: normal, tangential and coupling.
 
 A point force ``F`` normal to the surface of an isotropic linear elastic half-space (Young's
 modulus ``E``, Poisson's ratio ``nu``) displaces the surface, at a distance ``r`` from the force,
@@ -28,6 +28,21 @@ displacement and the force are measured along the same axis (the outward normal 
 half-space, say): a force pulling the surface out lifts it, a force pressing in sinks it, and the
 matrix entries are positive.
 
+A point force ``Q`` tangential to the surface (along x) displaces the surface by Cerruti's
+solution (Johnson 1985, eq. 2.19 at z = 0; G = E / (2 (1 + nu)) the shear modulus):
+
+.. math::
+
+    u_x = \\frac{Q}{2 \\pi G} \\left(\\frac{1 - \\nu}{\\rho} + \\frac{\\nu x^2}{\\rho^3}\\right), \\quad
+    u_y = \\frac{Q}{2 \\pi G} \\frac{\\nu x y}{\\rho^3}, \\quad
+    u_z = -\\frac{(1 - 2\\nu) Q}{4 \\pi G} \\frac{x}{\\rho^2},
+
+with ``z`` the outward normal (the surface sinks ahead of the force), and a normal force ``F``
+(outward) moves the surface radially by ``(1 - 2 nu) F / (4 pi G rho)`` away from it (Boussinesq);
+the two coupling terms are reciprocal, so the 3 x 3 per cell flexibility is symmetric. Each kernel
+is homogeneous of degree -1 and has an elementary primitive ``d^2 F / du dv = f`` (see
+:func:`influence_matrix`), which gives the uniform-traction rectangle in closed form.
+
 References
 ----------
 .. [Love1929] A. E. H. Love, "The stress produced in a semi-infinite solid by pressure on part of
@@ -43,7 +58,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 
-__all__ = ["grid", "normal_influence", "rectangle_potential"]
+__all__ = ["grid", "influence_matrix", "normal_influence", "rectangle_potential"]
 
 #: Rows of the influence matrix computed at once (bounds the temporary memory, not the result).
 _BLOCK_ROWS = 256
@@ -216,9 +231,29 @@ def normal_influence(x, y, dx, dy, young, poisson) -> np.ndarray:
     E, nu = _material(young, poisson)
     scale = (1.0 - nu * nu) / (np.pi * E * dx * dy)
     half_x, half_y = 0.5 * dx, 0.5 * dy
-    n = xs.size
-    result = np.empty((n, n))
+    result = np.empty((xs.size, xs.size))
+    for rows, (integral,), _, _ in _pairwise(
+            xs, ys, dx, dy, lambda X, Y: (scale * _rectangle_integral(X, Y, half_x, half_y),)):
+        result[rows] = integral
+    return result
 
+
+def _pairwise(xs, ys, dx, dy, evaluate):
+    """Evaluate kernels of the offsets ``|x_i - x_j|, |y_i - y_j|`` between cells, by row blocks.
+
+    ``evaluate(X, Y)`` (X, Y >= 0, broadcast) returns a tuple of arrays. Yields
+    ``(rows, values, sign_x, sign_y)``: a slice of rows ``i``, the tuple evaluated for those rows
+    against every cell ``j`` (each array of shape (rows, n)), and the signs of ``x_i - x_j`` and
+    ``y_i - y_j`` (for the kernels odd in an offset). Centres on a regular lattice of pitch
+    ``dx, dy`` evaluate each distinct offset once (a table gathered by a flat index, which keeps
+    ``value(i, j) == value(j, i)`` exactly); other arrangements evaluate every pair.
+
+    Raises
+    ------
+    InvalidInputError
+        Two cells overlap.
+    """
+    n = xs.size
     ix, iy = _lattice_indices(xs, dx), _lattice_indices(ys, dy)
     if ix is not None and iy is not None:
         keys = ix * (int(iy.max()) + 1) + iy
@@ -227,34 +262,164 @@ def normal_influence(x, y, dx, dy, young, poisson) -> np.ndarray:
             i = int(first[np.argmax(counts > 1)])
             j = int(np.flatnonzero(keys == keys[i])[1])
             raise InvalidInputError(_overlap_message(i, j, xs, ys))
-        # One evaluation per distinct offset: a (max ix + 1) x (max iy + 1) table.
+        # One evaluation per distinct offset: (max ix + 1) x (max iy + 1) tables.
         offsets_x = np.arange(int(ix.max()) + 1) * dx
         offsets_y = np.arange(int(iy.max()) + 1) * dy
-        table = scale * _rectangle_integral(offsets_x[:, None], offsets_y[None, :], half_x, half_y)
-        flat = table.ravel()
-        index_type = np.int32 if flat.size < 2**31 else np.int64
+        tables = [table.ravel() for table in evaluate(offsets_x[:, None], offsets_y[None, :])]
+        width = offsets_y.size
+        index_type = np.int32 if tables[0].size < 2**31 else np.int64
         ix, iy = ix.astype(index_type), iy.astype(index_type)
-        width = index_type(table.shape[1])
         for start in range(0, n, _BLOCK_ROWS):
             stop = min(start + _BLOCK_ROWS, n)
+            steps_x = ix[start:stop, None] - ix[None, :]
+            steps_y = iy[start:stop, None] - iy[None, :]
             # Flat gather (much faster than 2-D fancy indexing): k = |dix| * width + |diy|.
-            flat_index = np.abs(ix[start:stop, None] - ix[None, :])
-            flat_index *= width
-            flat_index += np.abs(iy[start:stop, None] - iy[None, :])
-            np.take(flat, flat_index, out=result[start:stop])
-        return result
+            flat_index = np.abs(steps_x)
+            flat_index *= index_type(width)
+            flat_index += np.abs(steps_y)
+            yield (slice(start, stop), tuple(np.take(table, flat_index) for table in tables),
+                   np.sign(steps_x), np.sign(steps_y))
+        return
 
     overlap_x, overlap_y = dx * (1.0 - 1e-9), dy * (1.0 - 1e-9)
     for start in range(0, n, _BLOCK_ROWS):
         stop = min(start + _BLOCK_ROWS, n)
-        X = np.abs(xs[start:stop, None] - xs[None, :])
-        Y = np.abs(ys[start:stop, None] - ys[None, :])
-        overlapping = (X < overlap_x) & (Y < overlap_y)
+        X = xs[start:stop, None] - xs[None, :]
+        Y = ys[start:stop, None] - ys[None, :]
+        overlapping = (np.abs(X) < overlap_x) & (np.abs(Y) < overlap_y)
         overlapping[np.arange(stop - start), np.arange(start, stop)] = False
         if overlapping.any():
             i, j = np.argwhere(overlapping)[0]
             raise InvalidInputError(_overlap_message(int(i) + start, int(j), xs, ys))
-        result[start:stop] = scale * _rectangle_integral(X, Y, half_x, half_y)
+        yield slice(start, stop), evaluate(np.abs(X), np.abs(Y)), np.sign(X), np.sign(Y)
+
+
+def _cerruti_integrals(X, Y, half_x: float, half_y: float):
+    """Integrals (m) of the degree -1 kernels over a ``2 half_x`` by ``2 half_y`` rectangle.
+
+    Seen from ``(X, Y) >= 0`` relative to the centre, with ``(u, v)`` the offset from a source
+    point and ``rho = sqrt(u^2 + v^2)``, returns the integrals of ``1 / rho``, ``u^2 / rho^3``,
+    ``v^2 / rho^3``, ``u v / rho^3``, ``u / rho^2`` and ``v / rho^2``, from the primitives
+
+    .. math::
+
+        \\frac{u^2}{\\rho^3}: v \\operatorname{asinh}\\frac{u}{|v|}, \\quad
+        \\frac{v^2}{\\rho^3}: u \\operatorname{asinh}\\frac{v}{|u|}, \\quad
+        \\frac{u v}{\\rho^3}: -\\rho, \\quad
+        \\frac{u}{\\rho^2}: \\tfrac12 v \\ln \\rho^2 + u \\arctan\\frac{v}{u}
+
+    (``v / rho^2`` by exchanging ``u`` and ``v``), each evaluated at the four corners like
+    :func:`rectangle_potential`. The last three are odd in the offsets: multiply by the signs.
+    """
+    def corners(primitive):
+        return (primitive(X + half_x, Y + half_y) - primitive(X - half_x, Y + half_y)
+                - primitive(X + half_x, Y - half_y) + primitive(X - half_x, Y - half_y))
+
+    def asinh_term(u, v):  # v asinh(u / |v|), 0 on v = 0
+        av = np.abs(v)
+        return v * np.arcsinh(u / np.where(av > 0.0, av, 1.0))
+
+    def log_term(u, v):  # 1/2 v ln(u^2 + v^2) + u atan(v / u), 0 on u = 0 and at the origin
+        rho2 = u * u + v * v
+        half_log = 0.5 * v * np.log(np.where(rho2 > 0.0, rho2, 1.0))
+        return half_log + u * np.arctan(v / np.where(u != 0.0, u, 1.0))
+
+    xx = corners(asinh_term)
+    yy = corners(lambda u, v: asinh_term(v, u))
+    return (xx + yy, xx, yy, corners(lambda u, v: -np.hypot(u, v)),
+            corners(log_term), corners(lambda u, v: log_term(v, u)))
+
+
+def influence_matrix(x, y, dx, dy, young, poisson, coupling=True) -> np.ndarray:
+    """Full (3 per cell) flexibility of an elastic half-space under uniform cell tractions.
+
+    Entry ``(3 i + a, 3 j + b)`` is the displacement (m) along axis ``a`` of the centre of cell
+    ``i`` caused by a unit total force (1 N) along axis ``b`` spread uniformly over cell ``j``;
+    axes ``0, 1, 2 = x, y, z``, with ``z`` the outward normal of the half-space (the sign
+    convention of :func:`normal_influence`, whose matrix is the ``z, z`` part). With
+    ``c = (1 + nu) / (pi E dx dy) = 1 / (2 pi G dx dy)`` and the rectangle integrals
+    ``I[f] = iint_cell j f(x_i - xi, y_i - eta) dxi deta`` (``rho`` the distance):
+
+    .. math::
+
+        R_{xx} = c \\left((1 - \\nu) I[\\tfrac1\\rho] + \\nu I[\\tfrac{x^2}{\\rho^3}]\\right),\\quad
+        R_{xy} = c\\, \\nu I[\\tfrac{x y}{\\rho^3}],\\quad
+        R_{zz} = c (1 - \\nu) I[\\tfrac1\\rho],\\quad
+        R_{xz} = -R_{zx} = c\\, \\frac{1 - 2\\nu}{2} I[\\tfrac{x}{\\rho^2}],
+
+    ``R_yy``, ``R_yz`` likewise. The tangential entries integrate Cerruti's point-force solution,
+    the coupling ones Boussinesq's radial displacement and its reciprocal; both are in closed
+    form (elementary primitives, see the module notes). ``R`` is symmetric.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (n,)
+        Cell centres (m); equal, non-overlapping cells (see :func:`normal_influence`).
+    dx, dy : float
+        Cell size (m), > 0.
+    young : float
+        Young's modulus ``E`` (Pa), > 0.
+    poisson : float
+        Poisson's ratio ``nu``, in (-1, 0.5).
+    coupling : bool
+        False drops the normal-tangential coupling (the ``(1 - 2 nu)`` terms), as for two
+        elastically similar bodies in contact, where the terms of the two bodies cancel.
+
+    Returns
+    -------
+    ndarray, shape (3 n, 3 n)
+        Flexibility ``R`` (m/N), rows and columns ordered cell by cell ``(x, y, z)``.
+
+    Raises
+    ------
+    InvalidInputError
+        An argument is non-finite, out of range, of the wrong shape, or two cells overlap.
+
+    Notes
+    -----
+    The coupling vanishes for an incompressible half-space (``nu = 1/2``) and for identical
+    bodies. For a distant cell the entries tend to the point-force values.
+
+    References
+    ----------
+    .. [1] K. L. Johnson, *Contact Mechanics*, Cambridge University Press, 1985, §2.2, §3.6-3.7.
+    .. [2] J. J. Kalker, *Three-dimensional elastic bodies in rolling contact*, Kluwer, 1990.
+
+    Examples
+    --------
+    >>> from contactqp.compliance import grid, influence_matrix
+    >>> x, y = grid(3, 3, 1e-4, 1e-4)
+    >>> influence_matrix(x, y, 1e-4, 1e-4, young=210e9, poisson=0.3).shape
+    (27, 27)
+    """
+    xs, ys = _centres(x, y)
+    dx = _positive_length(dx, "dx")
+    dy = _positive_length(dy, "dy")
+    E, nu = _material(young, poisson)
+    c = (1.0 + nu) / (np.pi * E * dx * dy)
+    normal_scale = (1.0 - nu * nu) / (np.pi * E * dx * dy)  # c (1 - nu), as normal_influence
+    coupling_scale = 0.5 * c * (1.0 - 2.0 * nu) if coupling else 0.0
+    half_x, half_y = 0.5 * dx, 0.5 * dy
+
+    def evaluate(X, Y):
+        one, xx, yy, xy, along_x, along_y = _cerruti_integrals(X, Y, half_x, half_y)
+        return (c * ((1.0 - nu) * one + nu * xx), c * ((1.0 - nu) * one + nu * yy),
+                c * nu * xy, normal_scale * _rectangle_integral(X, Y, half_x, half_y),
+                coupling_scale * along_x, coupling_scale * along_y)
+
+    n = xs.size
+    result = np.empty((3 * n, 3 * n))
+    for rows, (rxx, ryy, rxy, rzz, rxz, ryz), sign_x, sign_y in _pairwise(xs, ys, dx, dy,
+                                                                        evaluate):
+        block = result[3 * rows.start:3 * rows.stop].reshape(rows.stop - rows.start, 3, n, 3)
+        block[:, 0, :, 0] = rxx
+        block[:, 1, :, 1] = ryy
+        block[:, 0, :, 1] = block[:, 1, :, 0] = sign_x * sign_y * rxy
+        block[:, 2, :, 2] = rzz
+        block[:, 0, :, 2] = sign_x * rxz
+        block[:, 2, :, 0] = -block[:, 0, :, 2]
+        block[:, 1, :, 2] = sign_y * ryz
+        block[:, 2, :, 1] = -block[:, 1, :, 2]
     return result
 
 
