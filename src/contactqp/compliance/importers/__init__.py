@@ -1,0 +1,75 @@
+"""Reduced models from the matrix files of finite-element codes.
+
+=========================  ==================================  ===============================
+Format                     Function                            Selection
+=========================  ==================================  ===============================
+ANSYS ``.full``            :func:`read_ansys_full`             node numbers, ``"UX"``, ...
+NASTRAN OUTPUT4 ``.op4``   :func:`read_op4`                    row indices, ``fixed`` rows
+NASTRAN DMIG (bulk data)   :func:`read_dmig`                   grids, components 1-6
+MatrixMarket ``.mtx``      :func:`read_matrix_market`          row indices, ``fixed`` rows
+unit-load CSV              :func:`read_unit_load_csv`          header ``NODE:COMPONENT``
+=========================  ==================================  ===============================
+
+Every reader returns a :class:`~contactqp.model.ReducedModel` whose freedoms are ordered node by
+node, in the order of the chosen nodes and components. A stiffness is condensed to the chosen
+freedoms by one sparse factorisation (static condensation, exact for a linear model); when every
+free freedom is kept the model holds the stiffness itself. :func:`load_compliance` picks the
+reader from the file's extension.
+
+The ANSYS and NASTRAN readers need ``pip install 'contactqp[importers]'`` (ansys-mapdl-reader,
+pyNastran); they are imported when a file is read. Every error is one line that starts with the
+file's path: :class:`~contactqp.errors.FileFormatError` for a missing, foreign, truncated or
+malformed file, :class:`~contactqp.errors.InvalidInputError` for a selection the file cannot
+satisfy or an inconsistent matrix, :class:`~contactqp.errors.NotPositiveDefiniteError` (and
+:class:`~contactqp.compliance.condensation.RigidBodyModeError`) for a model that is not fixed
+enough.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ...errors import FileFormatError
+from .ansys import read_ansys_full
+from .csv_rows import read_unit_load_csv
+from .matrixmarket import read_matrix_market
+from .nastran import dmig_matrix, op4_matrix, read_dmig, read_op4
+
+__all__ = ["load_compliance", "read_ansys_full", "read_op4", "op4_matrix", "read_dmig",
+           "dmig_matrix", "read_matrix_market", "read_unit_load_csv", "READERS"]
+
+#: File name endings and the reader :func:`load_compliance` chooses for them.
+READERS = {
+    (".full",): read_ansys_full,
+    (".op4",): read_op4,
+    (".bdf", ".nas", ".dat", ".blk", ".bulk", ".pch"): read_dmig,
+    (".mtx", ".mtx.gz"): read_matrix_market,
+    (".csv", ".txt"): read_unit_load_csv,
+}
+
+
+def load_compliance(path, *args, **selection):
+    """Read a reduced model with the reader chosen by the file's extension (see :data:`READERS`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    *args, **selection
+        Passed to the reader, e.g. ``load_compliance("model.full", nodes=[12, 40])`` or
+        ``load_compliance("K.mtx", kind="stiffness", freedoms=[0, 5])``.
+
+    Returns
+    -------
+    ReducedModel
+
+    Raises
+    ------
+    FileFormatError
+        An extension no reader knows; otherwise the reader's errors.
+    """
+    name = Path(path).name.lower()
+    for endings, reader in READERS.items():
+        if name.endswith(endings):
+            return reader(path, *args, **selection)
+    known = ", ".join(ending for endings in READERS for ending in endings)
+    raise FileFormatError(f"{path}: cannot tell the format from the extension (known: {known})")

@@ -1,0 +1,60 @@
+"""MatrixMarket files (``.mtx``, ``.mtx.gz``) of a stiffness or a flexibility matrix."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.io
+import scipy.sparse as sp
+
+from ...errors import FileFormatError, InvalidInputError
+from ...model import SYMMETRY_RTOL, ReducedModel
+from ._common import about, existing_file, one_line, reduced_model
+
+__all__ = ["read_matrix_market"]
+
+
+def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_node=1,
+                       symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+    """Reduced model from a MatrixMarket file (coordinate or array, ``symmetric`` included).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    kind : {"stiffness", "flexibility"}
+        What the matrix is.
+    freedoms : sequence of int, optional
+        Rows (from 0) of the computational freedoms, in the model's order; default: every row not
+        fixed. A stiffness is condensed to them (one sparse factorisation), a flexibility cut.
+    fixed : sequence of int, optional
+        Rows of a stiffness that are clamped.
+    dofs_per_node : int or sequence of int
+        Freedoms of each computational node (see :class:`~contactqp.model.ReducedModel`).
+    symmetry_rtol : float
+        See :func:`~contactqp.model.check_spd_matrix`.
+
+    Returns
+    -------
+    ReducedModel
+        Given as the stiffness when every free row is kept, as a flexibility otherwise.
+
+    Raises
+    ------
+    FileFormatError
+        Missing or unreadable file, or not MatrixMarket.
+    InvalidInputError
+        Complex, non-square or non-finite matrix, bad indices.
+    NotPositiveDefiniteError
+        The (reduced) matrix is not positive definite (:class:`RigidBodyModeError` for a
+        stiffness with rigid-body modes).
+    """
+    path = existing_file(path)
+    try:
+        matrix = scipy.io.mmread(str(path))
+    except (OSError, ValueError, EOFError, UnicodeDecodeError, IndexError) as exc:
+        raise FileFormatError(f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
+    if np.iscomplexobj(matrix.data if sp.issparse(matrix) else matrix):
+        raise InvalidInputError(f"{path}: the matrix is complex; a real matrix is needed")
+    matrix = sp.csc_matrix(matrix, dtype=float) if sp.issparse(matrix) else matrix.astype(float)
+    with about(path):
+        return reduced_model(matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node,
+                             symmetry_rtol=symmetry_rtol)

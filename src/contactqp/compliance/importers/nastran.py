@@ -1,0 +1,264 @@
+"""NASTRAN matrices: OUTPUT4 (OP4) files and DMIG cards of a bulk-data file, through pyNastran."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import logging
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...errors import ContactError, FileFormatError, InvalidInputError
+from ...model import SYMMETRY_RTOL, ReducedModel
+from ._common import about, backend, existing_file, freedom_indices, one_line, reduced_model
+
+__all__ = ["read_op4", "op4_matrix", "read_dmig", "dmig_matrix"]
+
+_BULK_START = "BEGIN BULK"
+
+
+def _which(path: Path, names: Sequence[str], name: str | None, what: str) -> str:
+    if name is None:
+        if len(names) != 1:
+            raise InvalidInputError(f"{path}: the file holds {len(names)} {what}s "
+                                    f"({', '.join(names) or 'none'}); choose one by name")
+        return names[0]
+    if name not in names:
+        raise InvalidInputError(f"{path}: no {what} named {name!r} (the file holds "
+                                f"{', '.join(names) or 'none'})")
+    return name
+
+
+def _real(path: Path, matrix, name: str):
+    if np.iscomplexobj(matrix):
+        raise InvalidInputError(f"{path}: matrix {name!r} is complex; a real matrix is needed")
+    return matrix.astype(float)
+
+
+def op4_matrix(path, name: str | None = None):
+    """One matrix of a NASTRAN OUTPUT4 file, ASCII or binary, dense or sparse.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    name : str, optional
+        The matrix's name (e.g. ``"KAA"``); default: the file's only matrix.
+
+    Returns
+    -------
+    ndarray or scipy.sparse.coo_matrix, shape (n_rows, n_columns)
+        Real, float64, as stored (a sparse OP4 matrix stays sparse).
+
+    Raises
+    ------
+    FileFormatError
+        Missing, unreadable or foreign file.
+    InvalidInputError
+        No matrix of that name, several matrices and no name, or a complex matrix.
+    """
+    path = existing_file(path)
+    op4 = backend("pyNastran.op4.op4", "pyNastran", "NASTRAN OP4 files")
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            matrices = op4.read_op4(str(path), precision="double", log=_log())
+    except ContactError:
+        raise
+    except Exception as exc:  # whatever pyNastran raises on a foreign or truncated file
+        raise FileFormatError(f"{path}: not a readable OP4 file "
+                              f"({type(exc).__name__}: {one_line(exc)})") from None
+    name = _which(path, list(matrices), name, "matrix")
+    return _real(path, matrices[name].data, name)
+
+
+def _log() -> logging.Logger:
+    """pyNastran's messages go to the ``contactqp.importers`` logger, silent unless configured."""
+    log = logging.getLogger("contactqp.importers")
+    if not log.handlers:
+        log.addHandler(logging.NullHandler())
+    return log
+
+
+def read_op4(path, name: str | None = None, *, kind: str, freedoms=None, fixed=None,
+             dofs_per_node=1, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+    """Reduced model from a stiffness (``KAA``, ``KGG``, ...) or flexibility matrix in an OP4 file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    name : str, optional
+        The matrix's name; default: the file's only matrix.
+    kind : {"stiffness", "flexibility"}
+        What the matrix is (an OP4 file does not say).
+    freedoms : sequence of int, optional
+        Rows (from 0) of the computational freedoms, in the model's order; default: every row not
+        fixed. A stiffness is condensed to them, a flexibility cut to them.
+    fixed : sequence of int, optional
+        Rows of a stiffness that are clamped (e.g. the SPCs of an unconstrained ``KGG``).
+    dofs_per_node : int or sequence of int
+        Freedoms of each computational node (see :class:`~contactqp.model.ReducedModel`).
+    symmetry_rtol : float
+        See :func:`~contactqp.model.check_spd_matrix`.
+
+    Returns
+    -------
+    ReducedModel
+        Given as the stiffness when every free row is kept, as a flexibility otherwise; in the
+        units of the NASTRAN model.
+
+    Raises
+    ------
+    FileFormatError, InvalidInputError
+        See :func:`op4_matrix`; also a non-square matrix or bad indices.
+    NotPositiveDefiniteError
+        The (reduced) matrix is not positive definite (:class:`RigidBodyModeError` for a
+        stiffness with rigid-body modes).
+    MissingDependencyError
+        pyNastran is not installed.
+    """
+    path = Path(path)
+    matrix = op4_matrix(path, name)
+    with about(path):
+        return reduced_model(sp.csc_matrix(matrix) if sp.issparse(matrix) else matrix, kind,
+                             freedoms, fixed, dofs_per_node=dofs_per_node,
+                             symmetry_rtol=symmetry_rtol)
+
+
+def _bulk(path: Path):
+    """The BDF model of a bulk-data file, with or without executive and case control."""
+    bdf = backend("pyNastran.bdf.bdf", "pyNastran", "NASTRAN bulk-data files")
+    try:
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            punch = not any(line.upper().lstrip().startswith(_BULK_START) for line in handle)
+        model = bdf.BDF(log=_log())
+        with contextlib.redirect_stdout(io.StringIO()):  # pyNastran prints the failing card
+            model.read_bdf(str(path), xref=False, punch=punch, validate=False)
+    except ContactError:
+        raise
+    except Exception as exc:  # pyNastran's errors on malformed cards or foreign files
+        raise FileFormatError(f"{path}: not a readable NASTRAN bulk-data file "
+                              f"({type(exc).__name__}: {one_line(exc)})") from None
+    return model
+
+
+def _assemble(path: Path, dmig) -> tuple[sp.csc_matrix, list[tuple[int, int]]]:
+    """The square matrix of a DMIG and the (grid, component) of each row, sorted."""
+    if dmig.matrix_form not in (1, 6):
+        raise InvalidInputError(f"{path}: DMIG {dmig.name!r} has form IFO={dmig.matrix_form}; "
+                                "a square (1) or symmetric (6) matrix is needed")
+    rows = np.asarray(dmig.GCi, dtype=int).reshape(-1, 2)
+    cols = np.asarray(dmig.GCj, dtype=int).reshape(-1, 2)
+    values = np.asarray(dmig.Real, dtype=float)
+    if dmig.is_complex:
+        raise InvalidInputError(f"{path}: DMIG {dmig.name!r} is complex; a real matrix is needed")
+    labels, index = np.unique(np.vstack((rows, cols)), axis=0, return_inverse=True)
+    index = index.reshape(-1)
+    i, j, n = index[: len(rows)], index[len(rows):], len(labels)
+    if dmig.matrix_form == 6:  # each off-diagonal term given once, above or below the diagonal
+        off = i != j
+        if np.isin(j[off] * n + i[off], i[off] * n + j[off]).any():
+            raise FileFormatError(f"{path}: symmetric DMIG {dmig.name!r} gives a term both "
+                                  "above and below the diagonal")
+        i, j, values = (np.concatenate((i, j[off])), np.concatenate((j, i[off])),
+                        np.concatenate((values, values[off])))
+    matrix = sp.csc_matrix((values, (i, j)), shape=(n, n))
+    return matrix, [(int(g), int(c)) for g, c in labels]
+
+
+def dmig_matrix(path, name: str):
+    """The matrix of a DMIG entry of a bulk-data file and the (grid, component) of its rows.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A bulk-data file (``BEGIN BULK`` optional, ``INCLUDE`` followed).
+    name : str
+        The DMIG's name (e.g. ``"KAAX"``).
+
+    Returns
+    -------
+    matrix : scipy.sparse.csc_matrix, shape (n, n)
+        A symmetric DMIG (``IFO=6``) is completed from the triangle given.
+    labels : list of (int, int)
+        ``(grid, component)`` of each row and column, sorted; component 0 is a scalar point.
+
+    Raises
+    ------
+    FileFormatError
+        Missing or unreadable file, malformed cards.
+    InvalidInputError
+        No DMIG of that name, a rectangular or complex matrix.
+    """
+    return _load_dmig(existing_file(path), name)[1:]
+
+
+def _load_dmig(path: Path, name: str):
+    model = _bulk(path)
+    name = _which(path, sorted(model.dmig), name, "DMIG")
+    return (model, *_assemble(path, model.dmig[name]))
+
+
+def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
+              components: Sequence[int] = (1, 2, 3), *, kind: str, fixed=None,
+              symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+    """Reduced model of chosen grids from a DMIG matrix (``K2GG``, ``KAAX``, ...) of a bulk-data file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bulk-data file (see :func:`dmig_matrix`).
+    name : str
+        The DMIG's name.
+    nodes : sequence of int, optional
+        Grid (or scalar point) numbers of the computational nodes, in order; default: every grid
+        of the matrix, ascending.
+    components : sequence of int
+        NASTRAN components taken at every node (1-3 translations, 4-6 rotations, 0 for scalar
+        points), 1 to 3 of them, in order.
+    kind : {"stiffness", "flexibility"}
+        What the matrix is.
+    fixed : sequence of (int, int), optional
+        ``(grid, component)`` freedoms of a stiffness that are clamped. Freedoms neither chosen
+        nor fixed are condensed out of a stiffness and dropped from a flexibility.
+    symmetry_rtol : float
+        See :func:`~contactqp.model.check_spd_matrix`.
+
+    Returns
+    -------
+    ReducedModel
+        Freedoms node by node in the order of ``nodes`` and ``components``. Coordinates are those
+        of the GRID cards in the file when every chosen node has one in the basic system.
+
+    Raises
+    ------
+    FileFormatError, InvalidInputError
+        See :func:`dmig_matrix`; also a grid or component not in the matrix.
+    NotPositiveDefiniteError
+        The (reduced) matrix is not positive definite (:class:`RigidBodyModeError` for a
+        stiffness with rigid-body modes).
+    MissingDependencyError
+        pyNastran is not installed.
+    """
+    path = existing_file(path)
+    model, matrix, labels = _load_dmig(path, name)
+    if nodes is None:
+        nodes = sorted({grid for grid, _ in labels})
+    nodes = [int(node) for node in nodes]
+    grids = [model.nodes.get(node) for node in nodes]
+    coordinates = None
+    if all(grid is not None and grid.cp == 0 for grid in grids):
+        coordinates = np.array([grid.xyz for grid in grids], dtype=float)
+    describe = lambda node, component: f"grid {node} component {component}"  # noqa: E731
+    with about(path):
+        keep = freedom_indices(labels, nodes, [int(c) for c in components], describe)
+        fixed_index = None
+        if fixed is not None:
+            pairs = [(int(g), int(c)) for g, c in fixed]
+            fixed_index = np.concatenate([freedom_indices(labels, [g], [c], describe)
+                                          for g, c in pairs]) if pairs else None
+        names = [describe(g, c) for g, c in labels]
+        return reduced_model(matrix, kind, keep, fixed_index, names,
+                             dofs_per_node=len(components), coordinates=coordinates,
+                             symmetry_rtol=symmetry_rtol)
