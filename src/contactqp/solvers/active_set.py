@@ -11,6 +11,8 @@ from .box_qp import solve_box_qp
 
 __all__ = ["solve_active_set", "cold_start"]
 
+_ROW_CHUNK = 256
+
 
 def cold_start(W, b):
     """A first guess of the contact forces whose support is close to the contact zone.
@@ -18,7 +20,10 @@ def cold_start(W, b):
     Each interpenetration ``b_i > 0`` is shared over the row of ``W``, so that the first free
     block is smaller than the whole overlap; only the first active set depends on it.
     """
-    return np.maximum(b, 0.0) / np.abs(W).sum(axis=1)
+    row_sums = np.empty(len(b))
+    for start in range(0, len(b), _ROW_CHUNK):  # |W| by row blocks: no full-size temporary
+        row_sums[start:start + _ROW_CHUNK] = np.abs(W[start:start + _ROW_CHUNK]).sum(axis=1)
+    return np.maximum(b, 0.0) / row_sums
 
 
 def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int = 500):
@@ -45,12 +50,14 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     dual = problem.dual()
     if forces0 is None:
         forces0 = cold_start(dual.W, dual.b)
-    solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol, max_iter=max_iter)
+    solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol, max_iter=max_iter,
+                            check_finite=False)  # W comes from the validated model
     forces = solution.x
     displacements = dual.displacements(forces)
     elapsed = time.perf_counter() - start
     return problem.make_result(
         displacements, forces, solver="active-set", converged=solution.converged,
         message=solution.message, nit=solution.iterations, wall_time=elapsed,
-        info={"factorizations": solution.factorizations, "residual": solution.residual},
+        info={"factorizations": solution.factorizations, "updates": solution.updates,
+              "residual": solution.residual},
     )

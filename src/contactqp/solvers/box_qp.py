@@ -57,7 +57,10 @@ class BoxQPSolution:
     iterations : int
         Newton iterations of both phases.
     factorizations : int
-        Cholesky factorisations computed (cache hits excluded).
+        Cholesky factorisations of free blocks.
+    updates : int
+        Free blocks solved by updating a factorisation instead (see
+        :class:`~contactqp.solvers.free_block.FreeBlockSolver`).
     residual : float
         ``max|x - P(x - sigma g)|`` relative to the scale of ``x``, at the returned point.
     message : str
@@ -69,17 +72,18 @@ class BoxQPSolution:
     converged: bool
     iterations: int
     factorizations: int
+    updates: int
     residual: float
     message: str
 
 
-def _validated(W, c, lower, upper, x0):
+def _validated(W, c, lower, upper, x0, check_finite):
     W = np.asarray(W, dtype=float)
     c = np.asarray(c, dtype=float).reshape(-1)
     n = c.size
     if W.shape != (n, n):
         raise InvalidInputError(f"W must have shape ({n}, {n}) to match c, got {W.shape}")
-    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(c))):
+    if not (np.all(np.isfinite(c)) and (not check_finite or np.all(np.isfinite(W)))):
         raise InvalidInputError("W or c contains NaN or inf")
     lower = np.full(n, -np.inf) if lower is None else np.broadcast_to(
         np.asarray(lower, dtype=float), (n,)).copy()
@@ -156,7 +160,7 @@ def _active_set_phase(qp: _BoxQP, x, max_iter):
     f = qp.objective(x)
     for iteration in range(1, max_iter + 1):
         if qp.residual(x, g) <= qp.tol:
-            return x, iteration - 1, True, "active set converged"
+            return x, g, iteration - 1, True, "active set converged"
         newton = qp.newton_point(qp.state(x, g))
         product = qp.W @ newton
         value = float(newton @ (0.5 * product + qp.c))
@@ -170,10 +174,10 @@ def _active_set_phase(qp: _BoxQP, x, max_iter):
         values = np.einsum("ij,ij->j", trials, 0.5 * products + qp.c[:, None])
         best = int(np.argmin(values))
         if not values[best] < f:
-            return x, iteration, False, "active set step gave no decrease"
+            return x, g, iteration, False, "active set step gave no decrease"
         x, g, f = trials[:, best], products[:, best] + qp.c, float(values[best])
     converged = qp.residual(x, g) <= qp.tol
-    return x, max_iter, converged, ("active set converged" if converged
+    return x, g, max_iter, converged, ("active set converged" if converged
                                     else "active set iteration limit")
 
 
@@ -184,7 +188,7 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
         g = qp.gradient(x)
         step = x - qp.project(x - qp.sigma * g)
         if qp.residual(x, g) <= qp.tol:
-            return x, iteration - 1, True, "projected Newton converged"
+            return x, g, iteration - 1, True, "projected Newton converged"
         epsilon = min(float(np.max(np.abs(step))), 1e-3 * max(qp.x_scale, 1e-300))
         binding = (((x <= qp.lower + epsilon) & (g > 0)) | ((x >= qp.upper - epsilon) & (g < 0)))
         free = ~binding
@@ -201,16 +205,16 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
                 break
             alpha *= 0.5
             if alpha < 1e-14:
-                return x, iteration, False, "projected Newton line search stalled"
+                return x, g, iteration, False, "projected Newton line search stalled"
         x = trial
     g = qp.gradient(x)
     converged = qp.residual(x, g) <= qp.tol
-    return x, max_iter, converged, ("projected Newton converged" if converged
+    return x, g, max_iter, converged, ("projected Newton converged" if converged
                                     else "iteration limit reached")
 
 
 def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
-                 max_iter: int = 500) -> BoxQPSolution:
+                 max_iter: int = 500, check_finite: bool = True) -> BoxQPSolution:
     """Minimise ``1/2 x^T W x + c^T x`` subject to ``lower <= x <= upper``.
 
     Parameters
@@ -227,22 +231,25 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
         the scale of the solution (``sigma`` is the inverse mean diagonal of ``W``).
     max_iter : int
         Newton iterations allowed in each phase.
+    check_finite : bool
+        Check ``W`` for NaN and inf (a full pass over it); callers whose ``W`` is built from a
+        validated model may skip it.
 
     Returns
     -------
     BoxQPSolution
         ``converged`` is False, with the reason in ``message``, when neither phase reached ``tol``.
     """
-    W, c, lower, upper, x0 = _validated(W, c, lower, upper, x0)
+    W, c, lower, upper, x0 = _validated(W, c, lower, upper, x0, check_finite)
     qp = _BoxQP(W, c, lower, upper, tol)
     start = np.zeros(c.size) if x0 is None else x0
-    x, iterations, converged, message = _active_set_phase(qp, start, max_iter)
+    x, g, iterations, converged, message = _active_set_phase(qp, start, max_iter)
     if not converged:
-        x, more, converged, message = _projected_newton_phase(qp, x, max_iter)
+        x, g, more, converged, message = _projected_newton_phase(qp, x, max_iter)
         iterations += more
         message = f"active set did not settle; {message}"
-    g = qp.gradient(x)
     state = np.where(x <= lower, AT_LOWER, np.where(x >= upper, AT_UPPER, FREE)).astype(np.int8)
     return BoxQPSolution(x=x, gradient=g, state=state, converged=converged, iterations=iterations,
-                         factorizations=qp.blocks.factorizations, residual=qp.residual(x, g),
+                         factorizations=qp.blocks.factorizations,
+                         updates=qp.blocks.updates, residual=qp.residual(x, g),
                          message=message)
