@@ -17,7 +17,7 @@ import scipy.linalg
 from .errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
 
 __all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix",
-           "finite_array"]
+           "checked_cholesky", "finite_array"]
 
 #: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised silently-with-warning.
 SYMMETRY_RTOL = 1e-6
@@ -39,6 +39,14 @@ def finite_array(value, name: str, ndim: int) -> np.ndarray:
 def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
     """Validate a symmetric positive definite matrix and return it as a float array.
 
+    See :func:`checked_cholesky`, which also returns the factor computed by the check.
+    """
+    return checked_cholesky(matrix, name, symmetry_rtol)[0]
+
+
+def checked_cholesky(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL):
+    """Validate a symmetric positive definite matrix; return it and its lower Cholesky factor.
+
     Parameters
     ----------
     matrix : array_like, shape (n, n)
@@ -55,6 +63,12 @@ def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) ->
     NotPositiveDefiniteError
         The Cholesky factorisation fails; the message gives the failed pivot and the smallest
         eigenvalue.
+
+    Returns
+    -------
+    array : ndarray, shape (n, n)
+    factor : ndarray, shape (n, n)
+        Lower triangular ``L`` with ``L L^T = array``.
     """
     array = finite_array(matrix, name, 2)
     n, m = array.shape
@@ -89,7 +103,7 @@ def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) ->
             f"{name} is singular to working precision: smallest Cholesky pivot {pivots.min():.3g}, "
             f"largest {pivots.max():.3g}"
         )
-    return array
+    return array, factor
 
 
 @dataclass(frozen=True)
@@ -170,11 +184,13 @@ class ReducedModel:
         if (flexibility is None) == (stiffness is None):
             raise InvalidInputError("give exactly one of flexibility or stiffness")
         name = "flexibility" if flexibility is not None else "stiffness"
-        matrix = check_spd_matrix(flexibility if flexibility is not None else stiffness, name,
-                                  symmetry_rtol)
+        matrix, factor = checked_cholesky(flexibility if flexibility is not None else stiffness,
+                                          name, symmetry_rtol)
         self._flexibility = matrix if name == "flexibility" else None
         self._stiffness = matrix if name == "stiffness" else None
-        self._factor = None
+        # a stiffness always needs its factor (U = K^-1 P): keep the validation's; a flexibility
+        # needs one only if K is asked for, so its (n x n) factor is not held meanwhile
+        self._factor = (factor, True) if name == "stiffness" else None
         n = matrix.shape[0]
         counts = self._dof_counts(dofs_per_node, n)
         self.dofs_per_node = counts
@@ -227,8 +243,8 @@ class ReducedModel:
 
     def _cholesky(self):
         if self._factor is None:
-            matrix = self._flexibility if self._flexibility is not None else self._stiffness
-            self._factor = scipy.linalg.cho_factor(matrix, lower=True, check_finite=False)
+            self._factor = scipy.linalg.cho_factor(self._flexibility, lower=True,
+                                                   check_finite=False)
         return self._factor
 
     @property
