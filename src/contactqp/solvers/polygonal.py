@@ -40,8 +40,7 @@ from ..errors import InvalidInputError
 from ..local import LocalProblem
 from .local import LocalSolution
 from .qp import _qpsolvers, available_backends, backend_options
-from .tresca import (check_fixed_point_arguments, free_unknowns, run_fixed_point, scales,
-                     symmetric_split)
+from .tresca import FixedPointData, check_fixed_point_arguments, free_unknowns, run_fixed_point
 
 __all__ = ["solve_polygonal", "polygon_normals"]
 
@@ -60,7 +59,7 @@ def polygon_normals(facets: int) -> np.ndarray:
 class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
 
-    def __init__(self, problem: LocalProblem, facets: int, backend: str, options: dict):
+    def __init__(self, data: FixedPointData, facets: int, backend: str, options: dict):
         self.qpsolvers = _qpsolvers()
         if backend not in self.qpsolvers.available_solvers:
             raise InvalidInputError(
@@ -68,15 +67,14 @@ class _PolygonalTresca:
                 f"{', '.join(available_backends())}")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
-        W_sym, _ = symmetric_split(problem.W)
-        self.w, self.f = scales(W_sym, problem.q)
+        self.w, self.f = data.w, data.f
         self.sparse = backend in self.qpsolvers.sparse_solvers
-        P = W_sym / self.w
+        P = data.W_sym / self.w
         if self.sparse:
             self.P = sp.csc_matrix(P)
         else:
             self.P = P.toarray() if sp.issparse(P) else np.asarray(P)
-        self.d, self.nc = problem.dim, problem.n_contacts
+        self.d, self.nc = data.dim, data.n_contacts
         self.normals = polygon_normals(facets) if self.d == 3 else None
         self.inradius = np.cos(np.pi / facets)
 
@@ -158,6 +156,6 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
     """
     polygon_normals(facets)
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
-    tresca = _PolygonalTresca(problem, facets, backend, options)
-    return run_fixed_point(problem, tresca, tol=tol, max_iter=max_iter, r0=start,
-                           exact=problem.dim == 2)
+    data = FixedPointData(problem)
+    return run_fixed_point(problem, data, _PolygonalTresca(data, facets, backend, options),
+                           tol=tol, max_iter=max_iter, r0=start, exact=problem.dim == 2)

@@ -36,7 +36,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
 from ..errors import InvalidInputError, MissingDependencyError
-from ..local import LocalProblem, natural_map_error
+from ..local import LocalProblem, contact_status, natural_map_error
 from .local import LocalSolution
 
 __all__ = ["solve_tresca_fixed_point"]
@@ -67,62 +67,88 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     return start
 
 
-def symmetric_split(W):
-    """``(W_sym, W_skew)`` with ``W = W_sym + W_skew``; ``W_skew`` is None when W is symmetric."""
-    skew = 0.5 * (W - W.T)
-    if (skew.count_nonzero() if sp.issparse(skew) else np.count_nonzero(skew)) == 0:
-        return W, None
-    return W - skew, skew
+class FixedPointData:
+    """What the fixed-point routes need from a problem, computed once.
+
+    Reactions are measured from the cone apex, ``r' = r + apex_shift`` (so that a Mohr-Coulomb
+    problem with cohesion becomes a Coulomb one, ``u = W r' + q'``), and ``W`` is split into its
+    symmetric part (for the sub-problems) and its skew part (iterated on, None if zero).
+
+    Attributes
+    ----------
+    W_sym : ndarray or csr_matrix, shape (m, m)
+    skew : ndarray or csr_matrix or None, shape (m, m)
+    q : ndarray, shape (m,)
+        ``q - W apex_shift``.
+    shift : ndarray, shape (m,)
+        :attr:`~contactqp.local.LocalProblem.apex_shift`.
+    w, f : float
+        Compliance scale (largest diagonal of ``W``) and force scale ``max|q'| / w``: the
+        sub-problems solve for ``r' / f`` with ``W / w`` and ``q / (f w)``, O(1) data on which
+        the backends' absolute tolerances mean the same thing on every problem.
+    dim, n_contacts : int
+    """
+
+    def __init__(self, problem: LocalProblem):
+        W = problem.W
+        skew = 0.5 * (W - W.T)
+        if (skew.count_nonzero() if sp.issparse(skew) else np.count_nonzero(skew)) == 0:
+            self.W_sym, self.skew = W, None
+        else:
+            self.W_sym, self.skew = W - skew, skew
+        self.shift = problem.apex_shift
+        self.q = problem.q - np.asarray(W @ self.shift).ravel()
+        diagonal = np.abs(self.W_sym.diagonal())
+        self.w = float(diagonal.max()) if diagonal.size and diagonal.max() > 0 else 1.0
+        self.f = float(np.max(np.abs(self.q), initial=0.0)) / self.w or 1.0
+        self.dim, self.n_contacts = problem.dim, problem.n_contacts
 
 
-def run_fixed_point(problem, tresca, *, tol, max_iter, r0, exact):
-    """Iterate ``s = mu r_N`` over a Tresca sub-solver; the loop shared by the fixed-point routes.
+def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
+    """Iterate ``s = mu r'_N`` over a Tresca sub-solver; the loop shared by the fixed-point routes.
 
     Parameters
     ----------
     problem : LocalProblem
+    data : FixedPointData
     tresca : callable
-        ``tresca(q, s) -> r``: reactions (N, shape (m,)) of the Tresca problem with the symmetric
-        part of ``W``, right-hand side ``q`` (shape (m,)) and friction bounds ``s`` (shape (nc,)).
+        ``tresca(q, s) -> r'``: reactions from the apex (shape (m,)) of the Tresca problem with
+        ``data.W_sym``, right-hand side ``q`` (shape (m,)) and friction bounds ``s`` (shape (nc,)).
     tol : float
     max_iter : int
     r0 : ndarray or None
-        Start; None starts from the frictionless bounds ``s = 0``.
+        Starting reactions; None starts from the frictionless bounds ``s = 0``.
     exact : bool
         True when the sub-problem's cone is the Coulomb disc: convergence is then a natural-map
         error at most ``tol``. False (polygonal cones) when it is the fixed point itself: the
-        relative change of ``r`` between two iterations at most ``tol``.
+        relative change of ``r'`` between two iterations at most ``tol``.
 
     Returns
     -------
     LocalSolution
         The best iterate by natural-map error when ``exact``, the last one otherwise; ``error``
-        is always the natural-map error against the exact Coulomb cones.
+        is always the natural-map error against the exact cones.
     """
     start_time = time.perf_counter()
     d = problem.dim
-    _, skew = symmetric_split(problem.W)
-    r = np.zeros(problem.W.shape[0]) if r0 is None else r0.copy()
+    r = np.zeros(problem.q.shape[0]) if r0 is None else r0 + data.shift
     best = (np.inf, r)
     message, converged, stalled = "", False, 0
     iteration = 0
     for iteration in range(1, max_iter + 1):
         s = problem.mu * np.maximum(r[::d], 0.0)
-        q = problem.q if skew is None else problem.q + np.asarray(skew @ r).ravel()
+        q = data.q if data.skew is None else data.q + np.asarray(data.skew @ r).ravel()
         previous, r = r, tresca(q, s)
-        error = natural_map_error(problem, r)
+        error = natural_map_error(problem, r - data.shift)
         if exact:
-            if error < 0.5 * best[0]:
-                stalled = 0
-            else:
-                stalled += 1
+            stalled = 0 if error < 0.5 * best[0] else stalled + 1
             if error < best[0]:
                 best = (error, r)
             if error <= tol:
                 converged, message = True, f"natural-map error {error:.2e} <= tol"
                 break
             if stalled >= _PATIENCE:
-                message = f"stalled at natural-map error {best[0]:.2e} (sub-solver accuracy)"
+                message = f"stalled at natural-map error {best[0]:.2e}"
                 break
         else:
             best = (error, r)
@@ -135,21 +161,11 @@ def run_fixed_point(problem, tresca, *, tol, max_iter, r0, exact):
     if not message:
         message = f"max_iter = {max_iter} reached, natural-map error {best[0]:.2e}"
     error, r = best
+    r = r - data.shift
     u = np.asarray(problem.W @ r).ravel() + problem.q
     return LocalSolution(r=r, u=u, error=float(error), converged=converged, iterations=iteration,
-                         seconds=time.perf_counter() - start_time, message=message)
-
-
-def scales(W_sym, q):
-    """``(w, f)``: a compliance scale (largest diagonal of W) and a force scale ``max|q| / w``.
-
-    Solving for ``r / f`` with ``W / w`` and ``q / (f w)`` gives sub-problems with O(1) data,
-    so that absolute tolerances of the backends mean the same thing on every problem.
-    """
-    diagonal = np.abs(W_sym.diagonal())
-    w = float(diagonal.max()) if diagonal.size and diagonal.max() > 0 else 1.0
-    f = float(np.max(np.abs(q), initial=0.0)) / w or 1.0
-    return w, f
+                         seconds=time.perf_counter() - start_time, message=message,
+                         status=contact_status(problem, r, u))
 
 
 def free_unknowns(s, d):
@@ -185,19 +201,17 @@ class _ClarabelTresca:
     every second-order cone left has an interior.
     """
 
-    def __init__(self, problem: LocalProblem):
+    def __init__(self, data: FixedPointData):
         try:
             import clarabel
         except ImportError:
             raise MissingDependencyError(
                 "the Tresca fixed point needs Clarabel: pip install clarabel") from None
         self._clarabel = clarabel
-        W_sym, _ = symmetric_split(problem.W)
-        self.w, self.f = scales(W_sym, problem.q)
-        self.W = W_sym / self.w  # scaled, full (for the polish)
+        self.w, self.f = data.w, data.f
+        self.W = data.W_sym / self.w  # scaled, full (for the polish)
         self.P = sp.triu(sp.csc_matrix(self.W), format="csc")
-        self.d = problem.dim
-        self.nc = problem.n_contacts
+        self.d, self.nc = data.dim, data.n_contacts
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = _CLARABEL_TOL
@@ -316,5 +330,6 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
         Clarabel is not installed.
     """
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
-    return run_fixed_point(problem, _ClarabelTresca(problem), tol=tol, max_iter=max_iter,
+    data = FixedPointData(problem)
+    return run_fixed_point(problem, data, _ClarabelTresca(data), tol=tol, max_iter=max_iter,
                            r0=start, exact=True)
