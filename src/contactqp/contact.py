@@ -1,9 +1,14 @@
-"""Unilateral constraints ``A U <= Delta``: rigid obstacles and node-to-node pairs.
+"""Unilateral constraints ``A U <= Delta``: rigid obstacles and node-to-node pairs, local frames.
 
 Each constraint row measures the displacement of a node (or the relative displacement of two
 nodes) along a unit direction pointing towards the obstacle (or the other body); ``Delta`` is the
 initial gap along that direction, in metres. Small displacements are assumed: the directions do not
 rotate and the gaps are linear in the displacements.
+
+For friction, :func:`local_frames` completes each direction ``n`` with an orthonormal tangent basis
+and builds the operator ``H`` of the local (FCLIB) coordinates: per contact the normal row ``-n``
+(so that ``u_N = Delta + (H U)_N`` is the gap opening) and one row per tangent ``t`` (the slip of
+the node, or of the first node relative to the second, along ``t``).
 """
 
 from __future__ import annotations
@@ -24,6 +29,9 @@ __all__ = [
     "ProfileObstacle",
     "NodePairs",
     "assemble_constraints",
+    "LocalFrames",
+    "local_frames",
+    "tangent_basis",
 ]
 
 
@@ -279,3 +287,113 @@ def assemble_constraints(model: ReducedModel, obstacles) -> Constraints:
         nodes=np.array([r[0] for r in rows], dtype=int),
         labels=[r[4] for r in rows],
     )
+
+
+def tangent_basis(normals) -> np.ndarray:
+    """Deterministic orthonormal tangents completing unit normals.
+
+    2-D: ``t = (-n_y, n_x)`` (the normal turned by +90 degrees). 3-D: the branchless basis of
+    Duff et al. (2017), with ``t_1 x t_2 = n``; the frame is continuous except across ``n_z = 0``.
+    In 1-D there is no tangent.
+
+    Parameters
+    ----------
+    normals : array_like, shape (k, d)
+        Unit vectors, ``d`` in 1..3.
+
+    Returns
+    -------
+    ndarray, shape (k, d - 1, d)
+
+    References
+    ----------
+    T. Duff et al., "Building an orthonormal basis, revisited", JCGT 6(1), 2017.
+    """
+    n = np.asarray(normals, dtype=float)
+    d = n.shape[1]
+    if d == 1:
+        return np.zeros((len(n), 0, 1))
+    if d == 2:
+        return np.stack([-n[:, 1], n[:, 0]], axis=1)[:, None, :]
+    x, y, z = n.T
+    s = np.where(z >= 0.0, 1.0, -1.0)
+    a = -1.0 / (s + z)
+    b = x * y * a
+    t1 = np.stack([1.0 + s * x * x * a, s * b, -s * x], axis=1)
+    t2 = np.stack([b, s + y * y * a, -y], axis=1)
+    return np.stack([t1, t2], axis=1)
+
+
+@dataclass(frozen=True)
+class LocalFrames:
+    """Local contact frames and the operator to local coordinates.
+
+    Attributes
+    ----------
+    normals : ndarray, shape (k, d)
+        Unit direction of each contact towards the obstacle (the constraint's direction).
+    tangents : ndarray, shape (k, d - 1, d)
+        Orthonormal tangents, from :func:`tangent_basis`.
+    operator : scipy.sparse.csr_matrix, shape (d * k, n_freedoms)
+        ``H``: rows ``-n, t_1[, t_2]`` per contact. Local displacements are ``H U`` and the
+        contact forces on the body ``H^T r`` (``r_N >= 0`` compressive, ``r_T`` the tangential
+        force on the body, or on the first node of a pair).
+    """
+
+    normals: np.ndarray
+    tangents: np.ndarray
+    operator: scipy.sparse.csr_matrix
+
+    @property
+    def dim(self) -> int:
+        """Size ``d`` of each contact block."""
+        return int(self.normals.shape[1])
+
+
+def local_frames(model: ReducedModel, constraints: Constraints) -> LocalFrames:
+    """Frames and ``H`` for constraints whose nodes all have the same number of freedoms.
+
+    Every row of ``A`` must be made of node blocks ``+n`` (its own node) or ``-n`` (the other
+    node of a pair), as built by the obstacles of this module.
+
+    Raises
+    ------
+    InvalidInputError
+        The contact nodes have different numbers of freedoms, or a row is not made of ``+-n``
+        blocks.
+    """
+    A = constraints.matrix
+    counts = model.dofs_per_node[constraints.nodes]
+    if np.any(counts != counts[0]):
+        raise InvalidInputError(
+            "local frames need contact nodes with one number of freedoms, got "
+            f"{sorted(set(counts.tolist()))}"
+        )
+    d, m = int(counts[0]), constraints.n_constraints
+    own = model.offsets[constraints.nodes][:, None] + np.arange(d)
+    normals = np.asarray(A[np.repeat(np.arange(m), d), own.ravel()]).reshape(m, d)
+    # freedom -> (node, component) incidence: block sign s_ik = (A row i on node k) . n_i
+    node_of = np.searchsorted(model.offsets, np.arange(model.n_freedoms), side="right") - 1
+    component = np.arange(model.n_freedoms) - model.offsets[node_of]
+    coo = A.tocoo()
+    inside = component[coo.col] < d
+    if not np.all(inside):
+        raise InvalidInputError(f"constraint row {coo.row[~inside][0]} touches a node with more "
+                                f"than {d} freedoms")
+    comp = component[coo.col]
+    signs = scipy.sparse.coo_matrix((coo.data * normals[coo.row, comp], (coo.row, node_of[coo.col])),
+                                    shape=(m, model.n_nodes)).tocsr()
+    signs.sum_duplicates()
+    signed = signs[coo.row, node_of[coo.col]].A1
+    if not (np.allclose(np.abs(signs.data[signs.data != 0]), 1.0)
+            and np.allclose(coo.data, signed * normals[coo.row, comp])):
+        raise InvalidInputError("a constraint row is not made of node blocks +-n: no local frame")
+    tangents = tangent_basis(normals)
+    rows = [-A]
+    for j in range(d - 1):
+        rows.append(scipy.sparse.csr_matrix(
+            (signed * tangents[coo.row, j, comp], (coo.row, coo.col)), shape=A.shape))
+    # interleave: local row i*d + c is row i of block c
+    order = (np.arange(d)[None, :] * m + np.arange(m)[:, None]).ravel()
+    operator = scipy.sparse.vstack(rows).tocsr()[order]
+    return LocalFrames(normals=normals, tangents=tangents, operator=operator)

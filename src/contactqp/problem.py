@@ -1,4 +1,4 @@
-"""ContactProblem: a reduced model, its loads and its unilateral constraints.
+"""ContactProblem and FrictionalProblem: a reduced model, its loads and its contacts.
 
 Primal form (the method's QP, on displacements):
 
@@ -16,17 +16,49 @@ Dual form (on contact forces, built from ``R`` without inverting it):
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
+import scipy.sparse
 
-from .contact import Constraints, assemble_constraints
+from .contact import Constraints, LocalFrames, assemble_constraints, local_frames
 from .errors import InvalidInputError
+from .friction import FrictionLaw
+from .local import LocalProblem
 from .model import ReducedModel
-from .result import CERTIFICATE_TOL, ContactResult, certify
+from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
+                     scales)
 
-__all__ = ["ContactProblem", "DualForm"]
+__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "LocalForm"]
 
 #: A contact is reported closed when its force exceeds this fraction of the problem's force scale.
 CLOSED_RTOL = 1e-10
+
+
+def _influence(model: ReducedModel, matrix: scipy.sparse.csr_matrix) -> np.ndarray:
+    """``R M^T`` for a sparse constraint matrix ``M``: displacements under unit contact forces."""
+    if model.given == "flexibility":
+        # only the freedoms the constraints touch enter R M^T
+        used = np.unique(matrix.indices)
+        return model.flexibility[:, used] @ matrix[:, used].T.toarray()
+    return model.displacements(matrix.T.toarray())
+
+
+def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.ndarray:
+    """Validate the model, the loads ``(n_freedoms,)`` and the tolerance; return the loads."""
+    if not isinstance(model, ReducedModel):
+        raise InvalidInputError(f"model must be a ReducedModel, got {type(model).__name__}")
+    P = np.asarray(loads, dtype=float).reshape(-1)
+    if P.shape != (model.n_freedoms,):
+        raise InvalidInputError(
+            f"loads must have shape ({model.n_freedoms},) to match the model, got "
+            f"{np.shape(loads)}"
+        )
+    if not np.all(np.isfinite(P)):
+        raise InvalidInputError("loads contains NaN or inf")
+    if not certificate_tol > 0:
+        raise InvalidInputError(f"certificate_tol must be > 0, got {certificate_tol}")
+    return P
 
 
 class DualForm:
@@ -46,12 +78,7 @@ class DualForm:
 
     def __init__(self, model: ReducedModel, constraints: Constraints, loads: np.ndarray):
         A = constraints.matrix
-        if model.given == "flexibility":
-            # only the freedoms the constraints touch enter R A^T
-            used = np.unique(A.indices)
-            self.influence = model.flexibility[:, used] @ A[:, used].T.toarray()
-        else:
-            self.influence = model.displacements(A.T.toarray())
+        self.influence = _influence(model, A)
         W = np.asarray(A @ self.influence)
         self.W = 0.5 * (W + W.T)
         self.free_displacements = model.displacements(loads)
@@ -78,20 +105,8 @@ class ContactProblem:
     """
 
     def __init__(self, model: ReducedModel, loads, obstacles, certificate_tol: float = CERTIFICATE_TOL):
-        if not isinstance(model, ReducedModel):
-            raise InvalidInputError(f"model must be a ReducedModel, got {type(model).__name__}")
-        P = np.asarray(loads, dtype=float).reshape(-1)
-        if P.shape != (model.n_freedoms,):
-            raise InvalidInputError(
-                f"loads must have shape ({model.n_freedoms},) to match the model, got "
-                f"{np.shape(loads)}"
-            )
-        if not np.all(np.isfinite(P)):
-            raise InvalidInputError("loads contains NaN or inf")
-        if not certificate_tol > 0:
-            raise InvalidInputError(f"certificate_tol must be > 0, got {certificate_tol}")
+        self.loads = _checked_loads(model, loads, certificate_tol)
         self.model = model
-        self.loads = P
         self.constraints = assemble_constraints(model, obstacles)
         self.certificate_tol = float(certificate_tol)
         self._dual = None
@@ -142,3 +157,259 @@ class ContactProblem:
 
     def __repr__(self) -> str:
         return f"ContactProblem({self.model!r}, {self.n_constraints} constraints)"
+
+
+class LocalForm:
+    """The local (FCLIB) form ``u = W r + q`` of a frictional problem; see the module notes.
+
+    Attributes
+    ----------
+    W : ndarray, shape (d k, d k)
+        ``H R H^T`` (m/N), contact by contact, normal first.
+    influence : ndarray, shape (n, d k)
+        ``R H^T``: displacements caused by unit local contact forces.
+    offset : ndarray, shape (d k,)
+        ``w``: the initial gaps in the normal slots, zeros in the tangential ones (m).
+    operator : scipy.sparse.csr_matrix, shape (d k, n)
+        ``H``.
+    """
+
+    def __init__(self, model: ReducedModel, constraints: Constraints, frames: LocalFrames):
+        H = frames.operator
+        self.operator = H
+        self.influence = _influence(model, H)
+        W = np.asarray(H @ self.influence)
+        self.W = 0.5 * (W + W.T)
+        self.offset = np.zeros(H.shape[0])
+        self.offset[::frames.dim] = constraints.gaps
+        self._model = model
+
+    def free_displacements(self, loads: np.ndarray) -> np.ndarray:
+        """``R P`` (m)."""
+        return self._model.displacements(loads)
+
+    def q(self, loads: np.ndarray) -> np.ndarray:
+        """``H R P + w`` (m): the local displacements the loads cause without contact forces."""
+        return self.operator @ self.free_displacements(loads) + self.offset
+
+    def displacements(self, loads: np.ndarray, forces: np.ndarray) -> np.ndarray:
+        """``U = R (P + H^T r)`` (m) for local forces ``r`` (N, shape (d k,))."""
+        return self.free_displacements(loads) + self.influence @ forces
+
+
+class FrictionalProblem:
+    r"""A contact problem with friction on a reduced model, solved from a given state.
+
+    From the state of a previous result (or from rest), the loads ``P`` are applied in one
+    increment. The normal law acts on the total gap and the friction law on the slip increment
+    ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see :meth:`local_problem`) is
+
+    .. math::
+
+        u = W r + q - \begin{pmatrix} 0 \\ (H U_{prev})_T \end{pmatrix},
+        \qquad u_N = \text{gap}, \quad u_T = s_T,
+
+    with ``r`` the total local forces, in the friction set of :class:`~contactqp.friction.FrictionLaw`
+    and complementary to ``u`` (FCLIB's Coulomb problem for the exact cone without cohesion).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        Contact nodes with 2 or 3 freedoms each (one frame dimension for all contacts).
+    loads : array_like, shape (n_freedoms,)
+        External forces ``P`` (N), totals (not increments).
+    obstacles : sequence
+        As for :class:`ContactProblem`; each direction towards the obstacle is the frame's normal.
+    mu : float or array_like, shape (k,)
+        Friction coefficient per contact, >= 0.
+    cohesion : float or array_like, shape (k,)
+        Mohr-Coulomb cohesion per contact (N), >= 0: ``||r_T|| <= mu r_N + c``.
+    facets : int, optional
+        Replace each friction disc by the inscribed polygon of ``facets`` sides (>= 3), the
+        method's linearised cone (3-D; in 2-D the cone is already linear).
+    certificate_tol : float
+        Largest relative residual the certificate accepts.
+
+    Raises
+    ------
+    InvalidInputError
+        Bad loads, obstacles, ``mu``, ``cohesion`` or ``facets``; contact nodes with one freedom
+        (no tangent) or with different numbers of freedoms.
+    """
+
+    def __init__(self, model: ReducedModel, loads, obstacles, mu, cohesion=0.0, facets=None,
+                 certificate_tol: float = CERTIFICATE_TOL):
+        self.loads = _checked_loads(model, loads, certificate_tol)
+        self.model = model
+        self.constraints = assemble_constraints(model, obstacles)
+        self.frames = local_frames(model, self.constraints)
+        if self.frames.dim == 1:
+            raise InvalidInputError(
+                "friction needs contact nodes with 2 or 3 freedoms: a node with one freedom has "
+                "no tangent")
+        self.law = FrictionLaw(mu, cohesion, facets, n_contacts=self.n_contacts)
+        self.certificate_tol = float(certificate_tol)
+        self._local = None
+
+    @property
+    def n_contacts(self) -> int:
+        """Number of contacts ``k``."""
+        return self.constraints.n_constraints
+
+    @property
+    def dim(self) -> int:
+        """Size of each contact block: 2 or 3."""
+        return self.frames.dim
+
+    def local(self) -> LocalForm:
+        """The local form, assembled on first use and shared with :meth:`with_loads` copies."""
+        if self._local is None:
+            self._local = LocalForm(self.model, self.constraints, self.frames)
+        return self._local
+
+    def with_loads(self, loads) -> "FrictionalProblem":
+        """The same contacts and law under other loads (nothing is assembled again)."""
+        twin = object.__new__(FrictionalProblem)
+        twin.__dict__.update(self.__dict__)
+        twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
+        twin._local = self.local()
+        return twin
+
+    def _previous_tangential(self, previous) -> np.ndarray:
+        """``(H U_prev)_T`` of shape (k, d - 1): zero from rest."""
+        if previous is None:
+            return np.zeros((self.n_contacts, self.dim - 1))
+        if not isinstance(previous, FrictionalResult):
+            raise InvalidInputError(
+                f"previous must be a FrictionalResult or None, got {type(previous).__name__}")
+        if previous.tangential_displacements.shape != (self.n_contacts, self.dim - 1):
+            raise InvalidInputError(
+                f"previous has {len(previous.tangential_displacements)} contacts, this problem "
+                f"{self.n_contacts}")
+        return previous.tangential_displacements
+
+    def local_problem(self, previous=None) -> LocalProblem:
+        """The step's :class:`~contactqp.local.LocalProblem` from ``previous`` (None: rest).
+
+        In the model's units (m, N), with the cohesion of the law; FCLIB's problem when there
+        is none.
+        """
+        return self._step(self._previous_tangential(previous))
+
+    def _step(self, tangential: np.ndarray) -> LocalProblem:
+        q = self.local().q(self.loads).reshape(self.n_contacts, self.dim)
+        q[:, 1:] -= tangential
+        return LocalProblem(self.local().W, q.reshape(-1), self.law.mu, self.dim,
+                            cohesion=self.law.cohesion)
+
+    def fclib(self, tangential: np.ndarray) -> tuple[LocalProblem, np.ndarray, float]:
+        """The step as a dimensionless FCLIB problem: ``(problem, apex_shift, force_unit)``.
+
+        The cones are translated to their apices (``r~ = r + apex_shift``, no cohesion left)
+        and scaled: ``W / w`` and ``q~ / L`` with ``w`` the largest diagonal of ``W`` and ``L``
+        the largest ``|q~|``, so that forces are in units of ``L / w`` (``force_unit``, N) and
+        a natural-map error weighs forces and displacements alike.
+
+        Parameters
+        ----------
+        tangential : ndarray, shape (k, d - 1)
+            ``(H U_prev)_T`` (m).
+        """
+        step = self._step(tangential)
+        shift = step.apex_shift
+        W = step.W
+        q = step.q - W @ shift
+        w = float(np.max(np.diag(W)))
+        length = float(np.max(np.abs(q))) or 1.0
+        scaled = LocalProblem(W / w, q / length, step.mu, step.dim)
+        return scaled, shift, length / w
+
+    def make_result(self, forces, previous=None, *, solver: str, converged: bool, message: str,
+                    nit: int, wall_time: float, info: dict | None = None) -> FrictionalResult:
+        """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`."""
+        r = np.asarray(forces, dtype=float).reshape(-1)
+        local = self.local()
+        U = local.displacements(self.loads, r)
+        tangential = self._previous_tangential(previous)
+        certificate = certify_friction(self, U, r, tangential, self.certificate_tol)
+        if not converged:
+            status, success = 1, False
+        elif not certificate.passed:
+            status, success = 2, False
+            message = (f"{message}; certificate failed (worst relative residual "
+                       f"{certificate.worst:.2e} > {certificate.tol:.0e})")
+        else:
+            status, success = 0, True
+        k, d = self.n_contacts, self.dim
+        R = r.reshape(k, d)
+        HU = (local.operator @ U).reshape(k, d)
+        slip = HU[:, 1:] - tangential
+        force, length = scales(self.model, self.loads, U, r, self.constraints.gaps)
+        nodal = local.operator.T @ r
+        return FrictionalResult(
+            x=U, forces=R, nodal_forces=nodal, gaps=self.constraints.gaps + HU[:, 0], slip=slip,
+            tangential_displacements=HU[:, 1:],
+            contact_status=self.law.status(R, slip, CLOSED_RTOL * force,
+                                           self.certificate_tol * length),
+            dissipation=-np.sum(R[:, 1:] * slip, axis=1),
+            elastic_energy=float(0.5 * U @ (self.loads + nodal)), loads=self.loads.copy(),
+            success=success, status=status, message=message, nit=int(nit),
+            wall_time=float(wall_time), solver=solver, certificate=certificate,
+            info=dict(info or {}),
+        )
+
+    def solve(self, previous=None, *, solver: str | None = None, tol: float = 1e-10,
+              **options) -> FrictionalResult:
+        """Solve the step from ``previous`` (a :class:`FrictionalResult`, None: rest).
+
+        The solver receives the dimensionless FCLIB problem of :meth:`fclib`.
+
+        Parameters
+        ----------
+        previous : FrictionalResult, optional
+            The state carried over: its forces start the solver, its tangential displacements
+            are the origin of the slip increments.
+        solver : {"coulomb", "tresca", "polygonal"}, optional
+            ``"coulomb"`` (default for the exact cone): the project's Coulomb solver.
+            ``"tresca"``: the Tresca fixed point (second route). ``"polygonal"`` (default and
+            only choice when ``facets`` is set): the method's linearised cone.
+        tol : float
+            Solver tolerance (natural-map error, or fixed-point change for polygons).
+        **options
+            Passed to the solver.
+        """
+        name, method = _friction_route(self.law, solver)
+        start = time.perf_counter()
+        problem, shift, unit = self.fclib(self._previous_tangential(previous))
+        r0 = None if previous is None else (previous.forces.reshape(-1) + shift) / unit
+        if name == "polygonal":
+            options = {"facets": self.law.facets, **options}
+        solution = method(problem, tol=tol, r0=r0, **options)
+        return self.make_result(unit * solution.r - shift, previous, solver=name,
+                                converged=solution.converged, message=solution.message,
+                                nit=solution.iterations, wall_time=time.perf_counter() - start)
+
+    def __repr__(self) -> str:
+        return (f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
+                f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})")
+
+
+def _friction_route(law: FrictionLaw, solver: str | None):
+    """``(name, function)`` of the local solver for ``law``; imported where used."""
+    name = solver or ("coulomb" if law.facets is None else "polygonal")
+    if law.facets is not None and name != "polygonal":
+        raise InvalidInputError(
+            f"facets={law.facets} asks for the polygonal cone: use solver='polygonal', got "
+            f"{name!r}")
+    if name == "coulomb":
+        from .solvers.coulomb import solve_coulomb as method
+    elif name == "tresca":
+        from .solvers.tresca import solve_tresca_fixed_point as method
+    elif name == "polygonal":
+        if law.facets is None:
+            raise InvalidInputError("solver='polygonal' needs facets (an integer >= 3)")
+        from .solvers.polygonal import solve_polygonal as method
+    else:
+        raise InvalidInputError(
+            f"unknown friction solver {solver!r}; choose coulomb, tresca or polygonal")
+    return name, method

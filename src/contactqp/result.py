@@ -1,4 +1,8 @@
-"""ContactResult and the certificate that checks an answer independently of the solver."""
+"""Results and the certificates that check an answer independently of the solver.
+
+:class:`ContactResult` and :func:`certify` for frictionless problems, :class:`FrictionalResult`
+and :func:`certify_friction` for problems with friction.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Certificate", "ContactResult", "certify"]
+from .local import natural_map_error
+
+__all__ = ["Certificate", "ContactResult", "certify", "FrictionCertificate", "FrictionalResult",
+           "certify_friction", "scales"]
 
 #: Default largest accepted relative residual of a certificate.
 CERTIFICATE_TOL = 1e-7
@@ -72,28 +79,40 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     U = np.asarray(displacements, dtype=float)
     lam = np.asarray(forces, dtype=float)
     A, gaps, P = problem.constraints.matrix, problem.constraints.gaps, problem.loads
-    tiny = np.finfo(float).tiny
-    model = problem.model
-    force = max(np.max(np.abs(P), initial=0.0), np.max(np.abs(lam), initial=0.0), tiny)
-    compliance = (np.max(np.diag(model.flexibility)) if model.given == "flexibility"
-                  else 1.0 / np.max(np.diag(model.stiffness)))
-    # the displacement the force scale would cause keeps the scale meaningful when gaps and
-    # displacements are both (near) zero, e.g. a closed contact with zero initial gap
-    length = max(np.max(np.abs(U), initial=0.0), np.max(np.abs(gaps), initial=0.0),
-                 compliance * force, tiny)
+    force, length = scales(problem.model, P, U, lam, gaps)
     final_gaps = gaps - A @ U
-    net_load = P - A.T @ lam
-    if model.given == "flexibility":
-        equilibrium = np.max(np.abs(U - model.flexibility @ net_load), initial=0.0) / length
-    else:
-        equilibrium = np.max(np.abs(model.stiffness @ U - net_load), initial=0.0) / force
     return Certificate(
         penetration=float(max(0.0, -np.min(final_gaps, initial=0.0)) / length),
         force_sign=float(max(0.0, -np.min(lam, initial=0.0)) / force),
         complementarity=float(np.max(np.abs(lam * final_gaps), initial=0.0) / (force * length)),
-        equilibrium=float(equilibrium),
+        equilibrium=_equilibrium(problem.model, U, P - A.T @ lam, force, length),
         tol=tol,
     )
+
+
+def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
+    """``(force, length)``: the scales (N, m) that make a certificate's residuals relative.
+
+    The force scale is the largest load or contact force; the length scale the largest
+    displacement or gap, or the displacement the force scale would cause, which keeps it
+    meaningful when gaps and displacements are both (near) zero, e.g. a closed contact with zero
+    initial gap.
+    """
+    tiny = np.finfo(float).tiny
+    force = max(np.max(np.abs(loads), initial=0.0), np.max(np.abs(forces), initial=0.0), tiny)
+    compliance = (np.max(np.diag(model.flexibility)) if model.given == "flexibility"
+                  else 1.0 / np.max(np.diag(model.stiffness)))
+    length = max(np.max(np.abs(displacements), initial=0.0), np.max(np.abs(gaps), initial=0.0),
+                 compliance * force, tiny)
+    return float(force), float(length)
+
+
+def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
+    """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model)."""
+    if model.given == "flexibility":
+        return float(np.max(np.abs(displacements - model.flexibility @ net_load), initial=0.0)
+                     / length)
+    return float(np.max(np.abs(model.stiffness @ displacements - net_load), initial=0.0) / force)
 
 
 @dataclass
@@ -166,4 +185,204 @@ class ContactResult:
     def __repr__(self) -> str:
         return (f"ContactResult(success={self.success}, solver={self.solver!r}, "
                 f"closed={int(np.count_nonzero(self.closed))}/{self.forces.size}, nit={self.nit}, "
+                f"message={self.message!r})")
+
+
+@dataclass(frozen=True)
+class FrictionCertificate:
+    """Residuals of the frictional contact conditions, each relative to the problem's scale.
+
+    Computed from the model's own matrix, the local frames and the returned displacements and
+    forces (see :func:`certify_friction`), never from the solver's internal quantities.
+
+    Attributes
+    ----------
+    penetration : float
+        ``max(-gap, 0)`` over the length scale.
+    force_sign : float
+        ``max(-r~_N, 0)`` over the force scale, ``r~`` the force from the cone's apex.
+    cone : float
+        Largest excess of a tangential force over its friction set (disc or polygon of radius
+        ``mu r_N + c``), over the force scale.
+    complementarity : float
+        ``max ||r~_i|| |gap_i|`` over force times length: an open contact carries no force
+        (beyond the tension ``c / mu`` of a cohesive one).
+    dissipation : float
+        Largest maximum-dissipation gap ``(mu r_N + c) support(-s_T) + r_T . s_T`` over force
+        times length: zero when every slip is opposed by a friction force on the bound.
+    equilibrium : float
+        ``max |U - R (P + H^T r)|`` over the length scale (``K U`` against the forces over the
+        force scale for a stiffness model).
+    natural_map : float
+        :func:`~contactqp.local.natural_map_error` of the step's dimensionless FCLIB problem
+        (:meth:`~contactqp.FrictionalProblem.fclib`, exact cones). For a polygonal law it
+        measures the distance the linearisation puts between the answer and the Coulomb one.
+    exact_cone : bool
+        True for the exact cone: ``natural_map`` is then one of the checked residuals.
+    tol : float
+    """
+
+    penetration: float
+    force_sign: float
+    cone: float
+    complementarity: float
+    dissipation: float
+    equilibrium: float
+    natural_map: float
+    exact_cone: bool
+    tol: float = CERTIFICATE_TOL
+
+    @property
+    def worst(self) -> float:
+        """The largest checked residual."""
+        checked = [self.penetration, self.force_sign, self.cone, self.complementarity,
+                   self.dissipation, self.equilibrium]
+        return max(checked + [self.natural_map] * self.exact_cone)
+
+    @property
+    def passed(self) -> bool:
+        """True when every checked residual is within ``tol``."""
+        return bool(self.worst <= self.tol)
+
+    def as_dict(self) -> dict:
+        """Plain dictionary (for JSON)."""
+        return {"penetration": self.penetration, "force_sign": self.force_sign,
+                "cone": self.cone, "complementarity": self.complementarity,
+                "dissipation": self.dissipation, "equilibrium": self.equilibrium,
+                "natural_map": self.natural_map, "exact_cone": self.exact_cone,
+                "tol": self.tol, "passed": self.passed}
+
+
+def certify_friction(problem, displacements, forces, previous_tangential,
+                     tol: float = CERTIFICATE_TOL) -> FrictionCertificate:
+    """Check displacements and local forces against a :class:`~contactqp.FrictionalProblem`.
+
+    Parameters
+    ----------
+    problem : FrictionalProblem
+    displacements : ndarray, shape (n_freedoms,)
+        ``U`` (m).
+    forces : ndarray, shape (d k,)
+        Local forces ``r`` (N), normal first per contact; the force on the body is ``H^T r``.
+    previous_tangential : ndarray, shape (k, d - 1)
+        ``(H U_prev)_T`` (m), the origin of the slip increments.
+    tol : float
+    """
+    U = np.asarray(displacements, dtype=float)
+    r = np.asarray(forces, dtype=float)
+    k, d = problem.n_contacts, problem.dim
+    R = r.reshape(k, d)
+    H, gaps, P, law = problem.frames.operator, problem.constraints.gaps, problem.loads, problem.law
+    HU = (H @ U).reshape(k, d)
+    final_gaps = gaps + HU[:, 0]
+    slip = HU[:, 1:] - previous_tangential
+    apex = law.apex_forces(R)
+    force, length = scales(problem.model, P, U, r, gaps)
+    fclib, shift, unit = problem.fclib(previous_tangential)
+    return FrictionCertificate(
+        penetration=float(max(0.0, -np.min(final_gaps)) / length),
+        force_sign=float(max(0.0, -np.min(apex[:, 0])) / force),
+        cone=float(max(0.0, np.max(law.cone_excess(R))) / force),
+        complementarity=float(np.max(np.linalg.norm(apex, axis=1) * np.abs(final_gaps))
+                              / (force * length)),
+        dissipation=float(np.max(np.abs(law.dissipation_gap(R, slip))) / (force * length)),
+        equilibrium=_equilibrium(problem.model, U, P + H.T @ r, force, length),
+        natural_map=natural_map_error(fclib, (r + shift) / unit),
+        exact_cone=law.facets is None,
+        tol=tol,
+    )
+
+
+@dataclass
+class FrictionalResult:
+    """The answer to one step of a frictional problem, shaped like :class:`ContactResult`.
+
+    Attributes
+    ----------
+    x : ndarray, shape (n_freedoms,)
+        Displacements ``U`` (m), totals.
+    forces : ndarray, shape (k, d)
+        Local contact forces ``r`` (N): compressive normal force, then the tangential force on
+        the body (on the first node of a pair) along each tangent of the frame. Totals.
+    nodal_forces : ndarray, shape (n_freedoms,)
+        Contact forces on the freedoms, ``H^T r`` (N).
+    gaps : ndarray, shape (k,)
+        Final gaps (m).
+    slip : ndarray, shape (k, d - 1)
+        Slip increment of the step along the tangents (m).
+    tangential_displacements : ndarray, shape (k, d - 1)
+        ``(H U)_T``, total tangential displacement (m): the origin of the next step's slips.
+    contact_status : ndarray of int, shape (k,)
+        Index into :data:`~contactqp.friction.STATUS_LABELS` (open, stick, slip).
+    dissipation : ndarray, shape (k,)
+        Energy dissipated by friction during the step, ``-r_T . s_T`` per contact (J), with the
+        end-of-step force (exact when the friction bound is constant during the slip).
+    elastic_energy : float
+        ``1/2 U^T K U`` (J), from ``K U = P + H^T r``.
+    loads : ndarray, shape (n_freedoms,)
+        The loads of the step (N).
+    success, status, message, nit, wall_time, solver, certificate, info
+        As in :class:`ContactResult`; ``certificate`` is a :class:`FrictionCertificate`.
+    """
+
+    x: np.ndarray
+    forces: np.ndarray
+    nodal_forces: np.ndarray
+    gaps: np.ndarray
+    slip: np.ndarray
+    tangential_displacements: np.ndarray
+    contact_status: np.ndarray
+    dissipation: np.ndarray
+    elastic_energy: float
+    loads: np.ndarray
+    success: bool
+    status: int
+    message: str
+    nit: int
+    wall_time: float
+    solver: str
+    certificate: FrictionCertificate
+    info: dict = field(default_factory=dict)
+
+    @property
+    def displacements(self) -> np.ndarray:
+        """Alias of ``x``."""
+        return self.x
+
+    @property
+    def normal_forces(self) -> np.ndarray:
+        """Compressive normal force per contact (N), shape (k,)."""
+        return self.forces[:, 0]
+
+    @property
+    def tangential_forces(self) -> np.ndarray:
+        """Tangential force per contact (N), shape (k, d - 1)."""
+        return self.forces[:, 1:]
+
+    @property
+    def dissipated(self) -> float:
+        """Energy dissipated in the step by all contacts (J)."""
+        return float(np.sum(self.dissipation))
+
+    @property
+    def status_labels(self) -> list[str]:
+        """``"open"``, ``"stick"`` or ``"slip"`` per contact."""
+        from .friction import STATUS_LABELS
+
+        return [STATUS_LABELS[code] for code in self.contact_status]
+
+    def summary(self) -> dict:
+        """A JSON-ready summary (no arrays)."""
+        counts = np.bincount(self.contact_status, minlength=3)
+        return {"success": self.success, "status": self.status, "message": self.message,
+                "solver": self.solver, "iterations": self.nit, "seconds": self.wall_time,
+                "contacts": int(self.contact_status.size), "open": int(counts[0]),
+                "stick": int(counts[1]), "slip": int(counts[2]),
+                "dissipated": self.dissipated, "elastic_energy": self.elastic_energy,
+                "certificate": self.certificate.as_dict()}
+
+    def __repr__(self) -> str:
+        counts = np.bincount(self.contact_status, minlength=3)
+        return (f"FrictionalResult(success={self.success}, solver={self.solver!r}, "
+                f"open/stick/slip={counts[0]}/{counts[1]}/{counts[2]}, nit={self.nit}, "
                 f"message={self.message!r})")

@@ -1,0 +1,167 @@
+r"""Friction laws on local contact forces: Coulomb, Mohr-Coulomb, exact and polygonal cones.
+
+Per contact, with the compressive normal force :math:`r_N` (N) and the tangential force
+:math:`r_T` on the body (N, ``d - 1`` components in the local frame), the admissible forces are
+the (Mohr-)Coulomb cone
+
+.. math::
+
+    C_i = \{ \|r_T\| \le \mu_i r_N + c_i \}, \qquad r_N \ge -c_i / \mu_i ,
+
+Coulomb's for cohesion :math:`c_i = 0`. With cohesion the cone is Coulomb's translated to its
+apex :math:`r_N = -c_i/\mu_i` (the law of :class:`~contactqp.local.LocalProblem`): a closed
+contact carries shear up to :math:`c_i` without normal force and tension up to
+:math:`c_i/\mu_i`, and the gap opens when that tension is reached (perfectly plastic, no
+softening: an open cohesive contact keeps transmitting :math:`c_i/\mu_i`). The normal law acts on
+the force measured from the apex, :math:`\tilde r = r + (c/\mu) e_N`: :math:`\tilde r_N \ge 0`,
+gap :math:`\ge 0`, and :math:`\tilde r = 0` where the gap is open.
+
+The *polygonal* law of the method replaces the disc :math:`\|r_T\| \le s` by the inscribed
+regular polygon of ``facets`` sides :math:`n_k \cdot r_T \le s \cos(\pi / F)`, with the outward
+normals :math:`n_k` of :func:`~contactqp.solvers.polygonal.polygon_normals` (vertices on the circle
+at the angles :math:`(2k + 1)\pi / F`). In 2-D the tangential "disc" is the segment
+:math:`|r_T| \le s`, which every polygon reproduces: the polygonal law is then exact.
+
+The slip :math:`s_T` (m) obeys maximum dissipation: the friction force does the most negative
+work over the admissible set, :math:`-r_T \cdot s_T = \max_{f \in D} f \cdot (-s_T)` with ``D``
+the disc or polygon of radius :math:`\mu r_N + c`; so :math:`r_T = -(\mu r_N + c) s_T / \|s_T\|`
+on the exact cone whenever :math:`s_T \ne 0`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InvalidInputError
+from .model import finite_array
+from .solvers.polygonal import polygon_normals
+
+__all__ = ["FrictionLaw", "STATUS_LABELS"]
+
+#: Contact status codes of :meth:`FrictionLaw.status`, by index.
+STATUS_LABELS = ("open", "stick", "slip")
+
+
+def _per_contact(value, name: str, count: int) -> np.ndarray:
+    """A scalar or a ``(count,)`` array of finite values ``>= 0``, as a ``(count,)`` array."""
+    scalar = np.ndim(value) == 0
+    array = finite_array([value] if scalar else value, name, 1)
+    if scalar:
+        array = np.full(count, array[0])
+    elif array.shape != (count,):
+        raise InvalidInputError(
+            f"{name} must be a scalar or hold one value per contact ({count}), got shape "
+            f"{array.shape}")
+    if np.any(array < 0):
+        raise InvalidInputError(
+            f"{name} must be >= 0, got {array.min():g} at contact {int(np.argmin(array))}")
+    return array
+
+
+@dataclass(frozen=True)
+class FrictionLaw:
+    """Friction coefficients, cohesions and the cone (exact or polygonal) of ``k`` contacts.
+
+    Parameters
+    ----------
+    mu : array_like, shape () or (k,)
+        Friction coefficients, >= 0.
+    cohesion : array_like, shape () or (k,)
+        Cohesion ``c`` (N): the tangential force a closed contact carries without normal force.
+    facets : int, optional
+        Sides of the polygon replacing each friction disc (>= 3); None for the exact cone.
+    n_contacts : int
+        ``k``, to which scalars are broadcast.
+
+    Raises
+    ------
+    InvalidInputError
+        ``mu`` or ``cohesion`` negative, NaN, inf or of the wrong length; cohesion where
+        ``mu = 0`` (the cone has no apex); ``facets`` not an integer >= 3.
+    """
+
+    mu: np.ndarray
+    cohesion: np.ndarray
+    facets: int | None
+
+    def __init__(self, mu, cohesion=0.0, facets=None, *, n_contacts: int):
+        object.__setattr__(self, "mu", _per_contact(mu, "mu", n_contacts))
+        object.__setattr__(self, "cohesion", _per_contact(cohesion, "cohesion", n_contacts))
+        bad = np.flatnonzero((self.cohesion > 0) & (self.mu == 0))
+        if bad.size:
+            raise InvalidInputError(
+                f"cohesion > 0 needs mu > 0 (the cone's apex is at r_N = -c/mu): contact "
+                f"{bad[0]} has mu = 0 and cohesion {self.cohesion[bad[0]]:g}")
+        if facets is not None:
+            polygon_normals(facets)
+            facets = int(facets)
+        object.__setattr__(self, "facets", facets)
+
+    @property
+    def n_contacts(self) -> int:
+        """Number of contacts ``k``."""
+        return int(self.mu.size)
+
+    def apex_forces(self, forces) -> np.ndarray:
+        """Local forces measured from the cone's apex, ``r + (c / mu) e_N``, shape (k, d)."""
+        shifted = np.array(forces, dtype=float)
+        np.add(shifted[:, 0], self.cohesion / np.where(self.mu > 0, self.mu, 1.0),
+               out=shifted[:, 0])
+        return shifted
+
+    def bound(self, normal_forces) -> np.ndarray:
+        """Radius ``mu r_N + c`` of each friction disc (N), for normal forces ``(k,)``."""
+        return self.mu * np.asarray(normal_forces, dtype=float) + self.cohesion
+
+    def _vertices(self) -> np.ndarray:
+        """Unit vertices of the polygon in the tangent plane, shape (facets, 2)."""
+        angles = (2.0 * np.arange(self.facets) + 1.0) * np.pi / self.facets
+        return np.column_stack([np.cos(angles), np.sin(angles)])
+
+    def support(self, vectors) -> np.ndarray:
+        """Support function of the unit disc (or polygon) at tangential vectors ``(k, d - 1)``.
+
+        ``max_{f in D_1} f . x``: the norm for the exact cone (and in 2-D), the largest vertex
+        projection for a 3-D polygon. Times the bound, it is the largest friction work.
+        """
+        x = np.asarray(vectors, dtype=float)
+        if self.facets is None or x.shape[1] != 2:
+            return np.linalg.norm(x, axis=1)
+        return np.max(x @ self._vertices().T, axis=1)
+
+    def gauge(self, vectors) -> np.ndarray:
+        """Gauge of the unit disc (or polygon): ``x`` is in ``t D_1`` iff ``gauge(x) <= t``."""
+        x = np.asarray(vectors, dtype=float)
+        if self.facets is None or x.shape[1] != 2:
+            return np.linalg.norm(x, axis=1)
+        return np.max(x @ polygon_normals(self.facets).T, axis=1) / np.cos(np.pi / self.facets)
+
+    def cone_excess(self, forces) -> np.ndarray:
+        """``gauge(r_T) - (mu r_N + c)`` per contact (N): positive outside the friction set.
+
+        ``forces``: local forces, shape (k, d), normal first.
+        """
+        r = np.asarray(forces, dtype=float)
+        return self.gauge(r[:, 1:]) - self.bound(r[:, 0])
+
+    def dissipation_gap(self, forces, slips) -> np.ndarray:
+        """``(mu r_N + c) support(-s_T) + r_T . s_T`` per contact (J), zero under the law.
+
+        It is >= 0 for admissible forces, and zero exactly when the friction force does the
+        largest negative work on the slip (maximum dissipation).
+        """
+        r = np.asarray(forces, dtype=float)
+        s = np.asarray(slips, dtype=float)
+        return self.bound(r[:, 0]) * self.support(-s) + np.sum(r[:, 1:] * s, axis=1)
+
+    def status(self, forces, slips, force_tol: float, slip_tol: float) -> np.ndarray:
+        """Status code per contact (index into :data:`STATUS_LABELS`).
+
+        Open: the force measured from the apex is zero (``||r~|| <= force_tol``, N). Slip:
+        closed and ``||s_T|| > slip_tol`` (m). Stick otherwise.
+        """
+        carries = np.linalg.norm(self.apex_forces(forces), axis=1) > force_tol
+        slipping = np.linalg.norm(np.asarray(slips, dtype=float), axis=1) > slip_tol
+        return np.where(carries, np.where(slipping, 2, 1), 0)
