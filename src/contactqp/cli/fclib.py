@@ -7,9 +7,13 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
-from ..errors import ContactError, UnsupportedProblemError
+from ..errors import ContactError
 from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
+
+STATUSES = ("open", "stick", "slip")
+COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "seconds", *STATUSES)
 
 
 @cli.command()
@@ -18,9 +22,13 @@ from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
               show_default=True, help="Target natural-map error.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per file and line.")
 @click.option("--solution-dir", type=click.Path(file_okay=False, path_type=Path),
-              help="Write DIR/<file stem>.hdf5 with /solution/r and /solution/u.")
+              help="Write DIR/<file stem>.hdf5 with /solution/r and /solution/u (converged only).")
 def fclib(files, tol, as_json, solution_dir):
-    """Solve FCLIB problems (HDF5 or Siconos .dat), local or global."""
+    """Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.
+
+    Exit status 1 when a problem is not solved to --tol (its error and the solver's stages on
+    stderr, no solution written), 2 when a file is unreadable or invalid.
+    """
     from ..io.fclib import read_problem, write_solution
     from ..solvers.local import solve_local
 
@@ -30,23 +38,20 @@ def fclib(files, tol, as_json, solution_dir):
         try:
             problem = read_problem(path)
             solution = solve_local(problem, tol=tol)
-        except UnsupportedProblemError as exc:
-            fail(f"{path}: {exc}")
-            exit_code = max(exit_code, EXIT_NOT_SOLVED)
-            continue
         except ContactError as exc:
             fail(f"{path}: {exc}")
             exit_code = EXIT_BAD_INPUT
             continue
         record = {"file": str(path), "dim": problem.dim, "contacts": problem.n_contacts,
                   "converged": solution.converged, "error": solution.error,
-                  "iterations": solution.iterations, "seconds": solution.seconds}
-        if solution_dir:
+                  "iterations": solution.iterations, "seconds": solution.seconds,
+                  **{s: int(np.count_nonzero(solution.status == s)) for s in STATUSES}}
+        if not solution.converged:
+            fail(f"{path}: {solution.message}; no solution written")
+            exit_code = max(exit_code, EXIT_NOT_SOLVED)
+        elif solution_dir:
             solution_dir.mkdir(parents=True, exist_ok=True)
             write_solution(solution_dir / f"{Path(path).stem}.hdf5", solution.r, solution.u)
-        if not solution.converged:
-            fail(f"{path}: not converged: {solution.message} (error {solution.error:.2e})")
-            exit_code = max(exit_code, EXIT_NOT_SOLVED)
         if as_json:
             click.echo(json.dumps(record))
         rows.append(record)
@@ -59,9 +64,10 @@ def _fclib_table(rows):
     from rich.table import Table
 
     table = Table(title="FCLIB problems")
-    for column in ("file", "dim", "contacts", "converged", "error", "iterations", "seconds"):
+    for column in COLUMNS:
         table.add_column(column, justify="left" if column == "file" else "right")
     for r in rows:
         table.add_row(Path(r["file"]).name, str(r["dim"]), str(r["contacts"]), str(r["converged"]),
-                      f"{r['error']:.2e}", str(r["iterations"]), f"{r['seconds']:.3g}")
+                      f"{r['error']:.2e}", str(r["iterations"]), f"{r['seconds']:.3g}",
+                      *(str(r[s]) for s in STATUSES))
     console().print(table)

@@ -1,0 +1,281 @@
+"""The Coulomb (Mohr-Coulomb) solver of local problems ``u = W r + q``.
+
+Truths used:
+
+* closed forms for one contact with ``W = diag(a, b[, b])``: open (``q_N >= 0``: ``r = 0``), stick
+  (``r = -W^-1 q`` inside the cone) or slip (``r_N = -q_N / a``, ``r_T`` on the cone opposite to
+  ``q_T``); the same with cohesion, the cone's apex moved to ``r_N = -c / mu``;
+* a second algorithm, nonsmooth Gauss-Seidel run alone, on problems whose solution is unique
+  (``W`` symmetric positive definite and well conditioned, small ``mu``);
+* the natural-map error, recomputed from ``(r, W r + q)`` outside the solver, on every FCLIB file;
+* finite differences for the Alart-Curnier Jacobian blocks.
+
+Tolerances: solutions to ``tol = 1e-12`` agree with closed forms to 1e-9 relative (the error bound
+times the condition number of ``W``, at most 1e3 here).
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
+from contactqp.io import read_problem
+from contactqp.local import (
+    LocalProblem,
+    check_positive_semidefinite,
+    contact_status,
+    natural_map_error,
+)
+from contactqp.solvers.coulomb import alart_curnier, solve_coulomb
+from contactqp.solvers.local import solve_local
+from contactqp.solvers.pgs import GaussSeidel
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
+FILES = sorted(p.name for p in DATA.iterdir() if p.suffix in (".dat", ".hdf5"))
+
+
+def one_contact(a, b, q, mu, cohesion=0.0):
+    """Closed-form solution for ``W = diag(a, b[, b])``; returns (r, status)."""
+    q = np.asarray(q, dtype=float)
+    s = cohesion / mu if cohesion else 0.0
+    qn = q[0] - a * s  # the problem seen from the cone apex: q~ = q - W s e_N
+    qt = q[1:]
+    if qn >= 0:
+        return np.concatenate([[-s], np.zeros_like(qt)]), "open"
+    rn = -qn / a
+    rt = -qt / b
+    if np.linalg.norm(rt) <= mu * rn:
+        return np.concatenate([[rn - s], rt]), "stick"
+    rt = -mu * rn * qt / np.linalg.norm(qt)
+    return np.concatenate([[rn - s], rt]), "slip"
+
+
+coefficient = st.floats(0.1, 10.0)
+component = st.floats(-10.0, 10.0).filter(lambda x: abs(x) > 1e-3)
+
+
+@settings(max_examples=150, deadline=None)
+@given(dim=st.sampled_from([2, 3]), a=coefficient, b=coefficient, mu=st.floats(0.05, 2.0),
+       q=st.lists(component, min_size=3, max_size=3), sparse=st.booleans())
+def test_one_contact_closed_forms(dim, a, b, mu, q, sparse):
+    q = np.array(q[:dim])
+    W = np.diag([a] + [b] * (dim - 1))
+    problem = LocalProblem(sp.csr_matrix(W) if sparse else W, q, [mu], dim)
+    solution = solve_coulomb(problem, tol=1e-12)
+    expected, status = one_contact(a, b, q, mu)
+    assert solution.converged and solution.error <= 1e-12
+    np.testing.assert_allclose(solution.r, expected, rtol=0, atol=1e-9 * (1 + np.abs(q).max()))
+    np.testing.assert_allclose(solution.u, W @ solution.r + q, rtol=0, atol=1e-12 * 10)
+    boundary = abs(np.linalg.norm(q[1:]) / b - mu * max(-q[0], 0) / a) < 1e-6
+    if not boundary:  # exactly on the cone edge stick and slip are the same point
+        assert solution.status.tolist() == [status]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_cohesion_turns_slip_into_stick(dim):
+    # W = diag(2, 4[, 4]), q = (-2, 6[, 0]): r_N = 1, stick would need ||r_T|| = 1.5 <= mu + c
+    W = np.diag([2.0] + [4.0] * (dim - 1))
+    q = np.array([-2.0, 6.0, 0.0][:dim])
+    without = solve_coulomb(LocalProblem(W, q, [0.5], dim), tol=1e-12)
+    np.testing.assert_allclose(without.r[:2], [1.0, -0.5], atol=1e-10)  # slips on mu r_N = 0.5
+    assert without.status.tolist() == ["slip"]
+    sticky = LocalProblem(W, q, [0.5], dim, cohesion=[1.2])
+    with_c = solve_coulomb(sticky, tol=1e-12)
+    np.testing.assert_allclose(with_c.r[:2], [1.0, -1.5], atol=1e-10)  # 1.5 <= 0.5 + 1.2
+    assert with_c.status.tolist() == ["stick"] and with_c.error <= 1e-12
+    # the cohesionless answer is wrong for the cohesive problem, and the measure says so
+    assert natural_map_error(sticky, without.r) > 1e-3
+    slipping = LocalProblem(W, q, [0.5], dim, cohesion=[0.7])
+    slip = solve_coulomb(slipping, tol=1e-12)
+    np.testing.assert_allclose(slip.r[:2], [1.0, -1.2], atol=1e-10)  # ||r_T|| = 0.5 + 0.7
+    assert slip.status.tolist() == ["slip"]
+
+
+@settings(max_examples=100, deadline=None)
+@given(dim=st.sampled_from([2, 3]), a=coefficient, b=coefficient, mu=st.floats(0.05, 2.0),
+       c=st.floats(0.0, 5.0), q=st.lists(component, min_size=3, max_size=3))
+def test_cohesion_closed_forms(dim, a, b, mu, c, q):
+    q = np.array(q[:dim])
+    W = np.diag([a] + [b] * (dim - 1))
+    problem = LocalProblem(W, q, [mu], dim, cohesion=[c])
+    solution = solve_coulomb(problem, tol=1e-12)
+    expected, _ = one_contact(a, b, q, mu, c)
+    assert solution.converged
+    np.testing.assert_allclose(solution.r, expected, rtol=0,
+                               atol=1e-9 * (1 + np.abs(expected).max()))
+    assert natural_map_error(problem, expected) <= 1e-13
+
+
+def test_open_cohesive_contact_holds_tension_until_its_strength():
+    # q_N = 1 > 0 pulls the contact open; cohesion c = 1, mu = 0.5: tensile strength c/mu = 2,
+    # reached only if a * 2 < q_N
+    W = np.eye(3)
+    held = solve_coulomb(LocalProblem(W, [1.0, 0.0, 0.0], [0.5], 3, cohesion=[1.0]), tol=1e-12)
+    np.testing.assert_allclose(held.r, [-1.0, 0.0, 0.0], atol=1e-12)  # u_N = 0, in tension
+    assert held.status.tolist() == ["stick"]
+    broken = solve_coulomb(LocalProblem(W, [3.0, 0.0, 0.0], [0.5], 3, cohesion=[1.0]), tol=1e-12)
+    np.testing.assert_allclose(broken.r, [-2.0, 0.0, 0.0], atol=1e-12)
+    assert broken.status.tolist() == ["open"]
+
+
+def random_problem(nc, dim, seed, mu=0.3, sparse=False):
+    """A well-conditioned SPD W (condition number < 10) and a q that closes most contacts."""
+    rng = np.random.default_rng(seed)
+    m = nc * dim
+    A = rng.standard_normal((m, m)) / np.sqrt(m)
+    W = A @ A.T * 0.5 + np.eye(m)
+    q = 0.3 * rng.standard_normal(m)
+    q[::dim] -= 0.5
+    W = sp.csr_matrix(W) if sparse else W
+    return LocalProblem(W, q, np.full(nc, mu), dim)
+
+
+def gauss_seidel_alone(problem, tol, sweeps=5000):
+    gs = GaussSeidel(problem.W, problem.q, problem.mu, problem.dim)
+    r = np.zeros_like(problem.q)
+    for _ in range(sweeps):
+        r = gs.sweep(r)
+        if natural_map_error(problem, r) <= tol:
+            return r
+    raise AssertionError("Gauss-Seidel did not converge")
+
+
+@pytest.mark.parametrize("dim, sparse", [(2, False), (3, False), (3, True)])
+def test_newton_agrees_with_gauss_seidel_where_unique(dim, sparse):
+    problem = random_problem(12, dim, seed=3, sparse=sparse)
+    solution = solve_coulomb(problem, tol=1e-12)
+    assert solution.converged and "gauss-seidel" not in solution.message
+    assert set(solution.status) == {"open", "stick", "slip"}  # every regime is exercised
+    reference = gauss_seidel_alone(problem, 1e-13)
+    np.testing.assert_allclose(solution.r, reference, rtol=0, atol=1e-9 * np.abs(reference).max())
+
+
+def test_dense_and_sparse_w_give_the_same_solution():
+    dense = random_problem(10, 3, seed=7)
+    sparse = LocalProblem(sp.csr_matrix(dense.W), dense.q, dense.mu, 3)
+    a, b = solve_coulomb(dense, tol=1e-12), solve_coulomb(sparse, tol=1e-12)
+    np.testing.assert_allclose(a.r, b.r, rtol=0, atol=1e-10 * np.abs(a.r).max())
+
+
+def test_warm_start():
+    problem = read_problem(DATA / "Capsules-i97-269.hdf5")
+    cold = solve_coulomb(problem)
+    assert cold.converged
+    again = solve_coulomb(problem, r0=cold.r)
+    assert again.iterations == 0 and again.error == cold.error
+    rng = np.random.default_rng(0)
+    near = solve_coulomb(problem, r0=cold.r * (1 + 1e-4 * rng.standard_normal(cold.r.size)))
+    assert near.converged and near.iterations < cold.iterations
+
+
+def test_non_convergence_is_reported_not_hidden():
+    # W = 0 is positive semidefinite, but with q_N < 0 no reaction can close the contact:
+    # u = q whatever r, so the problem has no solution (the iterates grow without bound and the
+    # relative error falls like 1/||r||, but never to tol)
+    problem = LocalProblem(np.zeros((3, 3)), [-1.0, 0.5, 0.0], [0.3], 3)
+    solution = solve_coulomb(problem, max_iter=20)
+    assert not solution.converged
+    assert solution.error == natural_map_error(problem, solution.r) > 1e-8
+    assert "not converged" in solution.message and "gauss-seidel" in solution.message
+    assert f"{solution.error:.2e}" in solution.message
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_alart_curnier_jacobian_matches_finite_differences(dim):
+    rng = np.random.default_rng(dim)
+    nc = 200
+    R = rng.standard_normal((nc, dim))
+    U = rng.standard_normal((nc, dim))
+    mu = rng.uniform(0.1, 1.0, nc)
+    rho = rng.uniform(0.5, 2.0, nc)
+    _, A, B = alart_curnier(R, U, mu, rho, jacobian=True)
+    h = 1e-7
+    for k in range(dim):
+        e = np.zeros(dim)
+        e[k] = h
+        dr = (alart_curnier(R + e, U, mu, rho) - alart_curnier(R - e, U, mu, rho)) / (2 * h)
+        du = (alart_curnier(R, U + e, mu, rho) - alart_curnier(R, U - e, mu, rho)) / (2 * h)
+        # contacts within h of a kink have one-sided derivatives: leave them out
+        smooth = np.all(np.abs(dr - A[:, :, k]) < 1e-3, axis=1) | np.all(
+            np.abs(du - B[:, :, k]) < 1e-3, axis=1)
+        assert smooth.mean() > 0.97
+        np.testing.assert_allclose(dr[smooth], A[smooth, :, k], atol=1e-6)
+        np.testing.assert_allclose(du[smooth], B[smooth, :, k], atol=1e-6)
+    # each of the three regimes occurs in the sample
+    Phi = alart_curnier(R, U, mu, rho)
+    assert np.any(A[:, 0, 0] == 1) and np.any(A[:, 0, 0] == 0) and Phi.shape == R.shape
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_every_fclib_file_is_solved(name):
+    problem = read_problem(DATA / name)
+    solution = solve_local(problem, tol=1e-8)
+    assert solution.converged, solution.message
+    # the README's measure, recomputed from r alone (u = W r + q) outside the solver
+    assert natural_map_error(problem, solution.r) <= 1e-8
+    assert np.array_equal(contact_status(problem, solution.r), solution.status)
+
+
+def test_frictionless_problems_stay_on_the_box_qp():
+    problem = random_problem(8, 3, seed=3, mu=0.0)
+    solution = solve_local(problem)
+    assert solution.converged and "newton" not in solution.message
+    assert np.all(solution.r.reshape(8, 3)[:, 1:] == 0)
+    frictional = solve_local(random_problem(8, 3, seed=3, mu=0.3))
+    assert frictional.converged and "newton" in frictional.message
+
+
+# --- bad input ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"mu": [-0.1]}, "mu must be >= 0"),
+    ({"cohesion": [-1.0]}, "cohesion must be >= 0"),
+    ({"cohesion": [np.nan]}, "cohesion contains NaN"),
+    ({"cohesion": [1.0, 2.0]}, "cohesion must have length"),
+    ({"mu": [0.0], "cohesion": [1.0]}, "cohesion > 0 needs mu > 0"),
+    ({"q": [np.nan, 0.0, 0.0]}, "q contains NaN"),
+])
+def test_invalid_problems(kwargs, match):
+    args = {"W": np.eye(3), "q": [-1.0, 0.0, 0.0], "mu": [0.3], "dim": 3} | kwargs
+    with pytest.raises(InvalidInputError, match=match) as info:
+        LocalProblem(**args)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("W, match", [
+    (np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]]), "Cholesky"),
+    (sp.csr_matrix(np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]])), "Cholesky"),
+    (np.diag([1.0, -1e-3, 1.0]), "diagonal entry 1 is -0.001"),
+    (np.array([[1.0, 0, 0], [0, 0.0, 1.0], [0, 1.0, 1.0]]), "zero diagonal"),
+])
+def test_indefinite_w_is_refused(W, match):
+    problem = LocalProblem(W, [-1.0, 0.0, 0.0], [0.3], 3)
+    with pytest.raises(NotPositiveDefiniteError, match=match):
+        solve_coulomb(problem)
+    with pytest.raises(NotPositiveDefiniteError, match=match):
+        solve_local(LocalProblem(W, [-1.0, 0.0, 0.0], [0.0], 3))
+
+
+def test_psd_check_accepts_singular_and_rounded_matrices():
+    check_positive_semidefinite(np.zeros((3, 3)))
+    v = np.array([1.0, 2.0, 3.0])
+    check_positive_semidefinite(np.outer(v, v))  # rank one
+    # 6-digit rounding leaves the granular file's W indefinite at -2.7e-6 (scaled): accepted
+    check_positive_semidefinite(read_problem(DATA / "fc2d_granularflowonwall_02020_00213.dat").W)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"tol": 0.0}, "tol must be a positive"),
+    ({"tol": float("nan")}, "tol must be a positive"),
+    ({"max_iter": 0}, "max_iter must be a positive int"),
+    ({"r0": [1.0, 0.0]}, r"r0 must have shape \(3,\)"),
+    ({"r0": [np.inf, 0.0, 0.0]}, "r0 contains NaN"),
+])
+def test_invalid_options(kwargs, match):
+    with pytest.raises(InvalidInputError, match=match):
+        solve_coulomb(LocalProblem(np.eye(3), [-1.0, 0.0, 0.0], [0.3], 3), **kwargs)
