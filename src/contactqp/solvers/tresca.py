@@ -30,10 +30,11 @@ from __future__ import annotations
 
 import numbers
 import time
+import warnings
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import spsolve
+from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
 from ..errors import InvalidInputError, MissingDependencyError
 from ..local import LocalProblem, contact_status, natural_map_error
@@ -279,7 +280,9 @@ class _ClarabelTresca:
             M = D @ (sp.identity(m) - self.W) if not dense else D @ (np.eye(m) - self.W)
             J = (np.eye(m) - M) if dense else (sp.identity(m, format="csc") - sp.csc_matrix(M))
             try:
-                step = np.linalg.solve(J, -F) if dense else spsolve(J, -F)
+                with warnings.catch_warnings():  # singular J (rigid bodies): a NaN step, below
+                    warnings.simplefilter("ignore", MatrixRankWarning)
+                    step = np.linalg.solve(J, -F) if dense else spsolve(J, -F)
             except np.linalg.LinAlgError:
                 break
             if not np.all(np.isfinite(step)):
