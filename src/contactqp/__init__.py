@@ -11,8 +11,10 @@ from .errors import (
     UnsupportedProblemError,
 )
 from .model import ReducedModel, unit_load_compliance
-from .problem import ContactProblem
-from .result import Certificate, ContactResult
+from .friction import FrictionLaw
+from .loading import HistoryResult, linear_path, solve_history
+from .problem import ContactProblem, FrictionalProblem
+from .result import Certificate, ContactResult, FrictionalResult, FrictionCertificate
 from .solvers import SOLVERS, solve
 
 __all__ = [
@@ -21,6 +23,13 @@ __all__ = [
     "ContactProblem",
     "ContactResult",
     "Certificate",
+    "FrictionalProblem",
+    "FrictionalResult",
+    "FrictionCertificate",
+    "FrictionLaw",
+    "solve_history",
+    "linear_path",
+    "HistoryResult",
     "GapObstacle",
     "PlaneObstacle",
     "ProfileObstacle",
