@@ -85,9 +85,53 @@ def test_fclib_frictionless_problems_are_solved(tmp_path):
         assert natural_map_error(read_problem(path), r, u) <= 1e-8
 
 
-def test_fclib_with_friction_says_so_and_keeps_other_results(tmp_path):
-    twin = frictionless_copy(FCLIB / "Rover4516.dat", tmp_path / "rover.hdf5")
-    proc = run("fclib", str(FCLIB / "FrictionContact3D_1c.dat"), str(twin), "--json")
-    assert proc.returncode == 1
-    assert "friction not supported yet" in proc.stderr
-    assert json.loads(proc.stdout)["converged"] is True
+def test_fclib_solves_every_shared_file_with_friction(tmp_path):
+    files = sorted(p for p in FCLIB.iterdir() if p.suffix in (".dat", ".hdf5"))
+    assert len(files) == 23
+    out = tmp_path / "solutions"
+    proc = run("fclib", *map(str, files), "--json", "--solution-dir", str(out))
+    assert proc.returncode == 0, proc.stderr
+    rows = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert [Path(r["file"]).name for r in rows] == [p.name for p in files]
+    for path, row in zip(files, rows):
+        assert row["converged"] and row["error"] <= 1e-8
+        assert row["open"] + row["stick"] + row["slip"] == row["contacts"]
+        with h5py.File(out / f"{path.stem}.hdf5") as solution:
+            r, u = solution["solution/r"][()], solution["solution/u"][()]
+        problem = read_problem(path)
+        # the README's measure, recomputed here: from the written (r, u) and from r alone
+        assert natural_map_error(problem, r, u) <= 1e-8
+        assert natural_map_error(problem, r) <= 1e-8
+
+
+def test_fclib_unsolvable_problem_says_why_and_keeps_other_results(tmp_path):
+    # W = 0 with q_N < 0: no reaction closes the contact, the problem has no solution
+    hopeless = tmp_path / "hopeless.hdf5"
+    write_problem(hopeless, LocalProblem(np.zeros((3, 3)), [-1.0, 0.5, 0.0], [0.3], 3))
+    out = tmp_path / "solutions"
+    proc = run("fclib", str(hopeless), str(FCLIB / "Rover4516.dat"), "--json",
+               "--solution-dir", str(out))
+    assert_one_line_error(proc, 1)
+    assert "hopeless.hdf5" in proc.stderr and "not converged" in proc.stderr
+    bad, good = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert not bad["converged"] and bad["error"] > 1e-8
+    assert f"{bad['error']:.2e}" in proc.stderr
+    assert good["converged"]
+    assert sorted(p.name for p in out.iterdir()) == ["Rover4516.hdf5"]
+
+
+def test_fclib_bad_problems_exit_2(tmp_path):
+    indefinite = tmp_path / "indefinite.hdf5"
+    W = np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]])
+    write_problem(indefinite, LocalProblem(W, [-1.0, 0.0, 0.0], [0.3], 3))
+    proc = run("fclib", str(indefinite))
+    assert_one_line_error(proc, 2)
+    assert "not positive semidefinite" in proc.stderr
+    for name, values in (("mu", [-0.3]), ("q", [np.nan, 0.0, 0.0])):
+        path = tmp_path / f"bad_{name}.hdf5"
+        write_problem(path, LocalProblem(np.eye(3), [-1.0, 0.0, 0.0], [0.3], 3))
+        with h5py.File(path, "a") as fh:
+            fh[f"fclib_local/vectors/{name}"][...] = values
+        proc = run("fclib", str(path))
+        assert_one_line_error(proc, 2)
+        assert f"bad_{name}.hdf5" in proc.stderr and name in proc.stderr
