@@ -6,7 +6,7 @@ from pathlib import Path
 
 from .errors import MissingDependencyError
 
-__all__ = ["plot_spring_chain"]
+__all__ = ["plot_spring_chain", "plot_rod"]
 
 
 def _pyplot():
@@ -43,6 +43,64 @@ def plot_spring_chain(results, path) -> Path:
     axes.set_title("Spring chain with friction")
     axes.grid(True, alpha=0.3)
     axes.legend()
+    figure.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
+
+
+def plot_rod(rod, comparisons, path) -> Path:
+    """The rod deformed over its obstacle, one panel per load case, as a PNG (true scale, mm).
+
+    Parameters
+    ----------
+    rod : contactqp.rod.Rod
+    comparisons : sequence of contactqp.rod.CaseComparison
+        Drawn: the reference deflection on the mesh (line), the reduced solution at the
+        computational nodes (markers), the applied forces and the reduced contact forces (arrows,
+        labelled in N).
+    path : str or Path
+        Output file; its suffix chooses the format.
+    """
+    import numpy as np
+
+    plt = _pyplot()
+    x = rod.frame.coordinates[:, 0] * 1e3
+    nodes = rod.node_indices
+    figure, panels = plt.subplots(len(comparisons), 1, figsize=(8, 3.2 * len(comparisons)),
+                                  sharex=True, squeeze=False)
+    arrow = 0.25 * rod.gap_clamped * 1e3
+    for axes, c in zip(panels[:, 0], comparisons):
+        obstacle = -rod.gap(rod.frame.coordinates[:, 0]) * 1e3
+        axes.fill_between(x, obstacle, obstacle.min() - 1.0, color="0.85", label="obstacle")
+        axes.plot(x, obstacle, color="0.3", lw=1)
+        axes.plot(x, 0 * x, color="0.6", ls="--", lw=1, label="rod at rest")
+        deformed = rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2]
+        axes.plot(deformed[:, 0] * 1e3, deformed[:, 1] * 1e3, color="C0", lw=2,
+                  label="full FE contact")
+        U = c.reduced.x.reshape(-1, 2)
+        axes.plot((x[nodes] + U[:, 0] * 1e3), U[:, 1] * 1e3, "o", color="C1",
+                  label="reduced model (nodes)")
+        axes.plot([x[-1]] * 2, [-arrow, arrow], color="k", lw=4)
+        scale = arrow / max(max(abs(load.fy) for load in c.case.loads), 1e-300)
+        for load in c.case.loads:
+            uy = c.reference.displacements[int(np.argmin(np.abs(x - load.x * 1e3))), 1] * 1e3
+            axes.annotate(f"{abs(load.fy):.3g} N", (load.x * 1e3, uy),
+                          (load.x * 1e3, uy - load.fy * scale), color="C3", ha="center",
+                          arrowprops={"arrowstyle": "->", "color": "C3"})
+        for i in np.flatnonzero(c.reduced.forces > 0):
+            force = c.reduced.forces[i]
+            tip = (x[nodes[i]] + U[i, 0] * 1e3, U[i, 1] * 1e3)
+            tail = (tip[0] + force * scale * rod.normal[0], tip[1] + force * scale * rod.normal[1])
+            axes.annotate(f"{force:.3g} N", tip, tail, color="C2", ha="center", va="top",
+                          arrowprops={"arrowstyle": "->", "color": "C2"})
+        axes.set_title(f"{c.case.name}: largest deviation {c.max_eps:.2g} %")
+        axes.set_ylabel("y (mm)")
+        axes.grid(True, alpha=0.3)
+    panels[0, 0].legend(loc="upper left", fontsize="small")
+    panels[-1, 0].set_xlabel("x (mm), clamped at the right end")
     figure.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

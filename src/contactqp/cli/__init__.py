@@ -1,6 +1,7 @@
 """The ``contactqp`` command line: one module per command, each registering on :data:`cli`."""
 
 from . import fclib, solve, springs  # noqa: F401  (register the commands)
+from . import rod  # noqa: F401
 from .app import cli, main
 
 __all__ = ["cli", "main"]
