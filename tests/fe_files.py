@@ -42,7 +42,8 @@ def _split(value: int) -> tuple[int, int]:
     return value & 0xFFFFFFFF, value >> 32
 
 
-def write_ansys_full(path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), version="20.1"):
+def write_ansys_full(path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), counts=None,
+                     version="20.1"):
     """Write a symmetric stiffness as an ANSYS ``.full`` file.
 
     Parameters
@@ -50,19 +51,23 @@ def write_ansys_full(path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), ver
     path : str or os.PathLike
     stiffness : array_like or sparse, shape (neqn, neqn)
         Symmetric, equations in storage order: node by node (in the order of ``nodes``), each node
-        with every DOF of ``dofs``. Rows of constrained equations are written too, as MAPDL does.
+        with its DOFs in the order of ``dofs``. Constrained equations are written too, as MAPDL
+        does.
     nodes : sequence of int
         Node numbers in storage order (need not be sorted).
     dofs : sequence of int
         DOF reference numbers of every node (1 UX, 2 UY, 3 UZ, 4 ROTX, ...).
     constrained : sequence of int
         Storage indices of the constrained equations.
+    counts : sequence of int, optional
+        Number of DOFs of each node (the first ones of ``dofs``); default: all of them.
     version : str
         MAPDL version written in the standard header (``"NN.N"``).
     """
     K = sp.csc_matrix(stiffness, dtype=float)
     neqn, n_nodes, numdof = K.shape[0], len(nodes), len(dofs)
-    assert K.shape == (neqn, neqn) and neqn == n_nodes * numdof
+    counts = np.full(n_nodes, numdof) if counts is None else np.asarray(counts)
+    assert K.shape == (neqn, neqn) and neqn == counts.sum()
     lower = sp.tril(K, format="csc")
     lower.eliminate_zeros()
 
@@ -77,7 +82,7 @@ def write_ansys_full(path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), ver
     records = [_int_record(standard), None, _int_record(dofs), _int_record(nodes)]
     position = sum(r.size for r in records if r is not None) + FULL_HEADER_WORDS + 3
     ptr_dof = position
-    records += [_int_record(np.full(n_nodes, numdof)), _int_record(const)]
+    records += [_int_record(counts), _int_record(const)]
     position += records[-2].size + records[-1].size
     ptr_stf = position
     for column in range(neqn):

@@ -20,10 +20,10 @@ __all__ = ["read_op4", "op4_matrix", "read_dmig", "dmig_matrix"]
 _BULK_START = "BEGIN BULK"
 
 
-def _which(path: Path, names: Sequence[str], name: str | None, what: str) -> str:
+def _which(path: Path, names: Sequence[str], name: str | None, what: str, plural: str) -> str:
     if name is None:
         if len(names) != 1:
-            raise InvalidInputError(f"{path}: the file holds {len(names)} {what}s "
+            raise InvalidInputError(f"{path}: the file holds {len(names)} {plural} "
                                     f"({', '.join(names) or 'none'}); choose one by name")
         return names[0]
     if name not in names:
@@ -69,7 +69,7 @@ def op4_matrix(path, name: str | None = None):
     except Exception as exc:  # whatever pyNastran raises on a foreign or truncated file
         raise FileFormatError(f"{path}: not a readable OP4 file "
                               f"({type(exc).__name__}: {one_line(exc)})") from None
-    name = _which(path, list(matrices), name, "matrix")
+    name = _which(path, list(matrices), name, "matrix", "matrices")
     return _real(path, matrices[name].data, name)
 
 
@@ -196,7 +196,7 @@ def dmig_matrix(path, name: str):
 
 def _load_dmig(path: Path, name: str):
     model = _bulk(path)
-    name = _which(path, sorted(model.dmig), name, "DMIG")
+    name = _which(path, sorted(model.dmig), name, "DMIG", "DMIGs")
     return (model, *_assemble(path, model.dmig[name]))
 
 
