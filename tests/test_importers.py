@@ -184,12 +184,20 @@ def test_ansys_full_node_with_fewer_dofs_is_unsupported(tmp_path):
         read_ansys_full(path, [3], ["UX"])
 
 
-@pytest.mark.parametrize("keep_bytes", [0, 40, 430, 1200, -9])
-def test_ansys_full_truncated_file_is_a_format_error(plate_full, tmp_path, keep_bytes):
+@pytest.mark.parametrize("keep_bytes, part", [
+    (0, "only 0 bytes"), (40, "only 40 bytes"), (430, "full-file header"),
+    (1072, "DOF reference record"), (1200, "nodal equivalence table"),
+    (1320, "DOF count record"), (1600, "constraint record"), (-4, "stiffness matrix"),
+])
+def test_ansys_full_truncated_file_is_a_format_error(plate_full, tmp_path, keep_bytes, part):
+    """Every record is checked against the file's end before the reader's compiled code reads
+    it (it would read past the end). Records of the plate file, in words: standard header
+    0-102, full header 103-265, DOF references 266-270, nodes 271-309, DOF counts 310-348,
+    constraints 349-423, stiffness from 424."""
     data = plate_full.read_bytes()
     path = tmp_path / "cut.full"
-    path.write_bytes(data[:keep_bytes] if keep_bytes >= 0 else data[:len(data) // 2 + keep_bytes])
-    with pytest.raises(FileFormatError, match=r"cut\.full: "):
+    path.write_bytes(data[:keep_bytes] if keep_bytes >= 0 else data[:keep_bytes])
+    with pytest.raises(FileFormatError, match=rf"cut\.full: .*{part}"):
         read_ansys_full(path, [1000])
 
 
