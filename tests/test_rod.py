@@ -1,0 +1,222 @@
+"""The Euler-Bernoulli frame against beam theory, and the rod over an obstacle against full FE contact.
+
+Tolerances: Euler-Bernoulli elements are exact at the nodes for nodal loads, so beam theory is met
+to round-off (1e-9 relative, the sparse solve of a stiffness whose entries span 12 decades). The
+reduced model with contacts at the computational nodes is the same problem as the full mesh with
+contacts at those nodes, so the two agree to the solvers' accuracy (1e-8 relative). Against the
+full mesh with contacts at every node the method's bar is 0.3 %.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+from contactqp.compliance.beam import Frame2D, frame_element_stiffness
+from contactqp.compliance.condensation import RigidBodyModeError
+from contactqp.errors import InvalidInputError
+from contactqp.rod import (ABSOLUTE_BELOW, DEFAULT_CASES, Rod, RodLoad, RodLoadCase, compare,
+                           deviations)
+
+ROOT = Path(__file__).resolve().parents[1]
+E, A, L = 1e12, 0.2e-6, 0.04
+I = A**2 / (4 * np.pi)
+
+
+def cantilever(n_elements=8, angle=0.0):
+    """Rod from the origin at ``angle``, clamped at its far end."""
+    s = np.linspace(0.0, L, n_elements + 1)
+    nodes = np.column_stack([s * np.cos(angle), s * np.sin(angle)])
+    elements = np.column_stack([np.arange(n_elements), np.arange(1, n_elements + 1)])
+    return Frame2D(nodes, elements, E, A, I, fixed={-1: "xyr"})
+
+
+def test_cantilever_tip_load_meets_beam_theory_at_every_node():
+    frame = cantilever(8)
+    P = 0.3
+    u = frame.displacements(frame.load_vector([(0, 0.0, -P)]))
+    a = L - frame.coordinates[:, 0]  # distance from the clamp
+    np.testing.assert_allclose(u[:, 1], -P * a**2 * (3 * L - a) / (6 * E * I), rtol=1e-9, atol=0)
+    assert u[0, 1] == pytest.approx(-P * L**3 / (3 * E * I), rel=1e-9)
+    np.testing.assert_allclose(u[:, 2], P * a * (2 * L - a) / (2 * E * I), rtol=1e-9, atol=0)
+    assert u[0, 2] == pytest.approx(P * L**2 / (2 * E * I), rel=1e-9)
+    np.testing.assert_array_equal(u[-1], 0.0)
+
+
+def test_axial_load_stretches_by_PL_over_EA():
+    frame = cantilever(5)
+    u = frame.displacements(frame.load_vector([(0, -2.0, 0.0)]))
+    a = L - frame.coordinates[:, 0]
+    np.testing.assert_allclose(u[:, 0], -2.0 * a / (E * A), rtol=1e-9, atol=0)
+    np.testing.assert_allclose(u[:, 1:], 0.0, atol=1e-20)
+
+
+def test_inclined_cantilever_is_the_rotated_one():
+    angle = np.radians(30.0)
+    frame = cantilever(4, angle)
+    c, s = np.cos(angle), np.sin(angle)
+    axial, lateral = 1.5, -0.2  # along the rod and across it
+    load = (0, axial * c - lateral * s, axial * s + lateral * c)
+    u = frame.displacements(frame.load_vector([load]))[0]
+    along, across = u[0] * c + u[1] * s, -u[0] * s + u[1] * c
+    assert along == pytest.approx(axial * L / (E * A), rel=1e-9)  # pushed towards the clamp
+    assert across == pytest.approx(lateral * L**3 / (3 * E * I), rel=1e-9)
+    element = frame_element_stiffness([0, 0], [c, s], E, A, I)
+    assert np.allclose(element, element.T) and np.allclose(element @ [c, s, 0, c, s, 0], 0)
+
+
+def test_condensed_flexibility_is_the_cantilever_influence_function():
+    frame = cantilever(16)
+    nodes = [0, 4, 10]
+    R = frame.compliance(nodes, "xy")
+    a = L - frame.coordinates[nodes, 0]
+    near, far = np.minimum.outer(a, a), np.maximum.outer(a, a)
+    np.testing.assert_allclose(R[1::2, 1::2], near**2 * (3 * far - near) / (6 * E * I), rtol=1e-9)
+    np.testing.assert_allclose(R[0::2, 0::2], near / (E * A), rtol=1e-9)
+    np.testing.assert_allclose(R[0::2, 1::2], 0.0, atol=1e-12 * np.abs(R).max())
+
+
+def test_frame_errors_name_the_problem():
+    nodes = [[0, 0], [1, 0]]
+    with pytest.raises(RigidBodyModeError, match="rigid-body modes"):
+        Frame2D(nodes, [[0, 1]], E, A, I, fixed={0: "xy"}).compliance([1])
+    with pytest.raises(InvalidInputError, match="letters among"):
+        Frame2D(nodes, [[0, 1]], E, A, I, fixed={0: "xz"})
+    with pytest.raises(InvalidInputError, match="young"):
+        Frame2D(nodes, [[0, 1]], -E, A, I)
+    with pytest.raises(InvalidInputError, match="is fixed"):
+        Frame2D(nodes, [[0, 1]], E, A, I, fixed={0: "xyr"}).load_vector([(0, 1.0, 0.0)])
+    with pytest.raises(InvalidInputError, match="zero length"):
+        Frame2D([[0, 0], [0, 0]], [[0, 1]], E, A, I)
+
+
+@pytest.fixture(scope="module")
+def table():
+    return compare(Rod(), repeat=1)
+
+
+def test_one_force_contact_force_is_the_propped_cantilever(table):
+    """Force P at distance a from the clamp, tip held on the inclined obstacle (compatibility)."""
+    rod = Rod()
+    comparison = table[0]
+    (load,) = comparison.case.loads
+    a = rod.length - load.x
+    free_tip = -load.fy * a**2 * (3 * L - a) / (6 * E * I)
+    # a normal force lam pushes the tip by lam c L^3/(3EI) up and lam c s L/(EA) along the rod
+    c, s = 1 / np.hypot(1, rod.slope), rod.slope / np.hypot(1, rod.slope)
+    lam = (free_tip - rod.gap_free) / (c * L**3 / (3 * E * I) + s * rod.slope * c * L / (E * A))
+    assert comparison.reduced.forces[0] == pytest.approx(lam, rel=1e-8)
+    assert comparison.reference.forces[0] == pytest.approx(lam, rel=1e-8)
+    np.testing.assert_array_equal(comparison.reduced.forces[1:], 0.0)
+
+
+def test_reduced_model_is_exact_against_contact_at_the_same_nodes(table):
+    rod = Rod()
+    for comparison in table:
+        assert comparison.reduced.success
+        assert comparison.max_eps_same_nodes < 1e-6  # percent: 1e-8 relative
+        np.testing.assert_allclose(comparison.reduced.forces, comparison.same_nodes.forces,
+                                   rtol=1e-8, atol=1e-10)
+        u = comparison.same_nodes.displacements[rod.node_indices, :2]
+        np.testing.assert_allclose(comparison.reduced.x.reshape(-1, 2), u, rtol=1e-8,
+                                   atol=1e-8 * np.abs(u).max())
+
+
+def test_method_bar_against_contact_at_every_mesh_node(table):
+    rod = Rod()
+    for comparison in table:
+        assert comparison.max_eps <= 0.3
+        touching = comparison.reference.contact_nodes[comparison.reference.forces > 0]
+        assert touching.size and set(touching) <= set(rod.node_indices)
+        assert comparison.max_penetration < 1e-9 * rod.gap_free
+        assert 0 < comparison.t_reduced and 0 < comparison.t_full
+        # the free end closes and the rest of the rod stays open: part of the rod in contact
+        assert comparison.reduced.closed[0] and not comparison.reduced.closed[1:].any()
+
+
+def test_contact_between_nodes_is_seen_and_breaks_the_bar():
+    """Obstacle reversed (5 mm under the free end): the rod touches near 7 mm, between nodes."""
+    rod = Rod(gap_free=5e-3, gap_clamped=1e-3)
+    case = RodLoadCase("between nodes", (RodLoad(0.0, 0.0, -1.0), RodLoad(0.01, 0.0, -4.0),
+                                         RodLoad(0.02, 0.0, -4.0), RodLoad(0.03, 0.0, -4.0)))
+    (comparison,) = compare(rod, [case], repeat=1)
+    touching = comparison.reference.contact_nodes[comparison.reference.forces > 0]
+    assert not set(touching) <= set(rod.node_indices)
+    assert comparison.max_penetration > 1e-6
+    assert comparison.max_eps > 0.3
+    assert comparison.max_eps_same_nodes < 1e-6
+
+
+def test_deviations_switch_to_absolute_below_the_floor():
+    eps, absolute = deviations([1.01, 2e-9], [1.0, 1e-9], floor=ABSOLUTE_BELOW)
+    np.testing.assert_allclose(eps, [1.0, 1e-9])
+    np.testing.assert_array_equal(absolute, [False, True])
+
+
+def test_rod_rejects_nodes_off_the_mesh_and_loads_off_the_nodes():
+    with pytest.raises(InvalidInputError, match="not a free mesh node"):
+        Rod(n_elements=12)
+    with pytest.raises(InvalidInputError, match="not on a computational node"):
+        compare(Rod(), [RodLoadCase("off", (RodLoad(0.012, 0.0, -1.0),))], repeat=1)
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "contactqp.cli", "rod", *args],
+                          capture_output=True, text=True, cwd=ROOT)
+
+
+def test_cli_json_schema_and_values():
+    proc = run("--json")
+    assert proc.returncode == 0, proc.stderr
+    record = json.loads(proc.stdout)
+    assert record["clamped_end"] == "right"
+    assert [c["name"] for c in record["cases"]] == [c.name for c in DEFAULT_CASES]
+    for case, expected in zip(record["cases"], DEFAULT_CASES):
+        assert {"name", "loads", "nodes", "max_eps", "t_reduced", "t_full"} <= set(case)
+        assert case["loads"] == [{"x": l.x, "fx": l.fx, "fy": l.fy} for l in expected.loads]
+        assert len(case["nodes"]) == 8
+        largest = max(max(abs(n["ux_ref"]), abs(n["uy_ref"])) for n in case["nodes"])
+        for node in case["nodes"]:
+            assert {"x", "gap", "ux", "uy", "ux_ref", "uy_ref", "eps_x", "eps_y"} <= set(node)
+            assert node["gap"] == pytest.approx(1e-3 + 0.1 * node["x"], rel=1e-12)
+            for axis in "xy":
+                value, ref = node[f"u{axis}"], node[f"u{axis}_ref"]
+                absolute = abs(ref) < ABSOLUTE_BELOW * largest
+                assert node[f"eps_{axis}_absolute"] == absolute
+                expected_eps = abs(value - ref) if absolute else 100 * abs(value - ref) / abs(ref)
+                assert node[f"eps_{axis}"] == pytest.approx(expected_eps, rel=1e-9, abs=1e-30)
+        assert 0 <= case["max_eps"] <= 0.3
+        assert case["t_reduced"] > 0 and case["t_full"] > 0
+        assert case["nodes"][0]["uy"] == pytest.approx(-1e-3, rel=1e-5)  # the free end touches
+
+
+def test_cli_writes_a_figure_and_a_readable_vtu(tmp_path):
+    png, vtu = tmp_path / "rod.png", tmp_path / "out" / "rod.vtu"
+    proc = run("--plot", str(png), "--vtu", str(vtu))
+    assert proc.returncode == 0, proc.stderr
+    assert "several forces" in proc.stdout and "eps_y" in proc.stdout
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    mesh = meshio.read(vtu)
+    rod = Rod()
+    assert mesh.points.shape == (rod.n_elements + 1, 3)
+    assert mesh.cells[0].type == "line" and len(mesh.cells[0].data) == rod.n_elements
+    np.testing.assert_allclose(mesh.point_data["gap"], rod.gap(mesh.points[:, 0]))
+    reference = compare(rod, DEFAULT_CASES[:1], repeat=1)[0]
+    np.testing.assert_allclose(mesh.point_data["one_force_displacement"][:, :2],
+                               reference.reference.displacements[:, :2], rtol=1e-9, atol=1e-15)
+    force = mesh.point_data["one_force_contact_force_reduced"]
+    assert force[0, 1] == pytest.approx(reference.reduced.forces[0] / np.hypot(1, rod.slope))
+    np.testing.assert_array_equal(force[1:], 0.0)
+
+
+@pytest.mark.parametrize("args", [["--elements", "12"], ["--elements", "0"],
+                                  ["--vtu", "/proc/forbidden/rod.vtu"]])
+def test_cli_bad_input_is_one_line_and_exit_2(args):
+    proc = run(*args)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("contactqp: error:"), proc.stderr
