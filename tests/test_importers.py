@@ -20,6 +20,7 @@ from contactqp.compliance.importers import (READERS, dmig_matrix, load_complianc
                                             read_matrix_market, read_op4, read_unit_load_csv)
 from contactqp.errors import (FileFormatError, InvalidInputError, MissingDependencyError,
                               NotPositiveDefiniteError, UnsupportedProblemError)
+from contactqp.io.problem_file import load_problem_file, read_array
 from fe_files import write_ansys_full, write_op4_binary
 
 pyNastran = pytest.importorskip("pyNastran")  # the test extra installs both backends
@@ -453,7 +454,21 @@ def test_unit_load_csv_errors(tmp_path):
 
 
 # --------------------------------------------------------------------------------------------
-# Dispatch and missing backends
+# Dispatch, problem files and missing backends
+
+
+def test_problem_file_takes_an_op4_matrix_by_name(tmp_path):
+    K = chain_stiffness(3)
+    write_op4_binary(tmp_path / "model.op4", {"KAA": K, "MAA": np.eye(3)})
+    (tmp_path / "p.toml").write_text(
+        '[model]\nstiffness = { file = "model.op4", key = "KAA" }\n'
+        "[loads]\nvalues = [0.0, 0.0, 1.0]\n"
+        '[[obstacle]]\ntype = "gaps"\nnodes = [2]\ngaps = [1.0]\n')
+    spec = load_problem_file(tmp_path / "p.toml")
+    np.testing.assert_array_equal(spec.problem.model.stiffness, K)
+    np.testing.assert_array_equal(read_array(tmp_path / "model.op4", key="MAA"), np.eye(3))
+    with pytest.raises(InvalidInputError, match=r"model\.op4: the file holds 2 matrices"):
+        read_array(tmp_path / "model.op4")
 
 
 def test_load_compliance_knows_every_extension_and_names_the_unknown(tmp_path):

@@ -25,6 +25,10 @@ file. Readable formats, chosen by the file's extension or by ``format = "..."`` 
 * ``.npy`` (``format = "npy"``): the stored array.
 * ``.mtx``, ``.mtx.gz`` (``format = "mtx"``): MatrixMarket, through :func:`scipy.io.mmread`,
   dense or sparse (densified), ``symmetric`` storage included.
+* ``.op4`` (``format = "op4"``): NASTRAN OUTPUT4, ASCII or binary, the matrix named by ``key``
+  (e.g. ``{ file = "model.op4", key = "KAA" }``) or the only one in the file; needs pyNastran
+  (:func:`contactqp.compliance.importers.op4_matrix`). ANSYS ``.full`` files and DMIG cards need
+  a choice of nodes: read them with :mod:`contactqp.compliance.importers`.
 
 A vector may be stored as one row or one column. Inline arrays and files must hold finite numbers
 (TOML accepts ``nan`` and ``inf``; this schema does not).
@@ -170,6 +174,7 @@ ARRAY_FORMATS = {
     "npz": (".npz",),
     "npy": (".npy",),
     "mtx": (".mtx", ".mtx.gz"),
+    "op4": (".op4",),
 }
 
 #: Obstacle types a problem file may use.
@@ -328,7 +333,7 @@ def _read_mtx(path: Path) -> np.ndarray:
 
 
 def read_array(path, key: str | None = None, format: str | None = None) -> np.ndarray:
-    """Read a numeric array from a CSV, NPY, NPZ or MatrixMarket file.
+    """Read a numeric array from a CSV, NPY, NPZ, MatrixMarket or OP4 file.
 
     Parameters
     ----------
@@ -336,8 +341,9 @@ def read_array(path, key: str | None = None, format: str | None = None) -> np.nd
         The file. Its format comes from its extension (see :data:`ARRAY_FORMATS`) unless given.
     key : str, optional
         The array to take from an ``.npz`` archive (default: its only array; an archive written
-        by :func:`scipy.sparse.save_npz` is read as one sparse matrix).
-    format : {"csv", "npz", "npy", "mtx"}, optional
+        by :func:`scipy.sparse.save_npz` is read as one sparse matrix), or the matrix to take
+        from an ``.op4`` file (default: its only matrix).
+    format : {"csv", "npz", "npy", "mtx", "op4"}, optional
         Overrides the extension.
 
     Returns
@@ -355,8 +361,9 @@ def read_array(path, key: str | None = None, format: str | None = None) -> np.nd
     """
     path = Path(path)
     fmt = _format_of(path, format)
-    if key is not None and fmt != "npz":
-        raise InvalidInputError(f"key {key!r} applies only to .npz archives, not to {fmt} files")
+    if key is not None and fmt not in ("npz", "op4"):
+        raise InvalidInputError(f"key {key!r} applies only to .npz and .op4 files, not to {fmt} "
+                                "files")
     if not path.exists():
         raise FileFormatError(f"file '{path}' not found")
     if not path.is_file():
@@ -368,6 +375,11 @@ def read_array(path, key: str | None = None, format: str | None = None) -> np.nd
             array = _read_npz(path, key)
         elif fmt == "npy":
             array = np.load(path, allow_pickle=False)
+        elif fmt == "op4":
+            from ..compliance.importers import op4_matrix
+
+            array = op4_matrix(path, key)
+            array = array.toarray() if hasattr(array, "toarray") else array
         else:
             array = _read_mtx(path)
     except InvalidInputError:
