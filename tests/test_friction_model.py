@@ -1,0 +1,279 @@
+"""Frictional reduced models: frames, local form, laws, certificate and bad input.
+
+Truths used: orthonormality of the frames; the frictionless dual form (W_NN = A R A^T, q_N = -b);
+displacements recomputed from U = R (P + H^T r); single-contact solutions enumerated case by case
+(open, stick, slip either way); closed forms of one contact with cohesion and with polygonal cones;
+two solver routes (Coulomb Newton and Tresca fixed point).
+"""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import contactqp as cq
+from contactqp.contact import local_frames, tangent_basis
+
+
+def one_node(stiffness=None, coords=(0.0, 0.0), flexibility=None):
+    return cq.ReducedModel(stiffness=stiffness, flexibility=flexibility, dofs_per_node=len(coords),
+                           coordinates=[coords])
+
+
+def floor(dim):
+    normal = [0.0] * (dim - 1) + [-1.0]
+    return cq.PlaneObstacle(point=[0.0] * dim, normal=normal)
+
+
+# ----------------------------------------------------------------------------------- frames
+
+
+@settings(max_examples=50, deadline=None)
+@given(dim=st.sampled_from([2, 3]), data=st.data())
+def test_frames_are_orthonormal_and_right_handed(dim, data):
+    v = np.array(data.draw(st.lists(st.floats(-1, 1), min_size=dim, max_size=dim)))
+    if np.linalg.norm(v) < 1e-3:
+        v[-1] = 1.0
+    n = (v / np.linalg.norm(v))[None, :]
+    frame = np.vstack([n, tangent_basis(n)[0]])
+    np.testing.assert_allclose(frame @ frame.T, np.eye(dim), atol=1e-12)
+    assert np.linalg.det(frame[[1, 2, 0]] if dim == 3 else frame) == pytest.approx(1.0)
+    np.testing.assert_array_equal(tangent_basis(n), tangent_basis(n.copy()))
+
+
+def test_frames_of_a_floor_follow_the_axes():
+    np.testing.assert_array_equal(tangent_basis([[0.0, -1.0]])[0], [[1.0, 0.0]])
+    np.testing.assert_array_equal(tangent_basis([[0.0, 0.0, -1.0]])[0],
+                                  [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+
+
+def test_local_operator_of_planes_pairs_and_gaps_in_3d():
+    rng = np.random.default_rng(1)
+    coords = rng.normal(size=(4, 3))
+    model = cq.ReducedModel(flexibility=np.eye(12), dofs_per_node=3, coordinates=coords)
+    direction = np.array([1.0, 2.0, 2.0]) / 3.0
+    obstacles = [cq.PlaneObstacle([0, 0, -5.0], [0, 0, -1.0], nodes=[0, 1]),
+                 cq.NodePairs([[2, 3]], [0.1], direction),
+                 cq.GapObstacle([3], [0.2], [[0.0, 1.0, 0.0]])]
+    constraints = cq.ContactProblem(model, np.zeros(12), obstacles).constraints
+    frames = local_frames(model, constraints)
+    H = frames.operator.toarray()
+    assert H.shape == (12, 12)
+    np.testing.assert_allclose(H[0::3], -constraints.matrix.toarray())
+    # rows of one contact are orthonormal (sqrt(2) for the pair, which acts on two nodes)
+    gram = np.array([H[3 * i:3 * i + 3] @ H[3 * i:3 * i + 3].T for i in range(4)])
+    np.testing.assert_allclose(gram, [np.eye(3), np.eye(3), 2 * np.eye(3), np.eye(3)], atol=1e-14)
+    # the pair's tangents: +t on node 2, -t on node 3, orthogonal to the pair's direction
+    t = frames.tangents[2]
+    np.testing.assert_allclose(H[7:9, 6:9], t)
+    np.testing.assert_allclose(H[7:9, 9:12], -t)
+    np.testing.assert_allclose(t @ direction, 0.0, atol=1e-15)
+
+
+# ------------------------------------------------------------------------------- local form
+
+
+def coupled_problem(seed, mu=0.3, given="flexibility", **kwargs):
+    """Three 2-D nodes on a floor, coupled through a random SPD compliance."""
+    rng = np.random.default_rng(seed)
+    B = rng.normal(size=(6, 6))
+    R = B @ B.T / 6 + np.eye(6)
+    K = np.linalg.inv(R)
+    model = cq.ReducedModel(**{given: R if given == "flexibility" else 0.5 * (K + K.T)},
+                            dofs_per_node=2,
+                            coordinates=np.column_stack([np.arange(3.0), rng.uniform(0, 0.1, 3)]))
+    P = np.tile([1.0, -2.0], 3) + rng.normal(scale=0.5, size=6)
+    return cq.FrictionalProblem(model, P, [floor(2)], mu=mu, **kwargs)
+
+
+def test_local_form_extends_the_frictionless_dual_form():
+    problem = coupled_problem(0)
+    local = problem.local()
+    dual = cq.ContactProblem(problem.model, problem.loads, [floor(2)]).dual()
+    np.testing.assert_allclose(local.W[0::2, 0::2], dual.W, rtol=1e-12)
+    np.testing.assert_allclose(local.q(problem.loads)[0::2], -dual.b, rtol=1e-12)
+    H = local.operator.toarray()
+    np.testing.assert_allclose(local.W, H @ problem.model.flexibility @ H.T, rtol=1e-12)
+    twin = coupled_problem(0, given="stiffness")
+    np.testing.assert_allclose(twin.local().W, local.W, rtol=1e-10)
+
+
+def test_local_coordinates_are_gap_and_tangential_displacement():
+    problem = coupled_problem(2)
+    r = np.array([3.0, 0.5, 0.0, 0.0, 1.0, -0.2])
+    U = problem.model.flexibility @ (problem.loads + problem.local().operator.T @ r)
+    u = problem.local_problem().W @ r + problem.local_problem().q
+    coords = problem.model.coordinates
+    np.testing.assert_allclose(u[0::2], coords[:, 1] + U[1::2], rtol=1e-12)  # floor at y = 0
+    np.testing.assert_allclose(u[1::2], U[0::2], rtol=1e-12)  # t = +x for the floor
+
+
+# ---------------------------------------------------------------- one contact, by enumeration
+
+
+def enumerate_single_contact(W, q, mu):
+    """All solutions (r, u) of one 2-D Coulomb contact, by cases."""
+    solutions = []
+    if q[0] >= 0:
+        solutions.append(np.zeros(2))
+    r = -np.linalg.solve(W, q)
+    if r[0] >= 0 and abs(r[1]) <= mu * r[0]:
+        solutions.append(r)
+    for sigma in (1.0, -1.0):  # slip direction: u_T has sign sigma, r_T = -sigma mu r_N
+        direction = np.array([1.0, -sigma * mu])
+        denominator = W[0] @ direction
+        if denominator > 0:
+            rn = -q[0] / denominator
+            uT = rn * (W[1] @ direction) + q[1]
+            if rn > 0 and sigma * uT > 0:
+                solutions.append(rn * direction)
+    return solutions
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), mu=st.floats(0.0, 1.0))
+def test_single_contact_matches_enumeration(seed, mu):
+    rng = np.random.default_rng(seed)
+    B = rng.normal(size=(2, 2))
+    R = B @ B.T + 0.1 * np.eye(2)
+    P = rng.normal(size=2) * [1.0, 3.0]
+    problem = cq.FrictionalProblem(one_node(flexibility=R), P, [floor(2)], mu=mu)
+    step = problem.local_problem()
+    exact = enumerate_single_contact(step.W, step.q, mu)
+    # the Tresca fixed point converges for small mu only (where the solution is unique)
+    for solver in ("coulomb", "tresca") if mu <= 0.3 else ("coulomb",):
+        result = problem.solve(solver=solver)
+        assert result.success, result.message
+        distance = min(np.linalg.norm(result.forces[0] - r) for r in exact)
+        assert distance <= 1e-8 * max(1.0, np.max(np.abs(P)))
+
+
+@pytest.mark.parametrize("Q, slip, status", [(2.9, 0.0, "stick"), (4.0, 0.5, "slip"),
+                                              (-6.0, -1.5, "slip")])
+def test_one_spring_sticks_until_mu_n_then_slips(Q, slip, status):
+    k, mu, N = 2.0, 0.3, 10.0
+    problem = cq.FrictionalProblem(one_node(np.diag([k, 5.0])), [Q, -N], [floor(2)], mu=mu)
+    result = problem.solve()
+    assert result.success and result.status_labels == [status]
+    np.testing.assert_allclose(result.slip[0, 0], slip, atol=1e-12)
+    np.testing.assert_allclose(result.forces[0], [N, -np.clip(Q, -mu * N, mu * N)], atol=1e-10)
+    assert result.dissipated == pytest.approx(mu * N * abs(slip), abs=1e-10)
+
+
+def test_mohr_coulomb_cohesion_raises_the_slip_threshold_and_carries_tension():
+    k, kn, mu, c, N = 2.0, 5.0, 0.3, 0.5, 10.0
+    model = one_node(np.diag([k, kn]))
+    shear = cq.FrictionalProblem(model, [4.0, -N], [floor(2)], mu=mu, cohesion=c).solve()
+    assert shear.success and shear.status_labels == ["slip"]
+    np.testing.assert_allclose(shear.slip[0, 0], (4.0 - mu * N - c) / k, rtol=1e-10)
+    np.testing.assert_allclose(shear.forces[0, 1], -(mu * N + c), rtol=1e-10)
+    # pulled off the floor: closed while the tension is below c / mu, then open at that tension
+    held = cq.FrictionalProblem(model, [0.0, 1.0], [floor(2)], mu=mu, cohesion=c).solve()
+    np.testing.assert_allclose([held.forces[0, 0], held.gaps[0]], [-1.0, 0.0], atol=1e-10)
+    assert held.status_labels == ["stick"]
+    pulled = cq.FrictionalProblem(model, [0.0, 2.0], [floor(2)], mu=mu, cohesion=c).solve()
+    np.testing.assert_allclose(pulled.forces[0], [-c / mu, 0.0], atol=1e-10)
+    np.testing.assert_allclose(pulled.gaps[0], (2.0 - c / mu) / kn, rtol=1e-10)
+    assert pulled.success and pulled.status_labels == ["open"]
+
+
+# ----------------------------------------------------------------------------- polygonal cone
+
+
+@pytest.mark.parametrize("facets", [4, 8])
+def test_polygonal_cone_reduces_the_limit_across_a_side_not_at_a_vertex(facets):
+    k, mu, N, Q = 2.0, 0.4, 10.0, 7.0
+    model = one_node(np.diag([k, k, 3.0]), coords=(0.0, 0.0, 0.0))
+    # floor frame: t1 = +x, t2 = -y; side 0 of the polygon faces t1, a vertex lies at pi / F
+    vertex = np.array([np.cos(np.pi / facets), -np.sin(np.pi / facets)])
+    for direction, limit in (([1.0, 0.0], mu * N * np.cos(np.pi / facets)), (vertex, mu * N)):
+        P = np.array([Q * direction[0], Q * direction[1], -N])
+        polygonal = cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets).solve()
+        exact = cq.FrictionalProblem(model, P, [floor(3)], mu=mu).solve()
+        assert polygonal.success and exact.success, (polygonal.message, exact.message)
+        assert polygonal.solver == "polygonal" and exact.solver == "coulomb"
+        local_direction = np.array([direction[0], -direction[1]])
+        np.testing.assert_allclose(polygonal.tangential_forces[0], -limit * local_direction,
+                                   atol=1e-7 * N)
+        np.testing.assert_allclose(polygonal.slip[0], (Q - limit) / k * local_direction,
+                                   atol=1e-7)
+        np.testing.assert_allclose(np.linalg.norm(exact.tangential_forces[0]), mu * N, rtol=1e-9)
+        # the polygon is certified against its own law; against the exact cone it is off
+        # by the reduction of the limit
+        assert (polygonal.certificate.natural_map > 1e-3) == (limit < mu * N)
+
+
+def test_polygonal_law_in_2d_is_the_exact_cone():
+    exact = coupled_problem(3, mu=0.2).solve()
+    linear = coupled_problem(3, mu=0.2, facets=6).solve()
+    assert exact.success and linear.success
+    np.testing.assert_allclose(linear.forces, exact.forces, atol=1e-8 * np.abs(exact.forces).max())
+
+
+# -------------------------------------------------------------------------------- certificate
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_coupled_contacts_agree_across_routes_and_report_every_status(seed):
+    # node 0 pressed hard, node 1 sheared hard, node 2 pulled off the floor
+    problem = coupled_problem(seed, mu=0.3).with_loads([0.1, -5.0, 3.0, -2.0, 0.0, 4.0])
+    results = [problem.solve(solver=name) for name in ("coulomb", "tresca")]
+    for result in results:
+        assert result.success, result.message
+        assert result.status_labels == ["stick", "slip", "open"]
+    np.testing.assert_allclose(results[0].forces, results[1].forces, atol=1e-8)
+    assert results[0].dissipation[1] > 0 and results[0].dissipation[[0, 2]] == pytest.approx(0, abs=1e-9)
+
+
+def test_certificate_rejects_wrong_answers():
+    problem = coupled_problem(5)
+    good = problem.solve()
+    assert good.success
+    r = good.forces.copy()
+    r[:, 1] *= 1.5  # friction beyond the cone somewhere, or sticking forces changed
+    bad = problem.make_result(r.ravel(), solver="test", converged=True, message="", nit=0,
+                              wall_time=0.0)
+    assert not bad.success and bad.status == 2 and not bad.certificate.passed
+    flipped = good.forces.copy()
+    flipped[:, 1] *= -1.0  # friction pushing along the slip: no longer maximum dissipation
+    wrong = problem.make_result(flipped.ravel(), solver="test", converged=True, message="",
+                                nit=0, wall_time=0.0)
+    assert wrong.certificate.equilibrium < 1e-12  # U is recomputed from the forces...
+    assert not wrong.certificate.passed  # ...but the law is violated
+
+
+# --------------------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("kwargs, argument", [
+    ({"mu": -0.1}, "mu"),
+    ({"mu": [0.1, np.nan, 0.2]}, "mu"),
+    ({"mu": [0.1, 0.2]}, "mu"),
+    ({"mu": 0.2, "cohesion": -1.0}, "cohesion"),
+    ({"mu": 0.2, "cohesion": np.inf}, "cohesion"),
+    ({"mu": 0.0, "cohesion": 1.0}, "cohesion"),
+    ({"mu": 0.2, "facets": 2}, "facets"),
+    ({"mu": 0.2, "facets": 6.5}, "facets"),
+])
+def test_bad_friction_input_names_the_argument(kwargs, argument):
+    with pytest.raises(cq.InvalidInputError, match=argument):
+        coupled_problem(0, **kwargs)
+
+
+def test_bad_models_and_solvers_are_clear_errors():
+    with pytest.raises(cq.InvalidInputError, match="no tangent"):
+        cq.FrictionalProblem(cq.ReducedModel(flexibility=np.eye(2)), [0.0, 0.0],
+                             [cq.GapObstacle([0, 1], [0.0, 0.0])], mu=0.2)
+    mixed = cq.ReducedModel(flexibility=np.eye(5), dofs_per_node=[2, 3],
+                            coordinates=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    with pytest.raises(cq.InvalidInputError, match="one number of freedoms"):
+        cq.FrictionalProblem(mixed, np.zeros(5),
+                             [cq.GapObstacle([0], [0.0], [0.0, -1.0]),
+                              cq.GapObstacle([1], [0.0], [0.0, 0.0, -1.0])], mu=0.2)
+    with pytest.raises(cq.InvalidInputError, match="loads contains NaN"):
+        coupled_problem(0).with_loads(np.full(6, np.nan))
+    with pytest.raises(cq.InvalidInputError, match="solver='polygonal'"):
+        coupled_problem(0, facets=8).solve(solver="coulomb")
+    with pytest.raises(cq.InvalidInputError, match="unknown friction solver"):
+        coupled_problem(0).solve(solver="magic")
+    with pytest.raises(cq.InvalidInputError, match="previous"):
+        coupled_problem(0).solve(previous="rest")
