@@ -22,12 +22,9 @@ from contactqp.errors import (FileFormatError, InvalidInputError, MissingDepende
                               NotPositiveDefiniteError, UnsupportedProblemError)
 from contactqp.io.problem_file import load_problem_file, read_array
 from fe_files import write_ansys_full, write_op4_binary
-
-pyNastran = pytest.importorskip("pyNastran")  # the test extra installs both backends
-pytest.importorskip("ansys.mapdl.reader")
-from pyNastran.bdf.bdf import BDF  # noqa: E402
-from pyNastran.op2.result_objects.matrix import Matrix  # noqa: E402
-from pyNastran.op4.op4 import write_op4  # noqa: E402
+from pyNastran.bdf.bdf import BDF  # the test extra installs the importers' backends
+from pyNastran.op2.result_objects.matrix import Matrix
+from pyNastran.op4.op4 import write_op4
 
 RTOL = 1e-10
 K_SPRING = 3.0e4  # N/m

@@ -8,5 +8,6 @@ halfspace
 """
 
 from .halfspace import grid, influence_matrix, normal_influence
+from .importers import load_compliance
 
 __all__ = ["grid", "normal_influence", "influence_matrix"]
