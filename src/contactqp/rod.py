@@ -115,7 +115,7 @@ class Rod:
     gap_free: float = 1e-3
     gap_clamped: float = 5e-3
     nodes: tuple = tuple(0.005 * k for k in range(8))
-    n_elements: int = 160
+    n_elements: int = 80
 
     def __post_init__(self):
         for name in ("length", "young", "area", "gap_free", "gap_clamped"):
@@ -290,8 +290,10 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     answer = qpsolvers.solve_problem(qp, solver="clarabel", **_clarabel_options())
     if answer.x is None or answer.z is None:
         raise ReferenceSolveError(f"load case {case.name!r}: Clarabel found no solution")
-    z = np.asarray(answer.z)
-    active = np.flatnonzero(z > 1e-7 * max(z.max(), 0.0)) if z.max() > 0 else np.array([], int)
+    # contact forces (z * scale) above 1e-8 of the largest load are active; no load, no contact
+    largest = np.max(np.abs(f), initial=0.0)
+    active = np.flatnonzero(np.asarray(answer.z) * scale > 1e-8 * largest) if largest > 0 \
+        else np.array([], dtype=int)
     Ga = Gs[active]
     kkt = sp.bmat([[Ks, Ga.T], [Ga, None]], format="csc")
     solution = spla.spsolve(kkt, np.concatenate([fs, hs[active]]))
@@ -321,7 +323,7 @@ def deviations(values, reference, floor: float) -> tuple[np.ndarray, np.ndarray]
     """
     values, reference = np.asarray(values, dtype=float), np.asarray(reference, dtype=float)
     difference = np.abs(values - reference)
-    absolute = np.abs(reference) < floor
+    absolute = np.abs(reference) <= floor
     eps = np.where(absolute, difference, 100.0 * difference / np.where(absolute, 1.0,
                                                                        np.abs(reference)))
     return eps, absolute

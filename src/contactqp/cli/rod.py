@@ -12,7 +12,7 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
 
 
 @cli.command()
-@click.option("--elements", type=click.IntRange(min=1), default=160, show_default=True,
+@click.option("--elements", type=click.IntRange(min=1), default=80, show_default=True,
               help="Frame elements of the full mesh (a multiple of 8 keeps the nodes on it).")
 @click.option("--json", "as_json", is_flag=True, help="Print the table as one JSON object (SI units).")
 @click.option("--plot", type=click.Path(dir_okay=False, path_type=Path),

@@ -181,6 +181,14 @@ class Frame2D:
         """Stiffness of the free freedoms, shape (n_free, n_free), in the order of :attr:`free`."""
         return self.full_stiffness()[self.free][:, self.free].tocsc()
 
+    def _scaled_stiffness(self) -> tuple[np.ndarray, sp.csc_matrix]:
+        """``d`` and ``D K D`` with ``D = diag(d) = diag(K)^{-1/2}``: unit diagonal, so that
+        translations and rotations (stiffnesses ten decades apart) factorise accurately."""
+        K = self.stiffness()
+        d = 1.0 / np.sqrt(K.diagonal())
+        D = sp.diags(d)
+        return d, (D @ K @ D).tocsc()
+
     def load_vector(self, loads: Sequence[Sequence[float]]) -> np.ndarray:
         """Free-freedom load vector from ``[(node, fx, fy), ...]`` or ``(node, fx, fy, mz)`` rows.
 
@@ -203,8 +211,9 @@ class Frame2D:
 
         Fixed freedoms are zero.
         """
+        d, scaled = self._scaled_stiffness()
         full = np.zeros(3 * self.n_nodes)
-        full[self.free] = spla.spsolve(self.stiffness(), np.asarray(load_vector, dtype=float))
+        full[self.free] = d * spla.spsolve(scaled, d * np.asarray(load_vector, dtype=float))
         return full.reshape(-1, 3)
 
     def compliance(self, nodes: Sequence[int], components: str = "xy") -> np.ndarray:
@@ -214,13 +223,16 @@ class Frame2D:
         -------
         ndarray, shape (len(nodes) * len(components), same)
             In m/N, rad/(N m) and their mixed units, from static condensation of
-            :meth:`stiffness`.
+            :meth:`stiffness` scaled to a unit diagonal (``K^{-1} = D (D K D)^{-1} D``).
         """
         if not components or set(components) - set(_LETTERS):
             raise InvalidInputError(f"components must be letters among 'x', 'y', 'r', got "
                                     f"{components!r}")
-        freedoms = [self.index(int(k), COMPONENTS[_LETTERS[c]]) for k in nodes for c in components]
-        return condense(self.stiffness(), np.array(freedoms, dtype=int), labels=self.labels)
+        freedoms = np.array([self.index(int(k), COMPONENTS[_LETTERS[c]])
+                             for k in nodes for c in components], dtype=int)
+        d, scaled = self._scaled_stiffness()
+        # the outer product keeps R exactly symmetric
+        return np.outer(d[freedoms], d[freedoms]) * condense(scaled, freedoms, labels=self.labels)
 
     def __repr__(self) -> str:
         return (f"Frame2D({self.n_nodes} nodes, {len(self.elements)} elements, "
