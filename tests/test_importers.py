@@ -199,6 +199,30 @@ def test_ansys_full_truncated_file_is_a_format_error(plate_full, tmp_path, keep_
         read_ansys_full(path, [1000])
 
 
+HEADER = 105  # first word of the full-file header's items (after the standard header record)
+
+
+@pytest.mark.parametrize("word, value, error, message", [
+    (HEADER + 8, 0, FileFormatError, "holds no stiffness matrix"),  # ntermK
+    (HEADER + 8, 10**6, FileFormatError, "stiffness matrix lies beyond its end"),
+    (HEADER + 8, 300, FileFormatError, "stiffness matrix has record lengths that do not add up"),
+    (424, 5, FileFormatError, "record lengths that do not add up to the 514 terms"),  # column 1
+    (312, 3, FileFormatError, "DOF count record does not match the 72 equations"),  # node 1
+    (HEADER + 35, 10**7, FileFormatError, "DOF count record lies beyond its end"),  # ptrDOF
+    (0, 100 << 24, UnsupportedProblemError, "big-endian"),
+])
+def test_ansys_full_corrupt_file_is_a_clear_error(plate_full, tmp_path, word, value, error,
+                                                  message):
+    """Word offsets as in the truncation test; the stiffness starts at word 424."""
+    words = np.fromfile(plate_full, dtype="<i4")
+    assert words[HEADER + 18] == 424  # ptrSTF: the layout the offsets above assume
+    words[word] = value
+    path = tmp_path / "bad.full"
+    words.tofile(path)
+    with pytest.raises(error, match=rf"bad\.full: .*{message}"):
+        read_ansys_full(path, [1000])
+
+
 def test_ansys_full_foreign_files_are_format_errors(plate_full, tmp_path):
     text = tmp_path / "text.full"
     text.write_text("1.0, 2.0\n" * 200)

@@ -31,7 +31,8 @@ def _label(reference: int) -> str:
 
 
 class _Layout:
-    """The file as 32-bit words, to check that records lie within it."""
+    """The file as 32-bit words, to check records before the reader's compiled code reads them
+    (it does not stop at the end of a truncated file)."""
 
     def __init__(self, path):
         self.path = path
@@ -40,6 +41,9 @@ class _Layout:
             raise FileFormatError(f"{path}: not an ANSYS full file (only {size} bytes)")
         self.words = np.memmap(path, dtype="<i4", mode="r", shape=(size // 4,))
         if self.words[0] != 100:
+            if self.words[0].byteswap() == 100:
+                raise UnsupportedProblemError(f"{path}: a big-endian ANSYS file; "
+                                              "ansys-mapdl-reader reads little-endian files only")
             raise FileFormatError(f"{path}: not an ANSYS binary file (no standard header)")
         if self.words[2] != _FULL_FILE_TYPE:
             from ansys.mapdl.reader.common import ANSYS_BINARY_FILE_TYPES
@@ -54,21 +58,33 @@ class _Layout:
             end = pointer + int(self.words[pointer]) + 3
             if self.words[pointer] >= 0 and end <= self.words.size:
                 return end
-        raise self.truncated(what)
+        raise self.error(what, "lies beyond its end")
 
     def check_matrix(self, pointer: int, n_terms: int, n_equations: int, what: str) -> None:
-        """A matrix block: two records (indices, values) per equation."""
-        if pointer <= 0 or pointer + 6 * n_equations + 3 * n_terms > self.words.size:
-            raise self.truncated(what)
+        """A matrix block: per equation, a record of ``k`` row indices and one of ``k`` doubles."""
+        end = pointer + 6 * n_equations + 3 * n_terms
+        if pointer <= 0 or end > self.words.size:
+            raise self.error(what, "lies beyond its end")
+        block = np.asarray(self.words[pointer:end])
+        position = 0
+        for _ in range(n_equations):
+            rows = int(block[position])
+            values = position + rows + 3
+            if rows < 0 or values >= block.size or int(block[values]) != 2 * rows:
+                break
+            position = values + 2 * rows + 3
+        if position != block.size:
+            raise self.error(what, f"has record lengths that do not add up to the {n_terms} "
+                                   "terms of the header")
 
-    def truncated(self, what: str) -> FileFormatError:
+    def error(self, what: str, problem: str) -> FileFormatError:
         return FileFormatError(f"{self.path}: truncated or corrupt ANSYS full file: the {what} "
-                               f"lies beyond its end ({self.words.size} words)")
+                               f"{problem} ({self.words.size} words)")
 
 
 def _read(path):
     """Stiffness (full symmetric, CSC), ``(node, label)`` of each equation, constrained mask,
-    and the number of DOFs of each node."""
+    the number of DOFs of each node and the size of the file's DOF set."""
     full_module = backend("ansys.mapdl.reader.full", "ansys-mapdl-reader", "ANSYS full files")
     from ansys.mapdl.reader.common import two_ints_to_long
 
@@ -76,11 +92,11 @@ def _read(path):
     header_end = layout.record_end(_STANDARD_HEADER_END, "full-file header")
     try:
         full = full_module.FullFile(path)
-        header = full._header  # parsed by FullFile; the pointers are checked before use
+        header = full._header  # parsed by FullFile; each pointer is checked before it is used
         dof_end = layout.record_end(header_end, "DOF reference record")
         layout.record_end(dof_end, "nodal equivalence table")
-        layout.record_end(layout.record_end(header["ptrDOF"], "DOF count record"),
-                          "constraint record")
+        const_at = layout.record_end(header["ptrDOF"], "DOF count record")
+        layout.record_end(const_at, "constraint record")
         n_equations = int(header["neqn"])
         n_stiffness = two_ints_to_long(header["ntermKl"], header["ntermKh"])
         n_mass = two_ints_to_long(header["ntermMl"], header["ntermMh"])
@@ -90,6 +106,13 @@ def _read(path):
         if n_mass > 0:
             layout.check_matrix(header["ptrMAS"], n_mass, n_equations, "mass matrix")
         references = np.asarray(full.read_record(header_end))[: int(header["numdof"])]
+        n_nodes = np.asarray(full.read_record(dof_end)).size
+        counts = np.asarray(full.read_record(header["ptrDOF"]))
+        n_const = np.asarray(full.read_record(const_at)).size
+        if (counts.size > n_nodes or counts.sum() != n_equations or n_const != n_equations
+                or counts.min() < 0 or counts.max() > references.size):
+            raise layout.error("DOF count record", f"does not match the {n_equations} equations, "
+                               f"{n_nodes} nodes and {references.size} DOF kinds of the header")
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="Missing mass matrix")
             dof_ref, upper, _ = full.load_km(as_sparse=True, sort=True)
@@ -100,17 +123,13 @@ def _read(path):
         raise UnsupportedProblemError(f"{path}: {one_line(exc)}") from None
     except Exception as exc:  # whatever the reader raises on a corrupt file
         raise FileFormatError(f"{path}: cannot read the full file: {one_line(exc)}") from None
-    constrained_pairs = {(int(n), int(j)) for n, j in const}
-    if dof_ref.shape != (n_equations, 2) or upper.shape != (n_equations, n_equations):
-        raise FileFormatError(f"{path}: inconsistent full file: {n_equations} equations but "
-                              f"{dof_ref.shape[0]} freedoms and a {upper.shape} stiffness")
     upper = sp.csc_matrix(upper)
-    stiffness = (upper + sp.triu(upper, 1).T).tocsc()  # the file stores each term once
-    nodes, counts = np.unique(dof_ref[:, 0], return_counts=True)
-    labels = [(int(n), _label(references[j]) if j < references.size else f"DOF#{j}")
-              for n, j in dof_ref]
+    stiffness = (upper + sp.triu(upper, 1).T).tocsc()  # the file stores each pair once
+    constrained_pairs = {(int(n), int(j)) for n, j in const}
+    labels = [(int(n), _label(references[j])) for n, j in dof_ref]
     constrained = np.array([(int(n), int(j)) in constrained_pairs for n, j in dof_ref])
-    return stiffness, labels, constrained, dict(zip(nodes.tolist(), counts.tolist())), \
+    nodes, per_node = np.unique(dof_ref[:, 0], return_counts=True)
+    return stiffness, labels, constrained, dict(zip(nodes.tolist(), per_node.tolist())), \
         references.size
 
 
@@ -149,14 +168,18 @@ def read_ansys_full(path, nodes: Sequence[int], components: Sequence[str] = ("UX
     RigidBodyModeError
         The model is not fixed enough to have a flexibility.
     UnsupportedProblemError
-        Lumped mass or unsymmetric matrices (not read by ansys-mapdl-reader), or a chosen node
-        whose freedoms are not the file's full DOF set (their labels cannot be told).
+        Lumped mass, unsymmetric matrices or a big-endian file (not read by ansys-mapdl-reader),
+        or a chosen node whose freedoms are not the file's full DOF set (their labels cannot be
+        told).
     MissingDependencyError
         ansys-mapdl-reader is not installed.
 
     Notes
     -----
-    Constraint equations and coupled freedoms (``CE``, ``CP``) stored in the file are not read.
+    The components are those of each node's nodal coordinate system, as the full file stores
+    them. Constraint equations and coupled freedoms (``CE``, ``CP``) are not read. Before the
+    reader touches a record, its extent is checked against the file's length (a truncated file
+    would otherwise be read past its end).
     """
     path = existing_file(path)
     chosen_components = [str(c).upper() for c in components]
