@@ -383,7 +383,6 @@ def local_frames(model: ReducedModel, constraints: Constraints) -> LocalFrames:
     comp = component[coo.col]
     signs = scipy.sparse.coo_matrix((coo.data * normals[coo.row, comp], (coo.row, node_of[coo.col])),
                                     shape=(m, model.n_nodes)).tocsr()
-    signs.sum_duplicates()
     signed = signs[coo.row, node_of[coo.col]].A1
     if not (np.allclose(np.abs(signs.data[signs.data != 0]), 1.0)
             and np.allclose(coo.data, signed * normals[coo.row, comp])):

@@ -116,9 +116,13 @@ class FrictionLaw:
         return self.mu * np.asarray(normal_forces, dtype=float) + self.cohesion
 
     def _vertices(self) -> np.ndarray:
-        """Unit vertices of the polygon in the tangent plane, shape (facets, 2)."""
-        angles = (2.0 * np.arange(self.facets) + 1.0) * np.pi / self.facets
-        return np.column_stack([np.cos(angles), np.sin(angles)])
+        """Unit vertices of the polygon in the tangent plane, shape (facets, 2).
+
+        Vertex ``k`` joins sides ``k`` and ``k + 1``: it is along the sum of their normals.
+        """
+        normals = polygon_normals(self.facets)
+        vertices = normals + np.roll(normals, -1, axis=0)
+        return vertices / np.linalg.norm(vertices, axis=1)[:, None]
 
     def support(self, vectors) -> np.ndarray:
         """Support function of the unit disc (or polygon) at tangential vectors ``(k, d - 1)``.

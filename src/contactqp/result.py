@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .friction import STATUS_LABELS
 from .local import natural_map_error
 
 __all__ = ["Certificate", "ContactResult", "certify", "FrictionCertificate", "FrictionalResult",
@@ -367,8 +368,6 @@ class FrictionalResult:
     @property
     def status_labels(self) -> list[str]:
         """``"open"``, ``"stick"`` or ``"slip"`` per contact."""
-        from .friction import STATUS_LABELS
-
         return [STATUS_LABELS[code] for code in self.contact_status]
 
     def summary(self) -> dict:
