@@ -238,12 +238,6 @@ class FullSolution:
     seconds: float
 
 
-def _clarabel_options() -> dict:
-    from .solvers.qp import backend_options
-
-    return backend_options("clarabel")
-
-
 def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSolution:
     """Reference contact solution on the finite-element mesh, independent of the reduced model.
 
@@ -257,7 +251,8 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     Notes
     -----
     The QP is scaled by the stiffness diagonal (``u = l D v``, ``D = diag(K)^{-1/2}``, ``l`` the
-    largest gap) because the rod's freedoms differ by ten orders of magnitude in stiffness. The
+    largest gap, :meth:`~contactqp.compliance.beam.Frame2D.scaled_stiffness`) because the rod's
+    freedoms differ by ten orders of magnitude in stiffness. The
     interior-point answer is then polished: the KKT system on its active set is solved exactly
     (sparse LU), and the result is verified (forces >= 0, no penetration) to 1e-9.
 
@@ -268,6 +263,8 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     """
     try:
         import qpsolvers
+
+        from .solvers.qp import backend_options
     except ImportError:
         raise MissingDependencyError(
             "the reference solve needs qpsolvers and clarabel: pip install 'contactqp[qp]'"
@@ -275,19 +272,19 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     if contact not in ("mesh", "nodes"):
         raise InvalidInputError(f"contact must be 'mesh' or 'nodes', got {contact!r}")
     frame = rod.frame
-    K = frame.stiffness()
+    d, Ks = frame.scaled_stiffness()
     f = rod.mesh_loads(case)
     nodes = rod.mesh_contact_nodes if contact == "mesh" else rod.node_indices
     start = time.perf_counter()
     columns = np.array([[frame.index(int(k), "ux"), frame.index(int(k), "uy")] for k in nodes])
+    n = d.size
     G = sp.csr_matrix((np.tile(rod.normal, len(nodes)), columns.ravel(),
-                       np.arange(0, 2 * len(nodes) + 1, 2)), shape=(len(nodes), K.shape[0]))
+                       np.arange(0, 2 * len(nodes) + 1, 2)), shape=(len(nodes), n))
     h = rod.normal_gap(frame.coordinates[nodes, 0])
     scale = float(h.max())
-    D = sp.diags(1.0 / np.sqrt(K.diagonal()))
-    Ks, Gs, fs, hs = (D @ K @ D).tocsc(), (G @ D).tocsc(), D @ f / scale, h / scale
+    Gs, fs, hs = (G @ sp.diags(d)).tocsc(), d * f / scale, h / scale
     qp = qpsolvers.Problem(Ks, -fs, Gs, hs)
-    answer = qpsolvers.solve_problem(qp, solver="clarabel", **_clarabel_options())
+    answer = qpsolvers.solve_problem(qp, solver="clarabel", **backend_options("clarabel"))
     if answer.x is None or answer.z is None:
         raise ReferenceSolveError(f"load case {case.name!r}: Clarabel found no solution")
     # contact forces (z * scale) above 1e-8 of the largest load are active; no load, no contact
@@ -297,7 +294,7 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     Ga = Gs[active]
     kkt = sp.bmat([[Ks, Ga.T], [Ga, None]], format="csc")
     solution = spla.spsolve(kkt, np.concatenate([fs, hs[active]]))
-    v, za = solution[:K.shape[0]], solution[K.shape[0]:]
+    v, za = solution[:n], solution[n:]
     forces = np.zeros(len(nodes))
     forces[active] = za * scale
     penetration = np.max(Gs @ v - hs, initial=0.0)
@@ -307,12 +304,12 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
             f"{penetration * scale:.3g} m, least force {np.min(za, initial=0.0) * scale:.3g} N)")
     seconds = time.perf_counter() - start
     full = np.zeros(3 * frame.n_nodes)
-    full[frame.free] = scale * (D @ v)
+    full[frame.free] = scale * d * v
     return FullSolution(full.reshape(-1, 3), np.asarray(nodes), forces, seconds)
 
 
 def deviations(values, reference, floor: float) -> tuple[np.ndarray, np.ndarray]:
-    """Relative deviations in percent, or absolute ones (same unit) where ``|reference| < floor``.
+    """Relative deviations in percent, or absolute ones (same unit) where ``|reference| <= floor``.
 
     Returns
     -------

@@ -70,12 +70,15 @@ def frame_element_stiffness(start, end, young: float, area: float, inertia: floa
 
 
 def _positive(value, name: str, count: int) -> np.ndarray:
-    array = np.broadcast_to(np.asarray(value, dtype=float), (count,)) if np.ndim(value) == 0 \
-        else finite_array(value, name, 1)
-    if array.shape != (count,) or not np.all(np.isfinite(array)) or np.any(array <= 0):
+    """``value`` as ``count`` positive finite floats (one value is repeated)."""
+    try:
+        array = np.broadcast_to(np.asarray(value, dtype=float), (count,))
+    except (TypeError, ValueError):
+        array = None
+    if array is None or not np.all(np.isfinite(array)) or np.any(array <= 0):
         raise InvalidInputError(
             f"{name} must be one positive finite value or {count} of them (one per element), "
-            f"got shape {np.shape(value)}")
+            f"got {np.shape(value) or value}")
     return array
 
 
@@ -181,9 +184,17 @@ class Frame2D:
         """Stiffness of the free freedoms, shape (n_free, n_free), in the order of :attr:`free`."""
         return self.full_stiffness()[self.free][:, self.free].tocsc()
 
-    def _scaled_stiffness(self) -> tuple[np.ndarray, sp.csc_matrix]:
-        """``d`` and ``D K D`` with ``D = diag(d) = diag(K)^{-1/2}``: unit diagonal, so that
-        translations and rotations (stiffnesses ten decades apart) factorise accurately."""
+    def scaled_stiffness(self) -> tuple[np.ndarray, sp.csc_matrix]:
+        """:meth:`stiffness` scaled to a unit diagonal, for accurate factorisations.
+
+        Returns
+        -------
+        d : ndarray, shape (n_free,)
+            ``diag(K)^{-1/2}``; with ``D = diag(d)``, ``K^{-1} = D (D K D)^{-1} D``.
+        scaled : scipy.sparse.csc_matrix, shape (n_free, n_free)
+            ``D K D``. Translations and rotations of a slender rod differ in stiffness by ten
+            decades or more; the scaled matrix has them all at one.
+        """
         K = self.stiffness()
         d = 1.0 / np.sqrt(K.diagonal())
         D = sp.diags(d)
@@ -211,7 +222,7 @@ class Frame2D:
 
         Fixed freedoms are zero.
         """
-        d, scaled = self._scaled_stiffness()
+        d, scaled = self.scaled_stiffness()
         full = np.zeros(3 * self.n_nodes)
         full[self.free] = d * spla.spsolve(scaled, d * np.asarray(load_vector, dtype=float))
         return full.reshape(-1, 3)
@@ -230,7 +241,7 @@ class Frame2D:
                                     f"{components!r}")
         freedoms = np.array([self.index(int(k), COMPONENTS[_LETTERS[c]])
                              for k in nodes for c in components], dtype=int)
-        d, scaled = self._scaled_stiffness()
+        d, scaled = self.scaled_stiffness()
         # the outer product keeps R exactly symmetric
         return np.outer(d[freedoms], d[freedoms]) * condense(scaled, freedoms, labels=self.labels)
 
