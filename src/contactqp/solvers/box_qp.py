@@ -149,23 +149,24 @@ class _BoxQP:
 def _active_set_phase(qp: _BoxQP, x, max_iter):
     """Primal-dual active set iterations made monotone by a search along the projected path.
 
-    The Newton point of the current active set is tried first (the plain primal-dual active set
-    step, so nothing is lost where that converges). If it does not lower the objective, the best
+    The projected Newton point of the current active set is tried first (the plain primal-dual
+    active set step, so nothing is lost where that converges). If it does not lower the objective, the best
     of the projected points ``P(x + alpha d)``, ``alpha = 1/2, ..., 2^-11`` (evaluated together
     in one matrix product) is taken if it does; so the objective decreases at every step and no
     active set can cycle.
     """
     x = qp.project(x)
     g = qp.gradient(x)
-    f = qp.objective(x)
+    f = float(0.5 * x @ (g + qp.c))
     for iteration in range(1, max_iter + 1):
         if qp.residual(x, g) <= qp.tol:
             return x, g, iteration - 1, True, "active set converged"
         newton = qp.newton_point(qp.state(x, g))
-        product = qp.W @ newton
-        value = float(newton @ (0.5 * product + qp.c))
+        full_step = qp.project(newton)
+        product = qp.W @ full_step
+        value = float(full_step @ (0.5 * product + qp.c))
         if value < f:
-            x, g, f = newton, product + qp.c, value
+            x, g, f = full_step, product + qp.c, value
             continue
         direction = newton - x
         trials = np.clip(x[:, None] + direction[:, None] * _SHORTER_STEPS[None, :],
