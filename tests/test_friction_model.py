@@ -159,6 +159,24 @@ def test_one_spring_sticks_until_mu_n_then_slips(Q, slip, status):
     assert result.dissipated == pytest.approx(mu * N * abs(slip), abs=1e-10)
 
 
+@pytest.mark.parametrize("Q", [2.0, 2.9, -7.0])
+def test_two_bodies_in_frictional_contact_slip_relative_to_each_other(Q):
+    # node 0 above node 1, pressed together by N, sheared by +Q on node 0 and -Q on node 1;
+    # each node on its own springs (k tangential, 4 normal)
+    k, mu, N, gap = 2.0, 0.3, 10.0, 0.5
+    model = cq.ReducedModel(stiffness=np.diag([k, 4.0, k, 4.0]), dofs_per_node=2)
+    pair = cq.NodePairs([[0, 1]], [gap], [0.0, -1.0])
+    result = cq.FrictionalProblem(model, [Q, -N, -Q, N], [pair], mu=mu).solve()
+    assert result.success
+    normal = N - 4.0 * gap / 2  # the springs close the gap, the rest is contact force
+    friction = np.clip(Q, -mu * normal, mu * normal)
+    np.testing.assert_allclose(result.forces[0], [normal, -friction], atol=1e-10)
+    np.testing.assert_allclose(result.x[[0, 2]], [(Q - friction) / k, -(Q - friction) / k],
+                               atol=1e-10)
+    np.testing.assert_allclose(result.slip[0, 0], 2 * (Q - friction) / k, atol=1e-10)
+    assert result.status_labels == ["slip" if abs(Q) > mu * normal else "stick"]
+
+
 def test_mohr_coulomb_cohesion_raises_the_slip_threshold_and_carries_tension():
     k, kn, mu, c, N = 2.0, 5.0, 0.3, 0.5, 10.0
     model = one_node(np.diag([k, kn]))
