@@ -14,8 +14,8 @@ from ...errors import FileFormatError, InvalidInputError, MissingDependencyError
 from ...model import SYMMETRY_RTOL, ReducedModel
 from ..condensation import condense
 
-__all__ = ["KINDS", "existing_file", "about", "one_line", "backend", "freedom_indices",
-           "index_list", "reduced_model"]
+__all__ = ["KINDS", "existing_file", "about", "one_line", "backend", "node_major",
+           "freedom_indices", "index_list", "reduced_model"]
 
 #: What a matrix read from a file may be.
 KINDS = ("stiffness", "flexibility")
@@ -57,47 +57,58 @@ def backend(module: str, distribution: str, what: str):
         ) from None
 
 
-def freedom_indices(available: Sequence[tuple[Hashable, Hashable]], nodes, components,
-                    describe=lambda node, component: f"node {node} {component}") -> np.ndarray:
-    """Positions in ``available`` of every ``(node, component)`` chosen, node by node.
-
-    Parameters
-    ----------
-    available : sequence of (node, component)
-        The label of each row of the file's matrix.
-    nodes, components : sequence
-        The chosen nodes, in order, and the components taken at each of them, in order.
-    describe : callable
-        ``describe(node, component) -> str`` for error messages.
+def node_major(nodes, components) -> list[tuple]:
+    """The ``(node, component)`` pairs of the chosen nodes and components, node by node.
 
     Raises
     ------
     InvalidInputError
-        A node or a component is not in ``available``, or a node is chosen twice.
+        Nothing chosen, or a node or a component listed twice.
     """
     nodes, components = list(nodes), list(components)
     if not nodes or not components:
         raise InvalidInputError("choose at least one node and one component")
     for name, chosen in (("nodes", nodes), ("components", components)):
-        seen = set()
-        for item in chosen:
-            if item in seen:
-                raise InvalidInputError(f"{name} lists {item!r} twice")
-            seen.add(item)
+        if len(set(chosen)) != len(chosen):
+            twice = next(item for item in chosen if chosen.count(item) > 1)
+            raise InvalidInputError(f"{name} lists {twice!r} twice")
+    return [(node, component) for node in nodes for component in components]
+
+
+def freedom_indices(available: Sequence[tuple[Hashable, Hashable]], pairs, noun: str = "node",
+                    describe=None) -> np.ndarray:
+    """Positions in ``available`` of the ``(node, component)`` ``pairs``.
+
+    Parameters
+    ----------
+    available : sequence of (node, component)
+        The label of each row of the file's matrix.
+    pairs : sequence of (node, component)
+        The freedoms wanted, in order (see :func:`node_major`).
+    noun : str
+        What the file calls a node ("node", "grid"), for error messages.
+    describe : callable, optional
+        ``describe(node, component) -> str`` for error messages (default: noun, node, component).
+
+    Raises
+    ------
+    InvalidInputError
+        A node or a component is not in ``available``.
+    """
+    describe = describe or (lambda node, component: f"{noun} {node} {component}")
     where = {label: i for i, label in enumerate(available)}
     present: dict = {}
     for node, component in available:
         present.setdefault(node, []).append(component)
     indices = []
-    for node in nodes:
+    for node, component in pairs:
         if node not in present:
-            raise InvalidInputError(f"node {node} is not in the file ({len(present)} nodes)")
-        for component in components:
-            if (node, component) not in where:
-                has = ", ".join(str(c) for c in present[node])
-                raise InvalidInputError(
-                    f"{describe(node, component)} is not in the file (node {node} has {has})")
-            indices.append(where[node, component])
+            raise InvalidInputError(f"{noun} {node} is not in the file ({len(present)} {noun}s)")
+        if (node, component) not in where:
+            has = ", ".join(str(c) for c in present[node])
+            raise InvalidInputError(
+                f"{describe(node, component)} is not in the file ({noun} {node} has {has})")
+        indices.append(where[node, component])
     return np.asarray(indices, dtype=int)
 
 

@@ -15,7 +15,8 @@ import scipy.sparse as sp
 
 from ...errors import ContactError, FileFormatError, UnsupportedProblemError
 from ...model import SYMMETRY_RTOL, ReducedModel
-from ._common import about, backend, existing_file, freedom_indices, one_line, reduced_model
+from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
+                      reduced_model)
 
 __all__ = ["read_ansys_full", "DOF_LABELS"]
 
@@ -190,7 +191,7 @@ def read_ansys_full(path, nodes: Sequence[int], components: Sequence[str] = ("UX
                 f"{path}: node {node} has {counts[node]} of the file's {n_dof_kinds} DOF kinds; "
                 "which ones cannot be told from the file")
     with about(path):
-        keep = freedom_indices(labels, nodes, chosen_components)
+        keep = freedom_indices(labels, node_major(nodes, chosen_components))
         names = [f"node {n} {c}" for n, c in labels]
         return reduced_model(stiffness, "stiffness", keep, np.flatnonzero(constrained), names,
                              dofs_per_node=len(chosen_components), symmetry_rtol=symmetry_rtol)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import FileFormatError, InvalidInputError
 from ...model import SYMMETRY_RTOL, ReducedModel
-from ._common import about, existing_file, freedom_indices, one_line, reduced_model
+from ._common import about, existing_file, freedom_indices, node_major, one_line, reduced_model
 
 __all__ = ["read_unit_load_csv"]
 
@@ -144,6 +144,6 @@ def read_unit_load_csv(path, nodes: Sequence[int] | None = None,
         if components is None:
             components = [c for node, c in labels if node == order[0]]
         components = [str(c).upper() for c in components]
-        keep = freedom_indices(labels, nodes, components)
+        keep = freedom_indices(labels, node_major(nodes, components))
         return reduced_model(table.T, "flexibility", keep, dofs_per_node=len(components),
                              symmetry_rtol=symmetry_rtol)

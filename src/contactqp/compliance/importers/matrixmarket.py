@@ -51,7 +51,8 @@ def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_n
     try:
         matrix = scipy.io.mmread(str(path))
     except (OSError, ValueError, EOFError, UnicodeDecodeError, IndexError) as exc:
-        raise FileFormatError(f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
+        raise FileFormatError(
+            f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
     if np.iscomplexobj(matrix.data if sp.issparse(matrix) else matrix):
         raise InvalidInputError(f"{path}: the matrix is complex; a real matrix is needed")
     matrix = sp.csc_matrix(matrix, dtype=float) if sp.issparse(matrix) else matrix.astype(float)

@@ -13,7 +13,8 @@ import scipy.sparse as sp
 
 from ...errors import ContactError, FileFormatError, InvalidInputError
 from ...model import SYMMETRY_RTOL, ReducedModel
-from ._common import about, backend, existing_file, freedom_indices, one_line, reduced_model
+from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
+                      reduced_model)
 
 __all__ = ["read_op4", "op4_matrix", "read_dmig", "dmig_matrix"]
 
@@ -30,12 +31,6 @@ def _which(path: Path, names: Sequence[str], name: str | None, what: str, plural
         raise InvalidInputError(f"{path}: no {what} named {name!r} (the file holds "
                                 f"{', '.join(names) or 'none'})")
     return name
-
-
-def _real(path: Path, matrix, name: str):
-    if np.iscomplexobj(matrix):
-        raise InvalidInputError(f"{path}: matrix {name!r} is complex; a real matrix is needed")
-    return matrix.astype(float)
 
 
 def op4_matrix(path, name: str | None = None):
@@ -70,7 +65,10 @@ def op4_matrix(path, name: str | None = None):
         raise FileFormatError(f"{path}: not a readable OP4 file "
                               f"({type(exc).__name__}: {one_line(exc)})") from None
     name = _which(path, list(matrices), name, "matrix", "matrices")
-    return _real(path, matrices[name].data, name)
+    matrix = matrices[name].data
+    if np.iscomplexobj(matrix):
+        raise InvalidInputError(f"{path}: matrix {name!r} is complex; a real matrix is needed")
+    return matrix.astype(float)
 
 
 def _log() -> logging.Logger:
@@ -203,7 +201,7 @@ def _load_dmig(path: Path, name: str):
 def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
               components: Sequence[int] = (1, 2, 3), *, kind: str, fixed=None,
               symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
-    """Reduced model of chosen grids from a DMIG matrix (``K2GG``, ``KAAX``, ...) of a bulk-data file.
+    """Reduced model of chosen grids from a DMIG matrix (``K2GG``, ``KAAX``, ...) in bulk data.
 
     Parameters
     ----------
@@ -250,14 +248,16 @@ def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
     coordinates = None
     if all(grid is not None and grid.cp == 0 for grid in grids):
         coordinates = np.array([grid.xyz for grid in grids], dtype=float)
-    describe = lambda node, component: f"grid {node} component {component}"  # noqa: E731
+    def describe(grid, component):
+        return f"grid {grid} component {component}"
+
     with about(path):
-        keep = freedom_indices(labels, nodes, [int(c) for c in components], describe)
+        keep = freedom_indices(labels, node_major(nodes, [int(c) for c in components]), "grid",
+                               describe)
         fixed_index = None
         if fixed is not None:
-            pairs = [(int(g), int(c)) for g, c in fixed]
-            fixed_index = np.concatenate([freedom_indices(labels, [g], [c], describe)
-                                          for g, c in pairs]) if pairs else None
+            fixed_index = freedom_indices(labels, [(int(g), int(c)) for g, c in fixed], "grid",
+                                          describe)
         names = [describe(g, c) for g, c in labels]
         return reduced_model(matrix, kind, keep, fixed_index, names,
                              dofs_per_node=len(components), coordinates=coordinates,
