@@ -219,11 +219,14 @@ class FrictionalProblem:
     loads : array_like, shape (n_freedoms,)
         External forces ``P`` (N), totals (not increments).
     obstacles : sequence
-        As for :class:`ContactProblem`; each direction towards the obstacle is the frame's normal.
+        As for :class:`ContactProblem`; each direction towards the obstacle (from the first node
+        of a pair towards the second) is its frame's normal, the tangents those of
+        :func:`~contactqp.contact.tangent_basis`.
     mu : float or array_like, shape (k,)
         Friction coefficient per contact, >= 0.
     cohesion : float or array_like, shape (k,)
-        Mohr-Coulomb cohesion per contact (N), >= 0: ``||r_T|| <= mu r_N + c``.
+        Mohr-Coulomb cohesion per contact (N), >= 0, where ``mu > 0``: ``||r_T|| <= mu r_N + c``
+        and tension up to ``c / mu`` (the cone's apex; see :mod:`contactqp.friction`).
     facets : int, optional
         Replace each friction disc by the inscribed polygon of ``facets`` sides (>= 3), the
         method's linearised cone (3-D; in 2-D the cone is already linear).
