@@ -18,7 +18,7 @@ import struct
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["write_ansys_full", "write_op4_binary", "FULL_HEADER_WORDS"]
+__all__ = ["write_ansys_full", "write_op4_binary"]
 
 INT_FLAGS = 0x80000000  # type flag (bit 7 of the record's 8th byte): integer data
 DOUBLE_FLAGS = 0

@@ -425,6 +425,14 @@ def test_matrix_market_errors(tmp_path):
     scipy.io.mmwrite(str(complex_), np.eye(2) * (1 + 1j))
     with pytest.raises(InvalidInputError, match="complex"):
         read_matrix_market(complex_, kind="stiffness")
+    unsymmetric = tmp_path / "u.mtx"
+    K = chain_stiffness(4)
+    K[0, 1] *= 1.01
+    scipy.io.mmwrite(str(unsymmetric), sp.coo_matrix(K))
+    with pytest.raises(InvalidInputError, match=r"u\.mtx: the stiffness is not symmetric"):
+        read_matrix_market(unsymmetric, kind="stiffness", freedoms=[3])
+    with pytest.raises(InvalidInputError, match=r"u\.mtx: no freedom is chosen"):
+        read_matrix_market(unsymmetric, kind="stiffness", freedoms=[])
     indefinite = tmp_path / "i.mtx"
     scipy.io.mmwrite(str(indefinite), np.diag([1.0, -1.0]))
     with pytest.raises(NotPositiveDefiniteError, match=r"i\.mtx: stiffness is not positive"):
