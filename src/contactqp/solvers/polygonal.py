@@ -131,8 +131,8 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
         A :mod:`qpsolvers` backend (see :func:`~contactqp.solvers.qp.available_backends`),
         run with contactqp's tight tolerances (:func:`~contactqp.solvers.qp.backend_options`).
     tol : float
-        In (0, 1). Convergence: the relative change of the reactions between two iterations is
-        at most ``tol`` (3-D), or the natural-map error is at most ``tol`` (2-D, exact cone).
+        In (0, 1). Convergence: the natural-map error is at most ``tol`` (always so in 2-D,
+        exact cone), or in 3-D the relative change of the reactions between two iterations is.
     max_iter : int
         Largest number of quadratic programs solved.
     r0 : array_like, shape (m,), optional

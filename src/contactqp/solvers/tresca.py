@@ -128,7 +128,9 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
     exact : bool
         True when the sub-problem's cone is the Coulomb disc: convergence is then a natural-map
         error at most ``tol``. False (polygonal cones) when it is the fixed point itself: the
-        relative change of ``r'`` between two iterations at most ``tol``.
+        relative change of ``r'`` between two iterations at most ``tol`` (or the exact-cone
+        error, when no polygon constraint binds; with a singular ``W`` the reactions need not
+        settle while the velocities do).
 
     Returns
     -------
@@ -160,7 +162,7 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
         else:
             best = (error, r)
             change = np.linalg.norm(r - previous) / max(np.linalg.norm(r), np.finfo(float).tiny)
-            if change <= tol:
+            if change <= tol or error <= tol:
                 converged = True
                 message = (f"fixed point reached (relative change {change:.1e}); natural-map "
                            f"error against the exact cones {error:.2e}")
