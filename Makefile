@@ -19,9 +19,12 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	touch $@
 
 demo: $(STAMP_DEMO)
+	@mkdir -p out/demo
+	$(BIN)/contactqp rod --plot out/demo/rod.png --vtu out/demo/rod.vtu
+	$(BIN)/contactqp rod --json > out/demo/rod.json
 	$(BIN)/contactqp springs --n 3 --stiffness 1 --mu 0.2 --mass 2 --g 10 --force 3,6,9,14 --plot out/demo/springs.png
 	$(BIN)/contactqp solve examples/problems/two_springs.toml --out out/demo/two_springs
-	@echo "demo outputs in out/demo/"
+	@echo "demo outputs in out/demo/: rod.png, rod.vtu (ParaView), rod.json, springs.png, two_springs/"
 
 test: $(STAMP_TEST)
 	$(BIN)/python -m pytest -q
