@@ -12,6 +12,19 @@ Dual form (on contact forces, built from ``R`` without inverting it):
 
     \\min_{\\lambda \\ge 0} \\tfrac12 \\lambda^T W \\lambda - \\lambda^T (A R P - \\Delta),
     \\qquad W = A R A^T, \\qquad U = R (P - A^T \\lambda)
+
+Local form with friction (FCLIB's ``u = W r + q``, see :class:`LocalForm`): with the operator
+``H`` of :func:`~contactqp.contact.local_frames` (per contact the rows ``-n, t_1[, t_2]``),
+
+.. math::
+
+    U = R (P + H^T r), \\qquad u = H U + w = W r + q, \\qquad W = H R H^T,
+    \\qquad q = H R P + w,
+
+``w`` holding the initial gap ``Delta`` in each normal slot and zero in the tangential ones:
+``u_N`` is the gap opening (>= 0), ``r_N`` the compressive normal force (>= 0), ``u_T`` the
+tangential displacement and ``r_T`` the tangential force on the body. The normal block of ``W``
+is the frictionless ``A R A^T`` and ``q_N = -b``.
 """
 
 from __future__ import annotations
