@@ -157,8 +157,9 @@ def read_ansys_full(path, nodes: Sequence[int], components: Sequence[str] = ("UX
     Returns
     -------
     ReducedModel
-        Given as a flexibility, shape ``(n_nodes * len(components),) * 2``, freedoms node by node
-        in the order of ``nodes`` and ``components``, in the units of the ANSYS model (m/N in SI).
+        Shape ``(n_nodes * len(components),) * 2``, freedoms node by node in the order of
+        ``nodes`` and ``components``, in the units of the ANSYS model (m/N in SI). Given as the
+        flexibility, or as the stiffness itself when every free freedom is chosen.
 
     Raises
     ------
