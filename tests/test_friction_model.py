@@ -220,6 +220,28 @@ def test_polygonal_cone_reduces_the_limit_across_a_side_not_at_a_vertex(facets):
         assert (polygonal.certificate.natural_map > 1e-3) == (limit < mu * N)
 
 
+def test_polygonal_answer_approaches_the_exact_cone_as_facets_grow():
+    # a sliding force may turn by up to pi / F from the direction opposite to the slip, so the
+    # forces move by O(mu pi / F) relative to the exact cone's
+    rng = np.random.default_rng(3)
+    B = rng.normal(size=(15, 15))
+    model = cq.ReducedModel(flexibility=B @ B.T / 15 + np.eye(15), dofs_per_node=3,
+                            coordinates=np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)]))
+    P = np.zeros(15)
+    P[2::3] = -3.0
+    P[0::3], P[1::3] = rng.normal(size=(2, 5))
+    mu = 0.3
+    exact = cq.FrictionalProblem(model, P, [floor(3)], mu=mu).solve()
+    assert exact.success and exact.status_labels.count("slip") >= 2
+    errors = {}
+    for facets in (8, 16, 32, 64):
+        linear = cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets).solve()
+        assert linear.success, linear.message
+        errors[facets] = np.abs(linear.forces - exact.forces).max() / np.abs(exact.forces).max()
+        assert errors[facets] <= mu * np.pi / facets
+    assert errors[64] < errors[8] / 4
+
+
 def test_polygonal_law_in_2d_is_the_exact_cone():
     exact = coupled_problem(3, mu=0.2).solve()
     linear = coupled_problem(3, mu=0.2, facets=6).solve()
