@@ -11,6 +11,8 @@ Truths used here:
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -185,7 +187,8 @@ def test_facets_below_three_or_not_integers_are_rejected(facets):
 
 @pytest.mark.parametrize("solve", [solve_tresca_fixed_point, solve_polygonal])
 @pytest.mark.parametrize("kwargs, name", [
-    ({"tol": 0.0}, "tol"), ({"tol": 1.0}, "tol"), ({"tol": np.nan}, "tol"), ({"tol": "1e-8"}, "tol"),
+    ({"tol": 0.0}, "tol"), ({"tol": 1.0}, "tol"), ({"tol": np.nan}, "tol"),
+    ({"tol": "1e-8"}, "tol"),
     ({"max_iter": 0}, "max_iter"), ({"max_iter": 2.0}, "max_iter"),
     ({"r0": np.zeros(2)}, "r0"), ({"r0": [np.nan, 0.0, 0.0]}, "r0"),
 ])
@@ -209,7 +212,7 @@ def test_tresca_meets_the_certificate_on_fclib_files(name):
     unsymmetric W): the natural-map error of the answer, recomputed here, is below 1e-8."""
     from contactqp.io.fclib import read_problem
 
-    problem = read_problem(f"/work/shared/data/fclib/{name}")
+    problem = read_problem(Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib" / name)
     solution = solve_tresca_fixed_point(problem, tol=TOL)
     assert solution.converged, solution.message
     assert natural_map_error(problem, solution.r) <= TOL

@@ -333,10 +333,11 @@ def point_force_kernels(nu=NU, shear=G_SHEAR):
     at z = 0, z the outward normal): a as the displacement axis, b the force axis."""
     c = 1.0 / (2 * np.pi * shear)
     k = (1 - 2 * nu) / (4 * np.pi * shear)
-    return [[lambda t: c * ((1 - nu) + nu * np.cos(t) ** 2), lambda t: c * nu * np.cos(t) * np.sin(t),
-             lambda t: k * np.cos(t)],
-            [lambda t: c * nu * np.cos(t) * np.sin(t), lambda t: c * ((1 - nu) + nu * np.sin(t) ** 2),
-             lambda t: k * np.sin(t)],
+    def cross(t):
+        return c * nu * np.cos(t) * np.sin(t)
+
+    return [[lambda t: c * ((1 - nu) + nu * np.cos(t) ** 2), cross, lambda t: k * np.cos(t)],
+            [cross, lambda t: c * ((1 - nu) + nu * np.sin(t) ** 2), lambda t: k * np.sin(t)],
             [lambda t: -k * np.cos(t), lambda t: -k * np.sin(t), lambda t: c * (1 - nu)]]
 
 

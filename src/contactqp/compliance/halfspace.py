@@ -33,7 +33,8 @@ solution (Johnson 1985, eq. 2.19 at z = 0; G = E / (2 (1 + nu)) the shear modulu
 
 .. math::
 
-    u_x = \\frac{Q}{2 \\pi G} \\left(\\frac{1 - \\nu}{\\rho} + \\frac{\\nu x^2}{\\rho^3}\\right), \\quad
+    u_x = \\frac{Q}{2 \\pi G}
+          \\left(\\frac{1 - \\nu}{\\rho} + \\frac{\\nu x^2}{\\rho^3}\\right), \\quad
     u_y = \\frac{Q}{2 \\pi G} \\frac{\\nu x y}{\\rho^3}, \\quad
     u_z = -\\frac{(1 - 2\\nu) Q}{4 \\pi G} \\frac{x}{\\rho^2},
 

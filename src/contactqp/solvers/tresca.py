@@ -57,7 +57,7 @@ _PATIENCE = 4
 
 
 def check_fixed_point_arguments(problem, tol, max_iter, r0):
-    """Validate the common arguments of the fixed-point routes; return ``r0`` as an array or None."""
+    """Validate the arguments common to the fixed-point routes; return ``r0`` (array or None)."""
     if not isinstance(problem, LocalProblem):
         raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
     if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not 0.0 < tol < 1.0:
@@ -263,7 +263,8 @@ class _ClarabelTresca:
         blocks = np.zeros((nc, d, d))
         blocks[:, 0, 0] = Z[:, 0] > 0.0
         direction = Z[:, 1:] / np.where(norm > 0.0, norm, 1.0)[:, None]
-        tangent = np.eye(d - 1) - outside[:, None, None] * direction[:, :, None] * direction[:, None, :]
+        radial = direction[:, :, None] * direction[:, None, :]
+        tangent = np.eye(d - 1) - outside[:, None, None] * radial
         blocks[:, 1:, 1:] = factor[:, None, None] * tangent
         return projected.ravel(), sp.block_diag(blocks, format="csr")
 
