@@ -1,0 +1,380 @@
+"""Linear elastic bodies: assembly, fixations, full analyses and condensed reduced models.
+
+The body is isotropic (Young's modulus ``E``, Poisson's ratio ``nu``); in 2D it is a slice of
+thickness ``t`` in plane strain (``eps_zz = 0``) or in plane stress (``sigma_zz = 0``). The
+stiffness is scikit-fem's weak form ``int sigma(u) : eps(v) dx`` with the Lamé parameters
+
+.. math::
+
+    \\lambda = \\frac{E \\nu}{(1 + \\nu)(1 - 2 \\nu)}, \\qquad \\mu = \\frac{E}{2 (1 + \\nu)},
+
+except in plane stress, where eliminating ``eps_zz`` replaces ``lambda`` by
+
+.. math::
+
+    \\lambda^* = \\frac{2 \\lambda \\mu}{\\lambda + 2 \\mu} = \\frac{E \\nu}{1 - \\nu^2}.
+
+2D stiffnesses are multiplied by ``t``, so that loads are forces (N), not forces per unit
+thickness.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+import skfem
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+from ...errors import InvalidInputError, UnsupportedProblemError
+from ...model import ReducedModel, finite_array
+from ..condensation import RigidBodyModeError, condense, factorize
+from .meshes import SUPPORTED_MESHES
+from .rigid import free_rigid_motions
+from .selection import dof_mask, node_mask
+
+__all__ = ["ElasticModel", "NodeSelection", "elastic_compliance"]
+
+#: scikit-fem elements by mesh type and order.
+_ELEMENTS = {
+    "tri": (skfem.ElementTriP1, skfem.ElementTriP2),
+    "quad": (skfem.ElementQuad1, skfem.ElementQuad2),
+    "tet": (skfem.ElementTetP1, skfem.ElementTetP2),
+    "hex": (skfem.ElementHex1, skfem.ElementHex2),
+}
+_AXES = "xyz"
+
+
+class NodeSelection(NamedTuple):
+    """Mesh nodes picked by :meth:`ElasticModel.select_nodes`.
+
+    Attributes
+    ----------
+    nodes : ndarray of int, shape (k,)
+        Mesh node (vertex) indices.
+    distances : ndarray, shape (k,)
+        Distance (m) from each requested point to its node; zeros for nodes picked by a selector.
+    """
+
+    nodes: np.ndarray
+    distances: np.ndarray
+
+
+def _positive(value, name: str, unit: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+            np.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{name} must be a positive finite number ({unit}), got {value!r}")
+    return float(value)
+
+
+class _FreedomLabels:
+    """Names of the free freedoms, built only for the one an error message needs."""
+
+    def __init__(self, model: "ElasticModel", free: np.ndarray):
+        self._model, self._free = model, free
+
+    def __len__(self) -> int:
+        return self._free.size
+
+    def __getitem__(self, index: int) -> str:
+        return self._model._freedom_name(int(self._free[index]))
+
+
+class ElasticModel:
+    """A linear elastic body meshed by scikit-fem, with fixations.
+
+    Parameters
+    ----------
+    mesh : skfem.Mesh
+        Triangles or quadrilaterals (2D), tetrahedra or hexahedra (3D), in metres; see
+        :mod:`contactqp.compliance.fem.meshes`.
+    young : float
+        Young's modulus ``E`` (Pa).
+    poisson : float
+        Poisson's ratio ``nu``, ``-1 < nu < 0.5``.
+    plane : {"stress", "strain"}, optional
+        Required for a 2D mesh, refused for a 3D one.
+    thickness : float, optional
+        Thickness of a 2D body (m), 1 by default; refused in 3D.
+    order : {1, 2}
+        Polynomial order of the elements (2 avoids the locking of linear elements in bending).
+
+    Notes
+    -----
+    Freedoms are the displacement components at the mesh's vertices ("nodes") and, for
+    ``order=2``, at edge (and face) mid-points. Nodes not used by any cell are ignored.
+    """
+
+    def __init__(self, mesh, young, poisson, *, plane: str | None = None, thickness=None,
+                 order: int = 1):
+        cell = next((name for name, kind in SUPPORTED_MESHES.items() if isinstance(mesh, kind)),
+                    None)
+        if cell is None:
+            raise UnsupportedProblemError(
+                f"mesh must be a scikit-fem triangle, quadrilateral, tetrahedron or hexahedron "
+                f"mesh, got {type(mesh).__name__}")
+        self.mesh, self.dim = mesh, mesh.p.shape[0]
+        self.young = _positive(young, "young", "Pa")
+        if isinstance(poisson, bool) or not isinstance(poisson, numbers.Real) or not (
+                -1 < poisson < 0.5):
+            raise InvalidInputError(f"poisson must lie in (-1, 0.5), got {poisson!r}")
+        self.poisson = float(poisson)
+        if self.dim == 2:
+            if plane not in ("stress", "strain"):
+                raise InvalidInputError(f"plane must be 'stress' or 'strain' for a 2D mesh, "
+                                        f"got {plane!r}")
+            self.thickness = 1.0 if thickness is None else _positive(thickness, "thickness", "m")
+        else:
+            if plane is not None or thickness is not None:
+                raise InvalidInputError("plane and thickness apply to 2D meshes only; this mesh "
+                                        "is 3D")
+            self.thickness = 1.0
+        self.plane = plane
+        if order not in (1, 2):
+            raise InvalidInputError(f"order must be 1 or 2, got {order!r}")
+        self.order = order
+        self.basis = skfem.Basis(mesh, skfem.ElementVector(_ELEMENTS[cell][order - 1]()))
+        self._component = np.empty(self.basis.N, dtype=int)
+        for axis, indices in enumerate(self.basis.split_indices()):
+            self._component[indices] = axis
+        self._used = np.zeros(mesh.p.shape[1], dtype=bool)
+        self._used[mesh.t.ravel()] = True
+        self._fixed = np.zeros(self.basis.N, dtype=bool)
+        self._fixed[self.basis.nodal_dofs[:, ~self._used].ravel()] = True  # unconnected nodes
+        self._stiffness = None
+        self._free_stiffness = None
+
+    @property
+    def lame(self) -> tuple[float, float]:
+        """Lamé parameters ``(lambda, mu)`` (Pa), ``lambda*`` in plane stress."""
+        lam, mu = lame_parameters(self.young, self.poisson)
+        if self.plane == "stress":
+            lam = 2 * lam * mu / (lam + 2 * mu)
+        return lam, mu
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of mesh nodes (vertices)."""
+        return self.mesh.p.shape[1]
+
+    @property
+    def stiffness(self) -> sp.csr_matrix:
+        """Assembled stiffness of every freedom before fixation, shape (N, N), N/m."""
+        if self._stiffness is None:
+            form = linear_elasticity(*self.lame)
+            self._stiffness = (skfem.asm(form, self.basis) * self.thickness).tocsr()
+        return self._stiffness
+
+    @property
+    def fixed(self) -> np.ndarray:
+        """Indices of the fixed freedoms (those of unconnected nodes included)."""
+        return np.flatnonzero(self._fixed)
+
+    def fix(self, selector, components=None) -> "ElasticModel":
+        """Clamp the freedoms that ``selector`` picks (zero displacement).
+
+        Parameters
+        ----------
+        selector
+            See :mod:`contactqp.compliance.fem.selection`, e.g. ``"left"``,
+            ``Box((0, 0), (0, 1))`` or ``lambda x: x[0] == 0``.
+        components : sequence of int, optional
+            Directions fixed (0 = x, 1 = y, 2 = z); all by default. ``components=[0]`` on a face
+            normal to ``x`` is a symmetry (roller) condition.
+
+        Returns
+        -------
+        ElasticModel
+            ``self``, so that fixations chain.
+        """
+        axes = self._components(components, "components")
+        picked = dof_mask(selector, self.basis, "selector") & np.isin(self._component, axes)
+        if not picked.any():
+            raise InvalidInputError(f"selector {selector!r} picks no freedom to fix")
+        self._fixed |= picked
+        self._free_stiffness = None
+        return self
+
+    def select_nodes(self, points=None, *, where=None) -> NodeSelection:
+        """Mesh nodes nearest to ``points``, or all the nodes ``where`` picks.
+
+        Parameters
+        ----------
+        points : array_like, shape (k, dim), optional
+            Wanted locations (m) of computational nodes.
+        where : selector, optional
+            Restricts the candidates (e.g. ``"top"``: nodes of that face); every used node when
+            omitted.
+
+        Returns
+        -------
+        NodeSelection
+            The nodes, in the order of ``points`` (else by index), and the distances from the
+            points to them (m).
+
+        Raises
+        ------
+        InvalidInputError
+            No candidate node, or two points sharing their nearest node.
+        """
+        candidates = self._used.copy()
+        if where is not None:
+            candidates &= node_mask(where, self.mesh, "where")
+        ids = np.flatnonzero(candidates)
+        if ids.size == 0:
+            raise InvalidInputError(f"where={where!r} picks no node of the mesh")
+        if points is None:
+            return NodeSelection(ids, np.zeros(ids.size))
+        wanted = finite_array(points, "points", 2)
+        if wanted.shape[1] != self.dim:
+            raise InvalidInputError(f"points must have shape (k, {self.dim}), got {wanted.shape}")
+        distances, nearest = cKDTree(self.mesh.p[:, ids].T).query(wanted)
+        nodes = ids[nearest]
+        unique, counts = np.unique(nodes, return_counts=True)
+        if np.any(counts > 1):
+            node = unique[np.argmax(counts > 1)]
+            which = np.flatnonzero(nodes == node)
+            raise InvalidInputError(f"points {which.tolist()} share their nearest node {node}: "
+                                    "refine the mesh or move the points apart")
+        return NodeSelection(nodes, distances)
+
+    def solve(self, loads) -> np.ndarray:
+        """One full analysis: nodal displacements under nodal forces (factorises every call).
+
+        Parameters
+        ----------
+        loads : array_like, shape (n_nodes, dim)
+            Force on every mesh node (N). Forces on fixed freedoms go straight to the supports.
+
+        Returns
+        -------
+        ndarray, shape (n_nodes, dim)
+            Displacements of the mesh nodes (m).
+        """
+        forces = finite_array(loads, "loads", 2)
+        if forces.shape != (self.n_nodes, self.dim):
+            raise InvalidInputError(f"loads must have shape ({self.n_nodes}, {self.dim}), got "
+                                    f"{forces.shape}")
+        free, K = self._free_system()
+        vector = np.zeros(self.basis.N)
+        vector[self.basis.nodal_dofs] = forces.T
+        displacement = np.zeros(self.basis.N)
+        displacement[free] = factorize(K, labels=_FreedomLabels(self, free)).solve(vector[free])
+        return displacement[self.basis.nodal_dofs].T
+
+    def reduced_model(self, nodes, *, components=None) -> ReducedModel:
+        """Flexibility of computational nodes by static condensation.
+
+        Parameters
+        ----------
+        nodes : array_like of int, shape (k,), or NodeSelection
+            Mesh node indices, e.g. from :meth:`select_nodes`.
+        components : sequence of int, optional
+            Directions kept at every node (0 = x, 1 = y, 2 = z); all by default. Keeping only the
+            normal of a flat contact face gives one freedom per node.
+
+        Returns
+        -------
+        ReducedModel
+            ``R[i, j]`` (m/N): displacement of freedom ``i`` under a unit force on freedom ``j``,
+            freedoms ordered node by node, then by component; coordinates of the nodes (m).
+        """
+        if isinstance(nodes, NodeSelection):
+            nodes = nodes.nodes
+        ids = np.asarray(nodes)
+        if ids.ndim != 1 or ids.size == 0 or not np.issubdtype(ids.dtype, np.integer):
+            raise InvalidInputError(f"nodes must be a non-empty 1-D array of node indices, got "
+                                    f"{nodes!r}")
+        if ids.min() < 0 or ids.max() >= self.n_nodes or np.unique(ids).size != ids.size:
+            raise InvalidInputError(f"nodes must be distinct indices in 0..{self.n_nodes - 1}")
+        axes = self._components(components, "components")
+        freedoms = self.basis.nodal_dofs[axes][:, ids].T.ravel()
+        held = freedoms[self._fixed[freedoms]]
+        if held.size:
+            raise InvalidInputError(f"nodes: {self._freedom_name(held[0])} is fixed (or not "
+                                    "connected) and has no flexibility")
+        free, K = self._free_system()
+        position = np.full(self.basis.N, -1)
+        position[free] = np.arange(free.size)
+        R = condense(K, position[freedoms], labels=_FreedomLabels(self, free))
+        return ReducedModel(flexibility=R, dofs_per_node=len(axes),
+                            coordinates=self.mesh.p[:, ids].T)
+
+    def _components(self, components, name: str) -> np.ndarray:
+        if components is None:
+            return np.arange(self.dim)
+        axes = np.atleast_1d(np.asarray(components))
+        if (axes.ndim != 1 or axes.size == 0 or not np.issubdtype(axes.dtype, np.integer)
+                or axes.min() < 0 or axes.max() >= self.dim or np.unique(axes).size != axes.size):
+            raise InvalidInputError(f"{name} must be distinct directions in 0..{self.dim - 1}, "
+                                    f"got {components!r}")
+        return axes
+
+    def _freedom_name(self, freedom: int) -> str:
+        where = ", ".join(f"{c:.4g}" for c in self.basis.doflocs[:, freedom])
+        node = np.flatnonzero(self.basis.nodal_dofs == freedom)
+        owner = f"node {node[0] % self.n_nodes}" if node.size else "mid-side point"
+        return f"u_{_AXES[self._component[freedom]]} of {owner} at ({where})"
+
+    def _free_system(self) -> tuple[np.ndarray, sp.csc_matrix]:
+        """Free freedoms and their stiffness, after checking that every body is held."""
+        if self._free_stiffness is None:
+            self._check_held()
+            free = np.flatnonzero(~self._fixed)
+            self._free_stiffness = free, self.stiffness[free][:, free].tocsc()
+        return self._free_stiffness
+
+    def _check_held(self) -> None:
+        """Raise RigidBodyModeError naming the motions a connected body is free to make."""
+        mesh = self.mesh
+        cells = mesh.t.shape[1]
+        incidence = sp.csr_matrix((np.ones(mesh.t.size), (np.repeat(np.arange(cells),
+                                                                    mesh.t.shape[0]),
+                                                          mesh.t.T.ravel())),
+                                  shape=(cells, self.n_nodes))
+        count, part_of_node = connected_components(incidence.T @ incidence, directed=False)
+        part_of_dof = np.full(self.basis.N, -1)
+        part_of_dof[self.basis.element_dofs] = part_of_node[mesh.t[0]][None, :]
+        for part in range(count):
+            nodes = np.flatnonzero((part_of_node == part) & self._used)
+            if nodes.size == 0:
+                continue
+            points = mesh.p[:, nodes]
+            centre = points.mean(axis=1)
+            scale = float(np.max(np.ptp(points, axis=1)))
+            held = np.flatnonzero(self._fixed & (part_of_dof == part))
+            free = free_rigid_motions(self.basis.doflocs[:, held], self._component[held],
+                                      centre, scale)
+            if free:
+                body = "the body" if count == 1 else (
+                    f"the part of the mesh around ({', '.join(f'{c:.4g}' for c in centre)})")
+                raise RigidBodyModeError(f"not enough fixations: {body} has rigid-body modes "
+                                         f"({', '.join(free)}); fix more freedoms")
+
+
+def elastic_compliance(mesh, young, poisson, fixed, points, *, plane=None, thickness=None,
+                       order: int = 1, where=None, components=None) -> ReducedModel:
+    """Reduced model of an elastic body at the mesh nodes nearest to ``points``, in one call.
+
+    Parameters
+    ----------
+    mesh, young, poisson, plane, thickness, order
+        See :class:`ElasticModel`.
+    fixed : selector
+        Clamped part (every component), e.g. ``"left"``; use :class:`ElasticModel` for more.
+    points : array_like, shape (k, dim)
+        Wanted computational nodes (m); see :meth:`ElasticModel.select_nodes` (and ``where``).
+    components : sequence of int, optional
+        See :meth:`ElasticModel.reduced_model`.
+
+    Returns
+    -------
+    ReducedModel
+    """
+    model = ElasticModel(mesh, young, poisson, plane=plane, thickness=thickness, order=order)
+    model.fix(fixed)
+    return model.reduced_model(model.select_nodes(points, where=where), components=components)

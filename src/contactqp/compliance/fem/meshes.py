@@ -1,0 +1,170 @@
+"""Meshes: structured rectangles and boxes with named faces, and meshes read from files.
+
+The generated meshes start at the origin and carry the named boundaries ``"left"`` and
+``"right"`` (``x = 0`` and ``x = length``), ``"bottom"`` and ``"top"`` (the lowest and highest
+``y`` in 2D, ``z`` in 3D) and, in 3D, ``"front"`` and ``"back"`` (``y = 0`` and ``y = width``).
+"""
+
+from __future__ import annotations
+
+import numbers
+from pathlib import Path
+
+import numpy as np
+import skfem
+
+from ...errors import FileFormatError, InvalidInputError, UnsupportedProblemError
+
+__all__ = ["plate", "block", "bar", "read_mesh", "SUPPORTED_MESHES"]
+
+#: Mesh types of scikit-fem that the elastic models accept, by cell name.
+SUPPORTED_MESHES = {"tri": skfem.MeshTri, "quad": skfem.MeshQuad, "tet": skfem.MeshTet,
+                    "hex": skfem.MeshHex}
+_CELLS_2D, _CELLS_3D = ("tri", "quad"), ("tet", "hex")
+
+
+def _length(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+            np.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{name} must be a positive finite length in metres, got {value!r}")
+    return float(value)
+
+
+def _count(value, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise InvalidInputError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def _cell(cell: str, allowed: tuple[str, ...]) -> type:
+    if cell not in allowed:
+        raise InvalidInputError(f"cell must be one of {', '.join(allowed)}, got {cell!r}")
+    return SUPPORTED_MESHES[cell]
+
+
+def _faces(extents: tuple[float, ...]) -> dict:
+    """Boundary predicates of the box ``[0, extents]`` (2 or 3 extents)."""
+    tol = 1e-9 * max(extents)
+    axes = [("left", "right"), ("bottom", "top")] if len(extents) == 2 else [
+        ("left", "right"), ("front", "back"), ("bottom", "top")]
+    faces = {}
+    for axis, ((low, high), extent) in enumerate(zip(axes, extents)):
+        faces[low] = lambda x, a=axis: np.abs(x[a]) < tol
+        faces[high] = lambda x, a=axis, e=extent: np.abs(x[a] - e) < tol
+    return faces
+
+
+def plate(length, width, nx, ny, *, cell: str = "quad"):
+    """Rectangle ``[0, length] x [0, width]`` split into ``nx`` by ``ny`` cells.
+
+    Parameters
+    ----------
+    length, width : float
+        Sides along ``x`` and ``y`` (m).
+    nx, ny : int
+        Cells along ``x`` and ``y``; ``cell="tri"`` splits each into two triangles.
+    cell : {"quad", "tri"}
+
+    Returns
+    -------
+    skfem.Mesh
+        With the boundaries ``left``, ``right``, ``bottom``, ``top``.
+    """
+    extents = (_length(length, "length"), _length(width, "width"))
+    counts = (_count(nx, "nx"), _count(ny, "ny"))
+    mesh_type = _cell(cell, _CELLS_2D)
+    axes = [np.linspace(0.0, e, n + 1) for e, n in zip(extents, counts)]
+    return mesh_type.init_tensor(*axes).with_boundaries(_faces(extents))
+
+
+def block(length, width, height, nx, ny, nz, *, cell: str = "hex"):
+    """Box ``[0, length] x [0, width] x [0, height]`` split into ``nx * ny * nz`` cells.
+
+    Parameters
+    ----------
+    length, width, height : float
+        Sides along ``x``, ``y`` and ``z`` (m).
+    nx, ny, nz : int
+        Cells along each axis; ``cell="tet"`` splits each hexahedron into tetrahedra.
+    cell : {"hex", "tet"}
+
+    Returns
+    -------
+    skfem.Mesh
+        With the boundaries ``left``, ``right``, ``front``, ``back``, ``bottom``, ``top``.
+    """
+    extents = (_length(length, "length"), _length(width, "width"), _length(height, "height"))
+    counts = (_count(nx, "nx"), _count(ny, "ny"), _count(nz, "nz"))
+    mesh_type = _cell(cell, _CELLS_3D)
+    axes = [np.linspace(0.0, e, n + 1) for e, n in zip(extents, counts)]
+    return mesh_type.init_tensor(*axes).with_boundaries(_faces(extents))
+
+
+def bar(length, height, width=None, *, across: int = 2, cell: str | None = None):
+    """A bar along ``x`` meshed with nearly cubic cells: a :func:`plate` or a :func:`block`.
+
+    Parameters
+    ----------
+    length : float
+        Length along ``x`` (m).
+    height : float
+        Depth of the section: along ``y`` in 2D, along ``z`` in 3D (m).
+    width : float, optional
+        Width of the section along ``y`` (m); gives a 3D bar when given.
+    across : int
+        Cells across the height; the other counts follow from the cells' aspect ratio (>= 1).
+    cell : str, optional
+        ``"quad"`` (default) or ``"tri"`` in 2D, ``"hex"`` (default) or ``"tet"`` in 3D.
+    """
+    size = _length(height, "height") / _count(across, "across")
+    along = max(1, round(_length(length, "length") / size))
+    if width is None:
+        return plate(length, height, along, across, cell=cell or "quad")
+    return block(length, width, height, along, max(1, round(_length(width, "width") / size)),
+                 across, cell=cell or "hex")
+
+
+def read_mesh(source):
+    """A mesh read by meshio from a file, or converted from a ``meshio.Mesh``.
+
+    The cells of the highest dimension make the mesh (triangles, quadrilaterals, tetrahedra or
+    hexahedra, first or second order); named cell sets of lower dimension (Gmsh physical groups,
+    for example) become named boundaries usable as selectors.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or meshio.Mesh
+        Any file format meshio reads (``.msh``, ``.vtu``, ``.inp``, ``.med``, ...).
+
+    Returns
+    -------
+    skfem.Mesh
+
+    Raises
+    ------
+    FileFormatError
+        Missing or unreadable file.
+    UnsupportedProblemError
+        A mesh of lines only, or of cells the elastic models do not support.
+    """
+    import meshio
+    from skfem.io.meshio import from_meshio
+
+    if not isinstance(source, meshio.Mesh):
+        path = Path(source)
+        if not path.is_file():
+            raise FileFormatError(f"mesh file {str(path)!r} does not exist")
+        try:
+            source = meshio.read(path)
+        except (Exception, SystemExit) as exc:  # meshio's legacy VTK reader exits on bad headers
+            raise FileFormatError(f"mesh file {str(path)!r} could not be read by meshio: "
+                                  f"{exc}") from None
+    try:
+        mesh = from_meshio(source)
+    except Exception as exc:
+        raise FileFormatError(f"meshio mesh could not be converted: {exc}") from None
+    if not isinstance(mesh, tuple(SUPPORTED_MESHES.values())):
+        raise UnsupportedProblemError(
+            f"mesh of type {type(mesh).__name__} is not supported: give triangles, "
+            "quadrilaterals, tetrahedra or hexahedra")
+    return mesh
