@@ -20,7 +20,8 @@ reported, and is of the order of ``mu (1 - cos(pi / F))`` on sliding contacts.
 
 In 2-D the tangential space is a line and the Coulomb "disc" is the segment ``|r_T| <= s``: the
 two facets ``+-r_T <= s`` are the cone itself, so the 2-D route is exact (``facets`` is then not
-used) and its error reaches ``tol`` like the Tresca route's.
+used) and its error reaches ``tol`` like the Tresca route's (each QP answer is polished by the
+same Newton steps).
 
 The frozen-bound fixed point is used rather than the polyhedral cone
 ``n_k . r_T <= mu cos(pi / F) r_N`` in a single quadratic program: that program's optimality
@@ -40,7 +41,8 @@ from ..errors import InvalidInputError
 from ..local import LocalProblem
 from .local import LocalSolution
 from .qp import _qpsolvers, available_backends, backend_options
-from .tresca import FixedPointData, check_fixed_point_arguments, free_unknowns, run_fixed_point
+from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
+                     run_fixed_point)
 
 __all__ = ["solve_polygonal", "polygon_normals"]
 
@@ -69,7 +71,7 @@ class _PolygonalTresca:
         self.options = {**backend_options(backend), **options}
         self.w, self.f = data.w, data.f
         self.sparse = backend in self.qpsolvers.sparse_solvers
-        P = data.W_sym / self.w
+        P = self.W = data.W_sym / self.w
         if self.sparse:
             self.P = sp.csc_matrix(P)
         else:
@@ -111,8 +113,10 @@ class _PolygonalTresca:
                 f"backend {self.backend!r} found no solution of the polygonal Tresca problem "
                 f"(is W positive semidefinite?)")
         r = np.zeros(d * nc)
-        r[keep] = self.f * np.asarray(x)
-        return r
+        r[keep] = np.asarray(x)
+        if d == 2:  # the segment is the Coulomb disc of 2-D: polish as the Tresca route does
+            r = polish(self.W, q / (self.f * self.w), s / self.f, r, d)
+        return self.f * r
 
 
 def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",

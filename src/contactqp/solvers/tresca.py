@@ -203,6 +203,74 @@ def free_unknowns(s, d):
     return keep, sliding, position[::d], position.reshape(nc, d)[sliding, 1:]
 
 
+def _project(z, s, d):
+    """Projection on ``{x_N >= 0, ||x_T|| <= s}`` per contact and its (generalised) Jacobian."""
+    Z = z.reshape(-1, d)
+    nc = Z.shape[0]
+    norm = np.linalg.norm(Z[:, 1:], axis=1)
+    outside = norm > s
+    factor = np.where(outside, s / np.where(outside, norm, 1.0), 1.0)
+    projected = Z.copy()
+    projected[:, 0] = np.maximum(Z[:, 0], 0.0)
+    projected[:, 1:] *= factor[:, None]
+    blocks = np.zeros((nc, d, d))
+    blocks[:, 0, 0] = Z[:, 0] > 0.0
+    direction = Z[:, 1:] / np.where(norm > 0.0, norm, 1.0)[:, None]
+    radial = direction[:, :, None] * direction[:, None, :]
+    blocks[:, 1:, 1:] = factor[:, None, None] * (np.eye(d - 1) - outside[:, None, None] * radial)
+    return projected.ravel(), sp.block_diag(blocks, format="csr")
+
+
+def polish(W, c, s, x, d, steps: int = 6):
+    """Semismooth Newton steps on the Tresca natural map ``x - P_C(x - (W x + c))``.
+
+    Interior-point solutions are accurate to about 1e-9 relative; from there the active set is
+    identified and two or three Newton steps reach rounding. The best point is kept.
+
+    Parameters
+    ----------
+    W : ndarray or sparse matrix, shape (m, m)
+        Symmetric part of the (scaled) Delassus operator.
+    c : ndarray, shape (m,)
+    s : ndarray, shape (nc,)
+        Friction bounds (disc radii; in 2-D the segment ``|x_T| <= s``).
+    x : ndarray, shape (m,)
+        Start, e.g. an interior-point solution.
+    d : int
+        2 or 3.
+    """
+    m = x.size
+    dense = not sp.issparse(W)
+
+    def residual(x):
+        projected, jacobian = _project(x - (W @ x + c), s, d)
+        return x - projected, jacobian
+
+    F, D = residual(x)
+    best = np.linalg.norm(F)
+    for _ in range(steps):
+        if best == 0.0:
+            break
+        if dense:
+            J = np.eye(m) - D @ (np.eye(m) - W)
+        else:
+            J = sp.identity(m, format="csc") - sp.csc_matrix(D @ (sp.identity(m) - W))
+        try:
+            with warnings.catch_warnings():  # singular J (rigid bodies): a NaN step, below
+                warnings.simplefilter("ignore", MatrixRankWarning)
+                step = np.linalg.solve(J, -F) if dense else spsolve(J, -F)
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(step)):
+            break
+        candidate = x + step
+        F_new, D_new = residual(candidate)
+        if not np.linalg.norm(F_new) < best:
+            break
+        x, F, D, best = candidate, F_new, D_new, np.linalg.norm(F_new)
+    return x
+
+
 class _ClarabelTresca:
     """The Tresca cone program with Clarabel, on the contacts' free unknowns (scaled).
 
@@ -248,60 +316,7 @@ class _ClarabelTresca:
         solution = solver.solve()
         x = np.zeros(m)
         x[keep] = np.asarray(solution.x)
-        return self.f * self._polish(q / (self.f * self.w), s / self.f, x)
-
-    def _project(self, z, s):
-        """Projection on ``{x_N >= 0, ||x_T|| <= s}`` per contact and its (generalised) Jacobian."""
-        d, nc = self.d, self.nc
-        Z = z.reshape(nc, d)
-        norm = np.linalg.norm(Z[:, 1:], axis=1)
-        outside = norm > s
-        factor = np.where(outside, s / np.where(outside, norm, 1.0), 1.0)
-        projected = Z.copy()
-        projected[:, 0] = np.maximum(Z[:, 0], 0.0)
-        projected[:, 1:] *= factor[:, None]
-        blocks = np.zeros((nc, d, d))
-        blocks[:, 0, 0] = Z[:, 0] > 0.0
-        direction = Z[:, 1:] / np.where(norm > 0.0, norm, 1.0)[:, None]
-        radial = direction[:, :, None] * direction[:, None, :]
-        tangent = np.eye(d - 1) - outside[:, None, None] * radial
-        blocks[:, 1:, 1:] = factor[:, None, None] * tangent
-        return projected.ravel(), sp.block_diag(blocks, format="csr")
-
-    def _polish(self, c, s, x, steps: int = 6):
-        """Semismooth Newton steps on the Tresca natural map ``x - P_C(x - (W x + c))``.
-
-        Interior-point solutions are accurate to about 1e-9 relative; from there the active set
-        is identified and two or three Newton steps reach rounding. The best point is kept.
-        """
-        m = x.size
-        dense = not sp.issparse(self.W)
-
-        def residual(x):
-            projected, jacobian = self._project(x - (self.W @ x + c), s)
-            return x - projected, jacobian
-
-        F, D = residual(x)
-        best = np.linalg.norm(F)
-        for _ in range(steps):
-            if best == 0.0:
-                break
-            M = D @ (sp.identity(m) - self.W) if not dense else D @ (np.eye(m) - self.W)
-            J = (np.eye(m) - M) if dense else (sp.identity(m, format="csc") - sp.csc_matrix(M))
-            try:
-                with warnings.catch_warnings():  # singular J (rigid bodies): a NaN step, below
-                    warnings.simplefilter("ignore", MatrixRankWarning)
-                    step = np.linalg.solve(J, -F) if dense else spsolve(J, -F)
-            except np.linalg.LinAlgError:
-                break
-            if not np.all(np.isfinite(step)):
-                break
-            candidate = x + step
-            F_new, D_new = residual(candidate)
-            if not np.linalg.norm(F_new) < best:
-                break
-            x, F, D, best = candidate, F_new, D_new, np.linalg.norm(F_new)
-        return x
+        return self.f * polish(self.W, q / (self.f * self.w), s / self.f, x, d)
 
 
 def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
