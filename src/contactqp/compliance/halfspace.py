@@ -234,18 +234,19 @@ def normal_influence(x, y, dx, dy, young, poisson) -> np.ndarray:
     half_x, half_y = 0.5 * dx, 0.5 * dy
     result = np.empty((xs.size, xs.size))
     for rows, (integral,), _, _ in _pairwise(
-            xs, ys, dx, dy, lambda X, Y: (scale * _rectangle_integral(X, Y, half_x, half_y),)):
+            xs, ys, dx, dy, lambda X, Y: (scale * _rectangle_integral(X, Y, half_x, half_y),),
+            signs=False):
         result[rows] = integral
     return result
 
 
-def _pairwise(xs, ys, dx, dy, evaluate):
+def _pairwise(xs, ys, dx, dy, evaluate, signs: bool = True):
     """Evaluate kernels of the offsets ``|x_i - x_j|, |y_i - y_j|`` between cells, by row blocks.
 
     ``evaluate(X, Y)`` (X, Y >= 0, broadcast) returns a tuple of arrays. Yields
     ``(rows, values, sign_x, sign_y)``: a slice of rows ``i``, the tuple evaluated for those rows
     against every cell ``j`` (each array of shape (rows, n)), and the signs of ``x_i - x_j`` and
-    ``y_i - y_j`` (for the kernels odd in an offset). Centres on a regular lattice of pitch
+    ``y_i - y_j`` (for the kernels odd in an offset; None when ``signs`` is False). Centres on a regular lattice of pitch
     ``dx, dy`` evaluate each distinct offset once (a table gathered by a flat index, which keeps
     ``value(i, j) == value(j, i)`` exactly); other arrangements evaluate every pair.
 
@@ -279,7 +280,7 @@ def _pairwise(xs, ys, dx, dy, evaluate):
             flat_index *= index_type(width)
             flat_index += np.abs(steps_y)
             yield (slice(start, stop), tuple(np.take(table, flat_index) for table in tables),
-                   np.sign(steps_x), np.sign(steps_y))
+                   np.sign(steps_x) if signs else None, np.sign(steps_y) if signs else None)
         return
 
     overlap_x, overlap_y = dx * (1.0 - 1e-9), dy * (1.0 - 1e-9)
@@ -292,7 +293,8 @@ def _pairwise(xs, ys, dx, dy, evaluate):
         if overlapping.any():
             i, j = np.argwhere(overlapping)[0]
             raise InvalidInputError(_overlap_message(int(i) + start, int(j), xs, ys))
-        yield slice(start, stop), evaluate(np.abs(X), np.abs(Y)), np.sign(X), np.sign(Y)
+        yield (slice(start, stop), evaluate(np.abs(X), np.abs(Y)),
+               np.sign(X) if signs else None, np.sign(Y) if signs else None)
 
 
 def _cerruti_integrals(X, Y, half_x: float, half_y: float):
