@@ -35,7 +35,7 @@ from ...model import ReducedModel, finite_array
 from ..condensation import RigidBodyModeError, condense, factorize
 from .meshes import SUPPORTED_MESHES
 from .rigid import free_rigid_motions
-from .selection import dof_mask, node_mask
+from .selection import boundary_facets, dof_mask, node_mask
 
 __all__ = ["ElasticModel", "NodeSelection", "elastic_compliance"]
 
@@ -106,7 +106,8 @@ class ElasticModel:
     Notes
     -----
     Freedoms are the displacement components at the mesh's vertices ("nodes") and, for
-    ``order=2``, at edge (and face) mid-points. Nodes not used by any cell are ignored.
+    ``order=2``, at edge (and face) mid-points. Nodes used by no cell (points of a CAD geometry
+    left in a mesh file) are removed: ``model.mesh`` is then the renumbered mesh.
     """
 
     def __init__(self, mesh, young, poisson, *, plane: str | None = None, thickness=None,
@@ -117,6 +118,8 @@ class ElasticModel:
             raise UnsupportedProblemError(
                 f"mesh must be a scikit-fem triangle, quadrilateral, tetrahedron or hexahedron "
                 f"mesh, got {type(mesh).__name__}")
+        if np.unique(mesh.t).size < mesh.p.shape[1]:
+            mesh = mesh.remove_unused_nodes()
         self.mesh, self.dim = mesh, mesh.p.shape[0]
         self.young = _positive(young, "young", "Pa")
         if isinstance(poisson, bool) or not isinstance(poisson, numbers.Real) or not (
@@ -141,10 +144,7 @@ class ElasticModel:
         self._component = np.empty(self.basis.N, dtype=int)
         for axis, indices in enumerate(self.basis.split_indices()):
             self._component[indices] = axis
-        self._used = np.zeros(mesh.p.shape[1], dtype=bool)
-        self._used[mesh.t.ravel()] = True
         self._fixed = np.zeros(self.basis.N, dtype=bool)
-        self._fixed[self.basis.nodal_dofs[:, ~self._used].ravel()] = True  # unconnected nodes
         self._stiffness = None
         self._free_stiffness = None
 
@@ -171,7 +171,7 @@ class ElasticModel:
 
     @property
     def fixed(self) -> np.ndarray:
-        """Indices of the fixed freedoms (those of unconnected nodes included)."""
+        """Indices of the fixed freedoms."""
         return np.flatnonzero(self._fixed)
 
     def fix(self, selector, components=None) -> "ElasticModel":
@@ -207,7 +207,7 @@ class ElasticModel:
         points : array_like, shape (k, dim), optional
             Wanted locations (m) of computational nodes.
         where : selector, optional
-            Restricts the candidates (e.g. ``"top"``: nodes of that face); every used node when
+            Restricts the candidates (e.g. ``"top"``: nodes of that face); every node when
             omitted.
 
         Returns
@@ -221,10 +221,9 @@ class ElasticModel:
         InvalidInputError
             No candidate node, or two points sharing their nearest node.
         """
-        candidates = self._used.copy()
+        ids = np.arange(self.n_nodes)
         if where is not None:
-            candidates &= node_mask(where, self.mesh, "where")
-        ids = np.flatnonzero(candidates)
+            ids = np.flatnonzero(node_mask(where, self.mesh, "where"))
         if ids.size == 0:
             raise InvalidInputError(f"where={where!r} picks no node of the mesh")
         if points is None:
@@ -242,29 +241,55 @@ class ElasticModel:
                                     "refine the mesh or move the points apart")
         return NodeSelection(nodes, distances)
 
-    def solve(self, loads) -> np.ndarray:
-        """One full analysis: nodal displacements under nodal forces (factorises every call).
+    def solve(self, loads=None, *, tractions=None) -> np.ndarray:
+        """One full analysis: nodal displacements under loads (factorises at every call).
 
         Parameters
         ----------
-        loads : array_like, shape (n_nodes, dim)
+        loads : array_like, shape (n_nodes, dim), optional
             Force on every mesh node (N). Forces on fixed freedoms go straight to the supports.
+        tractions : dict, optional
+            ``{boundary name: traction}``: a uniform surface traction, shape (dim,), in Pa, on
+            the facets of each named boundary (distributed consistently over the freedoms,
+            mid-side ones included). In 2D it acts over the thickness.
 
         Returns
         -------
         ndarray, shape (n_nodes, dim)
             Displacements of the mesh nodes (m).
         """
-        forces = finite_array(loads, "loads", 2)
-        if forces.shape != (self.n_nodes, self.dim):
-            raise InvalidInputError(f"loads must have shape ({self.n_nodes}, {self.dim}), got "
-                                    f"{forces.shape}")
-        free, K = self._free_system()
+        if loads is None and not tractions:
+            raise InvalidInputError("give loads or tractions")
         vector = np.zeros(self.basis.N)
-        vector[self.basis.nodal_dofs] = forces.T
+        if loads is not None:
+            forces = finite_array(loads, "loads", 2)
+            if forces.shape != (self.n_nodes, self.dim):
+                raise InvalidInputError(f"loads must have shape ({self.n_nodes}, {self.dim}), "
+                                        f"got {forces.shape}")
+            vector[self.basis.nodal_dofs] = forces.T
+        for name, traction in (tractions or {}).items():
+            vector += self._traction_load(name, traction)
+        free, K = self._free_system()
         displacement = np.zeros(self.basis.N)
         displacement[free] = factorize(K, labels=_FreedomLabels(self, free)).solve(vector[free])
         return displacement[self.basis.nodal_dofs].T
+
+    def _traction_load(self, name, traction) -> np.ndarray:
+        """Consistent load vector (N), shape (N,), of a uniform traction on a named boundary."""
+        if not isinstance(name, str):
+            raise InvalidInputError(f"tractions keys must be boundary names, got {name!r}")
+        value = finite_array(traction, f"tractions[{name!r}]", 1)
+        if value.shape != (self.dim,):
+            raise InvalidInputError(f"tractions[{name!r}] must have shape ({self.dim},), got "
+                                    f"{value.shape}")
+        facets = skfem.FacetBasis(self.mesh, self.basis.elem,
+                                  facets=boundary_facets(self.mesh, name, "tractions"))
+
+        @skfem.LinearForm
+        def work(v, _):
+            return sum(value[axis] * v[axis] for axis in range(self.dim))
+
+        return skfem.asm(work, facets) * self.thickness
 
     def reduced_model(self, nodes, *, components=None) -> ReducedModel:
         """Flexibility of computational nodes by static condensation.
@@ -295,8 +320,8 @@ class ElasticModel:
         freedoms = self.basis.nodal_dofs[axes][:, ids].T.ravel()
         held = freedoms[self._fixed[freedoms]]
         if held.size:
-            raise InvalidInputError(f"nodes: {self._freedom_name(held[0])} is fixed (or not "
-                                    "connected) and has no flexibility")
+            raise InvalidInputError(f"nodes: {self._freedom_name(held[0])} is fixed and has no "
+                                    "flexibility")
         free, K = self._free_system()
         position = np.full(self.basis.N, -1)
         position[free] = np.arange(free.size)
@@ -340,10 +365,7 @@ class ElasticModel:
         part_of_dof = np.full(self.basis.N, -1)
         part_of_dof[self.basis.element_dofs] = part_of_node[mesh.t[0]][None, :]
         for part in range(count):
-            nodes = np.flatnonzero((part_of_node == part) & self._used)
-            if nodes.size == 0:
-                continue
-            points = mesh.p[:, nodes]
+            points = mesh.p[:, part_of_node == part]
             centre = points.mean(axis=1)
             scale = float(np.max(np.ptp(points, axis=1)))
             held = np.flatnonzero(self._fixed & (part_of_dof == part))

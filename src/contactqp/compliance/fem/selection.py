@@ -24,7 +24,7 @@ import numpy as np
 from ...errors import InvalidInputError
 from ...model import finite_array
 
-__all__ = ["Box", "node_mask", "dof_mask"]
+__all__ = ["Box", "boundary_facets", "node_mask", "dof_mask"]
 
 
 @dataclass(frozen=True, init=False)
@@ -58,7 +58,8 @@ class Box:
         return np.all(inside, axis=0)
 
 
-def _boundary_facets(mesh, name: str, argument: str) -> np.ndarray:
+def boundary_facets(mesh, name: str, argument: str) -> np.ndarray:
+    """Facet indices of the boundary ``name`` (``"boundary"``: all); errors name ``argument``."""
     if name == "boundary":
         return mesh.boundary_facets()
     if not mesh.boundaries or name not in mesh.boundaries:
@@ -99,7 +100,7 @@ def node_mask(selector, mesh, argument: str = "selector") -> np.ndarray:
         return np.logical_and.reduce([node_mask(s, mesh, argument) for s in selector])
     mask = np.zeros(mesh.p.shape[1], dtype=bool)
     if isinstance(selector, str):
-        mask[np.unique(mesh.facets[:, _boundary_facets(mesh, selector, argument)])] = True
+        mask[np.unique(mesh.facets[:, boundary_facets(mesh, selector, argument)])] = True
     elif callable(selector):
         mask = _predicate_mask(selector, mesh.p, argument)
     else:
@@ -113,7 +114,7 @@ def dof_mask(selector, basis, argument: str = "selector") -> np.ndarray:
         return np.logical_and.reduce([dof_mask(s, basis, argument) for s in selector])
     mask = np.zeros(basis.N, dtype=bool)
     if isinstance(selector, str):
-        mask[basis.get_dofs(_boundary_facets(basis.mesh, selector, argument)).all()] = True
+        mask[basis.get_dofs(boundary_facets(basis.mesh, selector, argument)).all()] = True
     elif callable(selector):
         mask = _predicate_mask(selector, basis.doflocs, argument)
     else:
