@@ -98,14 +98,16 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
         raise RigidBodyModeError("the stiffness matrix is singular: the model has rigid-body "
                                  "modes, add fixations (a pivot is exactly zero)") from None
 
-    def name(column: int) -> str:
-        return label(int(lu.perm_c[column]))
-
     if not np.array_equal(lu.perm_r, lu.perm_c):
         raise NotPositiveDefiniteError("stiffness is not positive definite: its factorisation "
                                        "needed row pivoting")
+    eliminated = np.argsort(lu.perm_c)  # perm_c[i] is the position of freedom i in the factor
+
+    def name(column: int) -> str:
+        return label(int(eliminated[column]))
+
     pivots = lu.U.diagonal()
-    ratio = pivots / diagonal[lu.perm_c]
+    ratio = pivots / diagonal[eliminated]
     weakest = int(np.argmin(ratio))
     if ratio[weakest] < -pivot_rtol:
         raise NotPositiveDefiniteError(
