@@ -237,7 +237,7 @@ def test_bar_picks_nearly_square_cells():
 
 
 @pytest.mark.parametrize("call,message", [
-    (lambda: ElasticModel(plate(1, 1, 1, 1), -1.0, NU, plane="stress"), "young must be a positive finite number"),
+    (lambda: ElasticModel(plate(1, 1, 1, 1), -1.0, NU, plane="stress"), "young must be a positive"),
     (lambda: ElasticModel(plate(1, 1, 1, 1), E, 0.5, plane="stress"), r"poisson must lie in"),
     (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU), "plane must be 'stress' or 'strain'"),
     (lambda: ElasticModel(block(1, 1, 1, 1, 1, 1), E, NU, thickness=0.1), "2D meshes only"),

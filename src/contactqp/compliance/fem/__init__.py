@@ -10,13 +10,12 @@ Units are SI throughout: metres, pascals, newtons. This package needs scikit-fem
 read files): ``pip install 'contactqp[fem]'``.
 """
 
+from importlib.util import find_spec
+
 from ...errors import MissingDependencyError
 
-try:
-    import skfem  # noqa: F401  (checked here so that every module of the package may use it)
-except ImportError:
-    raise MissingDependencyError(
-        "finite elements need scikit-fem: pip install 'contactqp[fem]'") from None
+if find_spec("skfem") is None:  # checked once here: every module of the package imports it
+    raise MissingDependencyError("finite elements need scikit-fem: pip install 'contactqp[fem]'")
 
 from .elastic import ElasticModel, NodeSelection, elastic_compliance
 from .meshes import bar, block, plate, read_mesh

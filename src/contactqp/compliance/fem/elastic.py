@@ -269,7 +269,7 @@ class ElasticModel:
             vector[self.basis.nodal_dofs] = forces.T
         for name, traction in (tractions or {}).items():
             vector += self._traction_load(name, traction)
-        free, K = self._free_system()
+        free, K = self.free_stiffness()
         displacement = np.zeros(self.basis.N)
         displacement[free] = factorize(K, labels=_FreedomLabels(self, free)).solve(vector[free])
         return displacement[self.basis.nodal_dofs].T
@@ -322,7 +322,7 @@ class ElasticModel:
         if held.size:
             raise InvalidInputError(f"nodes: {self._freedom_name(held[0])} is fixed and has no "
                                     "flexibility")
-        free, K = self._free_system()
+        free, K = self.free_stiffness()
         position = np.full(self.basis.N, -1)
         position[free] = np.arange(free.size)
         R = condense(K, position[freedoms], labels=_FreedomLabels(self, free))
@@ -345,8 +345,21 @@ class ElasticModel:
         owner = f"node {node[0] % self.n_nodes}" if node.size else "mid-side point"
         return f"u_{_AXES[self._component[freedom]]} of {owner} at ({where})"
 
-    def _free_system(self) -> tuple[np.ndarray, sp.csc_matrix]:
-        """Free freedoms and their stiffness, after checking that every body is held."""
+    def free_stiffness(self) -> tuple[np.ndarray, sp.csc_matrix]:
+        """The stiffness with the fixations applied, after checking that every body is held.
+
+        Returns
+        -------
+        free : ndarray of int, shape (m,)
+            Indices of the free freedoms among all ``N`` (nodal ones are ``basis.nodal_dofs``).
+        stiffness : scipy.sparse.csc_matrix, shape (m, m)
+            Their stiffness (N/m), as :func:`~contactqp.compliance.condensation.condense` takes.
+
+        Raises
+        ------
+        RigidBodyModeError
+            A connected part of the mesh is not held; the message names its free motions.
+        """
         if self._free_stiffness is None:
             self._check_held()
             free = np.flatnonzero(~self._fixed)

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import skfem
 
-from ...errors import FileFormatError, InvalidInputError, UnsupportedProblemError
+from ...errors import (FileFormatError, InvalidInputError, MissingDependencyError,
+                       UnsupportedProblemError)
 
 __all__ = ["plate", "block", "bar", "read_mesh", "SUPPORTED_MESHES"]
 
@@ -147,8 +148,12 @@ def read_mesh(source):
     UnsupportedProblemError
         A mesh of lines only, or of cells the elastic models do not support.
     """
-    import meshio
-    from skfem.io.meshio import from_meshio
+    try:
+        import meshio
+        from skfem.io.meshio import from_meshio
+    except ImportError:
+        raise MissingDependencyError("reading meshes needs meshio: pip install "
+                                     "'contactqp[fem]'") from None
 
     if not isinstance(source, meshio.Mesh):
         path = Path(source)
