@@ -75,12 +75,12 @@ def free_rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.nd
     dim = points.shape[0]
     n_modes = 3 if dim == 2 else 6
     T = rigid_motions(points, components, centre, scale)
+    square = np.zeros((n_modes, n_modes))  # T's triangular factor: same singular values
     if T.shape[0]:
-        _, sigma, vt = np.linalg.svd(T, full_matrices=True)
-        rank = int(np.sum(sigma > _RANK_RTOL * max(1.0, sigma[0])))
-        null = vt[rank:]
-    else:
-        null = np.eye(n_modes)
+        triangle = np.linalg.qr(T, mode="r")
+        square[:triangle.shape[0]] = triangle
+    _, sigma, vt = np.linalg.svd(square)
+    null = vt[sigma <= _RANK_RTOL * max(1.0, sigma[0])]
     names = []
     inside = np.linalg.norm(null, axis=0) > 1 - 1e-6  # canonical motions lying in the null space
     for mode in np.flatnonzero(inside):
