@@ -188,7 +188,8 @@ def test_mohr_coulomb_cohesion_raises_the_slip_threshold_and_carries_tension():
     held = cq.FrictionalProblem(model, [0.0, 1.0], [floor(2)], mu=mu, cohesion=c).solve()
     np.testing.assert_allclose([held.forces[0, 0], held.gaps[0]], [-1.0, 0.0], atol=1e-10)
     assert held.status_labels == ["stick"]
-    pulled = cq.FrictionalProblem(model, [0.0, 2.0], [floor(2)], mu=mu, cohesion=c).solve()
+    with pytest.warns(cq.ContactWarning, match="no tension cut-off"):
+        pulled = cq.FrictionalProblem(model, [0.0, 2.0], [floor(2)], mu=mu, cohesion=c).solve()
     np.testing.assert_allclose(pulled.forces[0], [-c / mu, 0.0], atol=1e-10)
     np.testing.assert_allclose(pulled.gaps[0], (2.0 - c / mu) / kn, rtol=1e-10)
     assert pulled.success and pulled.status_labels == ["open"]
@@ -317,3 +318,10 @@ def test_bad_models_and_solvers_are_clear_errors():
         coupled_problem(0).solve(solver="magic")
     with pytest.raises(cq.InvalidInputError, match="previous"):
         coupled_problem(0).solve(previous="rest")
+
+
+def test_cohesion_on_a_gapped_contact_is_refused():
+    model = cq.ReducedModel(flexibility=np.eye(2) * 1e-3, dofs_per_node=2)
+    with pytest.raises(cq.InvalidInputError, match="contact 0 has cohesion 10 N and initial gap"):
+        cq.FrictionalProblem(model, [0.0, 0.0], [cq.GapObstacle([0], [1e-3], [1.0, 0.0])],
+                             mu=0.5, cohesion=10.0)

@@ -30,12 +30,13 @@ is the frictionless ``A R A^T`` and ``q_N = -b``.
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 import scipy.sparse
 
 from .contact import Constraints, LocalFrames, assemble_constraints, local_frames
-from .errors import InvalidInputError
+from .errors import ContactWarning, InvalidInputError
 from .friction import FrictionLaw
 from .local import LocalProblem
 from .model import ReducedModel
@@ -239,7 +240,10 @@ class FrictionalProblem:
         Friction coefficient per contact, >= 0.
     cohesion : float or array_like, shape (k,)
         Mohr-Coulomb cohesion per contact (N), >= 0, where ``mu > 0``: ``||r_T|| <= mu r_N + c``
-        and tension up to ``c / mu`` (the cone's apex; see :mod:`contactqp.friction`).
+        and tension up to ``c / mu`` (the cone's apex; see :mod:`contactqp.friction`): a bonded
+        interface, so a cohesive contact must start closed (gap <= 0). One pulled open keeps
+        pulling with ``c / mu`` (no tension cut-off): the result then carries a
+        :class:`~contactqp.errors.ContactWarning` and says so in its message.
     facets : int, optional
         Replace each friction disc by the inscribed polygon of ``facets`` sides (>= 3), the
         method's linearised cone (3-D; in 2-D the cone is already linear).
@@ -264,6 +268,12 @@ class FrictionalProblem:
                 "friction needs contact nodes with 2 or 3 freedoms: a node with one freedom has "
                 "no tangent")
         self.law = FrictionLaw(mu, cohesion, facets, n_contacts=self.n_contacts)
+        gapped = np.flatnonzero((self.law.cohesion > 0) & (self.constraints.gaps > 0))
+        if gapped.size:
+            raise InvalidInputError(
+                f"cohesion models a bonded interface, which starts closed: contact {gapped[0]} "
+                f"has cohesion {self.law.cohesion[gapped[0]]:g} N and initial gap "
+                f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)")
         self.certificate_tol = float(certificate_tol)
         self._local = None
 
@@ -361,9 +371,17 @@ class FrictionalProblem:
         HU = (local.operator @ U).reshape(k, d)
         slip = HU[:, 1:] - tangential
         force, length = scales(self.model, self.loads, U, r, self.constraints.gaps)
+        gaps = self.constraints.gaps + HU[:, 0]
+        pulling = np.flatnonzero((self.law.cohesion > 0) & (gaps > self.certificate_tol * length))
+        if pulling.size:
+            note = (f"{pulling.size} cohesive contact(s) pulled open (first: contact "
+                    f"{pulling[0]}) still pull with their tensile strength c/mu: the model has no "
+                    f"tension cut-off, results past the opening are not physical")
+            warnings.warn(note, ContactWarning, stacklevel=3)
+            message = f"{message}; {note}"
         nodal = local.operator.T @ r
         return FrictionalResult(
-            x=U, forces=R, nodal_forces=nodal, gaps=self.constraints.gaps + HU[:, 0], slip=slip,
+            x=U, forces=R, nodal_forces=nodal, gaps=gaps, slip=slip,
             tangential_displacements=HU[:, 1:],
             contact_status=self.law.status(R, slip, CLOSED_RTOL * force,
                                            self.certificate_tol * length),
