@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from contactqp.compliance.condensation import RigidBodyModeError, condense, factorize
+from contactqp.compliance.condensation import (RigidBodyModeError, _by_schur_complement,
+                                               _by_solves, _schur_pays, condense, factorize)
 from contactqp.compliance.fem import ElasticModel, block, plate
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.model import unit_load_compliance
@@ -134,3 +135,19 @@ def test_the_singular_freedom_is_named():
     K = sp.block_diag([bar_stiffness(3, k=1e6), floating])
     with pytest.raises(RigidBodyModeError, match=r"at pair [ab]\)"):
         condense(K, [0], labels=["chain 0", "chain 1", "chain 2", "pair a", "pair b"])
+
+
+def test_both_routes_give_the_closed_form_and_the_cheaper_one_is_taken():
+    """Solves with the factor (few freedoms) and the Schur complement (many) agree.
+
+    On a chain of springs, ``K^-1`` is ``min(i, j) + 1`` over ``k``; one chosen freedom is cheaper
+    by a solve, all of them by the trailing block of a second factorisation.
+    """
+    k, n = 3.0, 200
+    K = sp.csc_matrix(bar_stiffness(n, k))
+    lu = factorize(K)
+    chosen = np.array([150, 3, 77, 199, 0])
+    expected = (np.minimum.outer(chosen, chosen) + 1) / k
+    np.testing.assert_allclose(_by_solves(lu, chosen), expected, rtol=1e-12)
+    np.testing.assert_allclose(_by_schur_complement(K, lu, chosen), expected, rtol=1e-12)
+    assert not _schur_pays(lu, 1) and _schur_pays(lu, n)

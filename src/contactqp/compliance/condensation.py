@@ -6,6 +6,17 @@ right-hand sides as chosen freedoms give the columns ``K^-1 e_j``; their rows at
 freedoms are the flexibility ``R``. This is the unit-load procedure done with one factorisation
 instead of one finite-element analysis per unit load.
 
+When the ``k`` solves would cost more than a second factorisation (many chosen freedoms), ``K`` is
+factorised again with the chosen freedoms eliminated last (the fill-reducing order of the first
+factorisation otherwise kept). The trailing ``k x k`` block of that factorisation is the Schur
+complement, the condensed stiffness
+
+.. math::
+
+    S = K_{cc} - K_{cr} K_{rr}^{-1} K_{rc} = L_{cc} U_{cc}, \\qquad R = S^{-1},
+
+and no solve with the sparse factor is needed.
+
 A pivot ``d_j`` of the factorisation is the stiffness of freedom ``j`` when the freedoms eliminated
 after it are clamped. It is positive for a positive definite ``K``; it vanishes (up to round-off,
 measured as ``d_j / K_jj`` so that the units of each freedom do not matter) when the model can
@@ -15,6 +26,7 @@ move without deforming.
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -151,7 +163,42 @@ def condense(stiffness, freedoms, *, labels=None,
     K = _checked_stiffness(stiffness)
     idx = _checked_freedoms(freedoms, K.shape[0])
     lu = factorize(K, labels=labels, pivot_rtol=pivot_rtol)
-    unit_loads = np.zeros((K.shape[0], idx.size))
-    unit_loads[idx, np.arange(idx.size)] = 1.0
-    R = lu.solve(unit_loads)[idx]
+    R = _by_schur_complement(K, lu, idx) if _schur_pays(lu, idx.size) else None
+    if R is None:
+        R = _by_solves(lu, idx)
     return 0.5 * (R + R.T)
+
+
+def _schur_pays(lu, k: int) -> bool:
+    """Whether ``k`` solves (``2 nnz(L + U)`` flops each) cost more than one factorisation.
+
+    A factorisation costs ``2 sum c_j^2`` flops (``c_j``: off-diagonal entries of column ``j`` of
+    ``L``) plus its copies and symbolic work, counted as ten passes over the factor.
+    """
+    nnz = float(lu.L.nnz + lu.U.nnz)
+    off_diagonal = np.diff(lu.L.indptr).astype(float) - 1.0
+    return 2.0 * nnz * k > 2.0 * np.sum(off_diagonal**2) + 10.0 * nnz
+
+
+def _by_solves(lu, idx: np.ndarray) -> np.ndarray:
+    """Rows ``idx`` of ``K^-1 e_j`` for each chosen freedom ``j``: one multi-column solve."""
+    unit_loads = np.zeros((lu.shape[0], idx.size))
+    unit_loads[idx, np.arange(idx.size)] = 1.0
+    return lu.solve(unit_loads)[idx]
+
+
+def _by_schur_complement(K: sp.csc_matrix, lu, idx: np.ndarray) -> np.ndarray | None:
+    """``S^-1`` from a factorisation with the chosen freedoms last; None if SuperLU reorders."""
+    n, k = K.shape[0], idx.size
+    elimination = np.argsort(lu.perm_c)
+    chosen = np.zeros(n, dtype=bool)
+    chosen[idx] = True
+    order = np.concatenate([elimination[~chosen[elimination]], idx])
+    last = spla.splu(K[order][:, order].tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                     options={"SymmetricMode": True})
+    if not (np.array_equal(last.perm_c[n - k:], np.arange(n - k, n))
+            and np.array_equal(last.perm_r, last.perm_c)):
+        return None  # the chosen freedoms were not eliminated last
+    S = (last.L[n - k:, n - k:] @ last.U[n - k:, n - k:]).toarray()
+    factor = scipy.linalg.cho_factor(0.5 * (S + S.T), lower=True, check_finite=False)
+    return scipy.linalg.cho_solve(factor, np.eye(k), check_finite=False)
