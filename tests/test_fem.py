@@ -264,3 +264,20 @@ def test_bar_picks_nearly_square_cells():
 def test_bad_input_names_the_argument(call, message):
     with pytest.raises(InvalidInputError, match=message):
         call()
+
+
+def test_second_order_cells_are_taken_with_straight_edges(tmp_path):
+    """10-node tetrahedra read from a file: the same answers as the 4-node mesh with order=2."""
+    linear = block(1.0, 0.4, 0.4, 4, 2, 2, cell="tet")
+    quadratic = skfem.MeshTet2.from_mesh(linear)  # mid-side nodes added
+    path = tmp_path / "tet10.msh"
+    quadratic.save(path, file_format="gmsh")
+    read = read_mesh(path)
+    assert isinstance(read, skfem.MeshTet2)
+    models = [ElasticModel(m, E, NU, order=2).fix(Box((0, 0, 0), (0, 0.4, 0.4)))
+              for m in (linear, read)]
+    assert models[1].n_nodes == linear.p.shape[1]
+    tip = [models[0].select_nodes([[1.0, 0.4, 0.4]]).nodes, models[1].select_nodes(
+        [[1.0, 0.4, 0.4]]).nodes]
+    np.testing.assert_allclose(models[1].reduced_model(tip[1]).flexibility,
+                               models[0].reduced_model(tip[0]).flexibility, rtol=1e-10)

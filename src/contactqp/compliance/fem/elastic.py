@@ -33,7 +33,7 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 from ...errors import InvalidInputError, UnsupportedProblemError
 from ...model import ReducedModel, finite_array
 from ..condensation import RigidBodyModeError, condense, factorize
-from .meshes import SUPPORTED_MESHES
+from .meshes import SUPPORTED_MESHES, straight_sided
 from .rigid import free_rigid_motions
 from .selection import boundary_facets, dof_mask, node_mask
 
@@ -106,8 +106,10 @@ class ElasticModel:
     Notes
     -----
     Freedoms are the displacement components at the mesh's vertices ("nodes") and, for
-    ``order=2``, at edge (and face) mid-points. Nodes used by no cell (points of a CAD geometry
-    left in a mesh file) are removed: ``model.mesh`` is then the renumbered mesh.
+    ``order=2``, at edge (and face) mid-points. A mesh of second-order cells (6-node triangles,
+    10-node tetrahedra, ...) is taken with straight edges, its vertices only: ask ``order=2`` for
+    quadratic elements. Nodes used by no cell (points of a CAD geometry left in a mesh file) are
+    removed. ``model.mesh`` is the mesh as used, to which node indices refer.
     """
 
     def __init__(self, mesh, young, poisson, *, plane: str | None = None, thickness=None,
@@ -118,6 +120,7 @@ class ElasticModel:
             raise UnsupportedProblemError(
                 f"mesh must be a scikit-fem triangle, quadrilateral, tetrahedron or hexahedron "
                 f"mesh, got {type(mesh).__name__}")
+        mesh = straight_sided(mesh, cell)
         if np.unique(mesh.t).size < mesh.p.shape[1]:
             mesh = mesh.remove_unused_nodes()
         self.mesh, self.dim = mesh, mesh.p.shape[0]

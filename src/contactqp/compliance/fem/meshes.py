@@ -16,7 +16,7 @@ import skfem
 from ...errors import (FileFormatError, InvalidInputError, MissingDependencyError,
                        UnsupportedProblemError)
 
-__all__ = ["plate", "block", "bar", "read_mesh", "SUPPORTED_MESHES"]
+__all__ = ["plate", "block", "bar", "read_mesh", "straight_sided", "SUPPORTED_MESHES"]
 
 #: Mesh types of scikit-fem that the elastic models accept, by cell name.
 SUPPORTED_MESHES = {"tri": skfem.MeshTri, "quad": skfem.MeshQuad, "tet": skfem.MeshTet,
@@ -123,6 +123,30 @@ def bar(length, height, width=None, *, across: int = 2, cell: str | None = None)
         return plate(length, height, along, across, cell=cell or "quad")
     return block(length, width, height, along, max(1, round(_length(width, "width") / size)),
                  across, cell=cell or "hex")
+
+
+def straight_sided(mesh, cell: str):
+    """The mesh with first-order geometry: second-order cells lose their mid-side nodes.
+
+    Parameters
+    ----------
+    mesh : skfem.Mesh
+        A mesh of the type ``SUPPORTED_MESHES[cell]`` or of its second-order subtype
+        (``MeshTri2``, ``MeshTet2``, ... read from 6-node triangles, 10-node tetrahedra, ...).
+    cell : str
+        A key of :data:`SUPPORTED_MESHES`.
+
+    Returns
+    -------
+    skfem.Mesh
+        ``mesh`` itself when it is first order; otherwise the mesh of its vertices and cells, with
+        its named boundaries and subdomains (edges become straight).
+    """
+    linear = SUPPORTED_MESHES[cell]
+    if type(mesh) is linear:
+        return mesh
+    return linear(mesh.p[:, :mesh.nvertices], mesh.t, _boundaries=mesh._boundaries,
+                  _subdomains=mesh._subdomains)
 
 
 def read_mesh(source):
