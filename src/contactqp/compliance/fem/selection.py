@@ -27,9 +27,12 @@ from ...model import finite_array
 __all__ = ["Box", "boundary_facets", "node_mask", "dof_mask"]
 
 
-@dataclass(frozen=True, init=False)
+@dataclass(frozen=True, init=False, eq=False)
 class Box:
-    """The closed axis-aligned box ``lower <= x <= upper`` (m), widened by round-off.
+    """The closed axis-aligned box ``lower <= x <= upper`` (m).
+
+    The box is widened by ``1e-9`` times its largest corner coordinate (at least ``1e-9`` m) so
+    that nodes computed with round-off on its faces belong to it.
 
     Parameters
     ----------
