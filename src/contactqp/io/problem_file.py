@@ -1,12 +1,13 @@
-"""Problem files: a frictionless contact problem described in TOML, and its results written out.
+"""Problem files: a contact problem described in TOML, and its results written out.
 
 This is what ``contactqp solve PROBLEM.toml`` reads (:func:`load_problem_file`) and writes
-(:func:`write_results`).
+(:func:`write_results`): a frictionless problem, a problem with friction, or a problem with
+friction along a load history.
 
 The schema
 ----------
-A problem file has five top-level entries, ``name``, ``[model]``, ``[loads]``, ``[[obstacle]]``
-and ``[solver]``; nothing else is accepted. Every table rejects keys it does not know, so that a
+A problem file has seven top-level entries, ``name``, ``[model]``, ``[loads]``,
+``[[obstacle]]``, ``[friction]``, ``[loading]`` and ``[solver]``; nothing else is accepted. Every table rejects keys it does not know, so that a
 typo (``flexibilty``, ``gap``, ``max_iters``) is an error and never a silently ignored setting.
 Units are SI (metres, newtons): the file stores numbers, the physics decides their units, and the
 results come back in the same units. Node and freedom indices count from 0; freedoms are ordered
@@ -42,7 +43,8 @@ A vector may be stored as one row or one column. Inline arrays and files must ho
 ``coordinates``    Array, shape (n_nodes, d), metres. Needed by ``plane`` obstacles.
 =================  ===========================================================================
 
-**[loads]** (required): the external forces ``P`` (N), by exactly one of
+**[loads]** (required, unless ``[loading].points`` gives the loads): the external forces ``P``
+(N), by exactly one of
 
 * ``values``: array of ``n`` numbers, one per freedom;
 * ``entries``: an array of inline tables, the unlisted freedoms being unloaded. Each entry has a
@@ -64,7 +66,55 @@ A vector may be stored as one row or one column. Inline arrays and files must ho
 A :class:`~contactqp.ProfileObstacle` cannot be written in a file, because its profile is a
 Python function: tabulate the gaps and use ``type = "gaps"``, or build the problem in Python.
 
-**[solver]** (optional): how to solve it.
+The *contacts* are the rows of all obstacles: the ``[[obstacle]]`` tables in file order, each
+one's nodes (or pairs) in order; they are numbered from 0 in results.
+
+**[friction]** (optional): Coulomb (Mohr-Coulomb) friction at every contact, solved by
+:class:`~contactqp.FrictionalProblem` from rest. Without this table the problem is frictionless.
+Friction needs contact nodes with 2 freedoms (2-D) or 3 (3-D), the same number at every contact.
+
+=============  ===========================================================================
+``mu``         Friction coefficient, >= 0 (required): a number, or one per contact (array or
+               file, in contact order).
+``cohesion``   Cohesion ``c`` (N), >= 0, a number or one per contact (default 0): the friction
+               set is ``|r_T| <= mu r_N + c``, and a contact with ``c > 0`` needs ``mu > 0``.
+``facets``     Integer >= 3: each friction disc becomes the inscribed regular polygon of that
+               many sides, the method's linear cone (in 2-D the cone is linear already).
+``solver``     ``"coulomb"`` (default: exact cone, semismooth Newton), ``"tresca"`` (exact
+               cone, Tresca fixed point) or ``"polygonal"`` (the default, and the only
+               choice, when ``facets`` is given).
+``tol``        Solver tolerance (default 1e-10): natural-map error, or the fixed-point change
+               of ``"polygonal"``.
+other keys     Keyword options of the chosen route, checked against its signature:
+               ``max_iter`` for every route, ``backend`` for ``"polygonal"``.
+[friction.backend_options]
+               ``"polygonal"`` only: settings for its qpsolvers backend, as in ``[solver]``.
+=============  ===========================================================================
+
+Local frames: a contact's normal is its obstacle's direction (towards the obstacle, or from the
+first node of a pair towards the second); the tangent is the normal turned by +90 degrees in 2-D
+(``(n_x, n_y) -> (-n_y, n_x)``), the two tangents of :func:`~contactqp.contact.tangent_basis`
+in 3-D. Tangential forces (on the body, or on the first node of a pair) and slips are given
+along these tangents. With ``[friction]``, ``[solver]`` holds ``certificate_tol`` only: a
+``[solver].name`` (a frictionless solver) is an error, the route is ``[friction].solver``.
+
+**[loading]** (optional, needs ``[friction]``): a load history, solved by
+:func:`~contactqp.loading.solve_history` from rest, step by step, the friction state carried
+over. Its turning points are given by exactly one of
+
+=============  ===========================================================================
+``factors``    Multiples of ``[loads]``, e.g. ``[0, 1, -1, 1]`` (array or file, >= 1 number).
+``points``     Full load vectors (N), replacing ``[loads]`` (give one or the other): an array
+               of rows of ``n`` numbers, a file holding such a matrix, or an array whose
+               entries are vectors or file references (one turning point each).
+``steps``      Equal increments from each turning point to the next (integer >= 1, default 1).
+=============  ===========================================================================
+
+Step 0 is the first turning point, then ``steps`` increments lead to each next one:
+``1 + steps (j - 1)`` steps for ``j`` turning points, numbered from 0 in the results.
+
+**[solver]** (optional): how to solve a frictionless problem (with ``[friction]``: only
+``certificate_tol``).
 
 =====================  ======================================================================
 ``name``               A name from :data:`contactqp.SOLVERS`: ``"active-set"`` (default) or
@@ -124,6 +174,50 @@ A plate held by two 2-freedom nodes, pressed on a rigid floor and on a second pa
     [solver.backend_options]
     max_iter = 200
 
+The same plate with friction (no ``[solver].name`` then), its loads cycled twice::
+
+    [friction]
+    mu = [0.3, 0.3, 0.2, 0.5]                # one per contact: nodes 0, 1 (plane), 2, pair 0-2
+    cohesion = 0.0                           # N
+    solver = "coulomb"                       # or facets = 8 (polygonal)
+    tol = 1e-10
+
+    [loading]
+    factors = [0.0, 1.0, -1.0, 1.0, -1.0]    # times [loads]; or points = [[...], ...]
+    steps = 10                               # 41 steps: 0, 0.1, ..., 1, 0.8, ..., -1, ...
+
+Results
+-------
+:func:`write_results` writes, into one directory, floats in their shortest exact form
+(:func:`repr`, so they read back exactly):
+
+* ``displacements.csv``: ``node, freedom, u``, one row per freedom: the global freedom index
+  and its displacement (m).
+* ``contacts.csv``, one row per contact. Frictionless: ``row, node, label, gap0, gap, force,
+  status``: initial and final gap (m), contact force (N), ``closed`` or ``open``. With friction:
+  ``row, node, label, gap0, gap, normal_force, tangential_force, slip, tangential_displacement,
+  dissipated, status`` (in 3-D each tangential column twice, suffixed ``_1`` and ``_2``): gaps
+  (m), compressive normal force (N), tangential force on the body along the tangent(s) (N),
+  slip of the step along the tangent(s) (m), total tangential displacement (m), energy
+  dissipated by friction in the step (J), ``open``, ``stick`` or ``slip``.
+* ``result.npz``: frictionless, ``x`` (m), ``forces`` (N), ``nodal_forces`` (N), ``gaps`` (m),
+  ``closed`` (bool), as in :class:`~contactqp.ContactResult`. With friction, the fields of
+  :class:`~contactqp.result.FrictionalResult`: ``x`` (m, shape (n,)), ``forces`` (N, (k, d),
+  normal first), ``nodal_forces`` (N, (n,)), ``gaps`` (m, (k,)), ``slip`` and
+  ``tangential_displacements`` (m, (k, d - 1)), ``contact_status`` (int, (k,): 0 open,
+  1 stick, 2 slip), ``dissipation`` (J, (k,)), with the frames ``normals`` ((k, d)) and
+  ``tangents`` ((k, d - 1, d)).
+* ``summary.json``: ``name``, ``problem`` (absolute path of the problem file), ``solver``,
+  ``options``, ``friction`` (with friction: ``mu`` and ``cohesion`` per contact, ``facets``)
+  and ``result`` (:meth:`ProblemSpec.summary`); NaN and inf are written as ``null``.
+
+For a load history, ``displacements.csv`` and ``contacts.csv`` start with a ``step`` column
+and hold every step; the arrays of ``result.npz`` gain a leading step axis (K, ...) and it adds
+``loads`` (N, (K, n)), ``success`` (bool, (K,)) and, for ``factors``, ``factors`` ((K,));
+``steps.csv`` (written last) has one row per step: ``step, factor, open, stick, slip,
+dissipated, cumulative_dissipated, iterations, certificate_worst, success`` (``factor`` empty
+for ``points``; energies in J).
+
 Errors
 ------
 Every problem with a file raises :class:`~contactqp.errors.InvalidInputError`, or its subclass
@@ -151,11 +245,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contact import GapObstacle, NodePairs, PlaneObstacle
+from ..contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
+from ..friction import STATUS_LABELS, FrictionLaw
+from ..loading import HistoryResult, linear_path, solve_history
 from ..model import ReducedModel
-from ..problem import ContactProblem
-from ..result import CERTIFICATE_TOL, ContactResult
+from ..problem import ContactProblem, FrictionalProblem, _friction_route
+from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
 
 __all__ = [
@@ -166,6 +262,7 @@ __all__ = [
     "ARRAY_FORMATS",
     "OBSTACLE_TYPES",
     "RESULT_FILES",
+    "HISTORY_FILES",
 ]
 
 #: Array file formats and the file name endings that select them.
@@ -183,7 +280,12 @@ OBSTACLE_TYPES = ("gaps", "plane", "pairs")
 #: The files :func:`write_results` writes, in order.
 RESULT_FILES = ("displacements.csv", "contacts.csv", "result.npz", "summary.json")
 
-_TOP_KEYS = ("name", "model", "loads", "obstacle", "solver")
+#: The files :func:`write_results` writes for a load history, in order.
+HISTORY_FILES = RESULT_FILES + ("steps.csv",)
+
+_TOP_KEYS = ("name", "model", "loads", "obstacle", "friction", "loading", "solver")
+_FRICTION_LAW_KEYS = ("mu", "cohesion", "facets")
+_LOADING_KEYS = ("factors", "points", "steps")
 _MODEL_KEYS = ("flexibility", "stiffness", "dofs_per_node", "coordinates")
 _LOADS_KEYS = ("values", "entries")
 _FILE_REF_KEYS = ("file", "key", "format")
@@ -761,43 +863,171 @@ def _option(where: _Where, name: str, value, default, key: str):
     return value
 
 
-def _solver(where: _Where, doc: dict) -> tuple[str, dict, float]:
-    table = _table(where, doc.get("solver", {}), "[solver]")
-    name = table.get("name", "active-set")
-    if name not in SOLVERS:
-        expected = ", ".join(SOLVERS)
-        raise where.error("[solver].name", f"unknown solver {name!r} (expected one of {expected})")
-    named, extra = _solver_parameters(SOLVERS[name])
-    allowed = {"name", "certificate_tol", *named}
+def _route_options(where: _Where, table: dict, section: str, route: str, named: dict,
+                   extra: bool, reserved) -> dict:
+    """The solver options in ``table`` (its keys beyond ``reserved``), checked against ``named``
+    (name: default); ``[section.backend_options]`` when the solver passes extra ones on."""
+    allowed = {*reserved, *named}
     if extra:
         allowed.add("backend_options")
     for key in table:
         if key not in allowed:
             hint = _close_match(key, allowed)
             if extra:
-                hint += "; backend settings go in [solver.backend_options]"
+                hint += f"; backend settings go in [{section[1:-1]}.backend_options]"
             raise where.error(
-                f"[solver].{key}",
-                f"not an option of solver '{name}' (allowed: {', '.join(sorted(allowed))}){hint}",
+                f"{section}.{key}",
+                f"not an option of {route} (allowed: {', '.join(sorted(allowed))}){hint}",
             )
-    certificate_tol = _option(where, "certificate_tol", table.get("certificate_tol",
-                                                                  CERTIFICATE_TOL),
-                              CERTIFICATE_TOL, "[solver].certificate_tol")
-    options = {key: _option(where, key, table[key], named[key], f"[solver].{key}")
+    options = {key: _option(where, key, table[key], named[key], f"{section}.{key}")
                for key in table if key in named}
     if "backend_options" in table:
-        backend = _table(where, table["backend_options"], "[solver.backend_options]")
+        sub = f"[{section[1:-1]}.backend_options]"
+        backend = _table(where, table["backend_options"], sub)
         for key, value in backend.items():
             if isinstance(value, (dict, list)) or (isinstance(value, float)
                                                    and not math.isfinite(value)):
-                raise where.error(f"[solver.backend_options].{key}",
+                raise where.error(f"{sub}.{key}",
                                   f"must be a finite number, a string or a boolean, got "
                                   f"{_describe(value)}")
             if key in named or key in options:
-                raise where.error(f"[solver.backend_options].{key}",
-                                  f"is an option of solver '{name}': set it in [solver]")
+                raise where.error(f"{sub}.{key}", f"is an option of {route}: set it in {section}")
             options[key] = value
+    return options
+
+
+def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, float]:
+    table = _table(where, doc.get("solver", {}), "[solver]")
+    certificate_tol = _option(where, "certificate_tol", table.get("certificate_tol",
+                                                                  CERTIFICATE_TOL),
+                              CERTIFICATE_TOL, "[solver].certificate_tol")
+    if frictional:
+        if "name" in table:
+            raise where.error(
+                "[solver].name",
+                f"solver {table['name']!r} is frictionless but [friction] is given: remove "
+                "[solver].name and choose the route with [friction].solver (coulomb, tresca "
+                "or polygonal)")
+        for key in table:
+            if key != "certificate_tol":
+                raise where.error(f"[solver].{key}", "with [friction], [solver] holds only "
+                                  "certificate_tol; solver options go in [friction]")
+        return "", {}, certificate_tol
+    name = table.get("name", "active-set")
+    if name not in SOLVERS:
+        expected = ", ".join(SOLVERS)
+        raise where.error("[solver].name", f"unknown solver {name!r} (expected one of {expected})")
+    named, extra = _solver_parameters(SOLVERS[name])
+    options = _route_options(where, table, "[solver]", f"solver '{name}'", named, extra,
+                             ("name", "certificate_tol"))
     return name, options, certificate_tol
+
+
+def _per_contact(where: _Where, value, key: str):
+    """A number, or an array or file of numbers (one per contact)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return _array(where, value, key, 1)
+
+
+def _one_freedom_contacts(where: _Where, model: ReducedModel, obstacles) -> None:
+    """Raise when a contact node has one freedom (no tangent, so no friction)."""
+    for number, obstacle in enumerate(obstacles, 1):
+        for row in obstacle.rows(model):
+            node = row[0]
+            if model.dofs_per_node[node] == 1:
+                raise where.error(
+                    "[friction]",
+                    f"friction needs contact nodes with 2 or 3 freedoms (a tangent), but node "
+                    f"{node} of [[obstacle]] #{number} has 1 ([model].dofs_per_node)")
+
+
+def _friction(where: _Where, table, model: ReducedModel, loads: np.ndarray, obstacles,
+              certificate_tol: float) -> tuple[FrictionalProblem, str, dict]:
+    """The frictional problem of ``[friction]``, its route and the route's options."""
+    table = _table(where, table, "[friction]")
+    if "mu" not in table:
+        raise where.error("[friction]", "missing 'mu' (the friction coefficient, >= 0)")
+    _one_freedom_contacts(where, model, obstacles)
+    n_contacts = assemble_constraints(model, obstacles).n_constraints
+    given = {}
+    for name in _FRICTION_LAW_KEYS:  # each key checked by the law, in turn, to name it
+        if name in table:
+            key = f"[friction].{name}"
+            value = table[name]
+            given[name] = value if name == "facets" else _per_contact(where, value, key)
+            try:
+                law = FrictionLaw(**given, n_contacts=n_contacts)
+            except InvalidInputError as exc:
+                raise where.rewrap(key, exc) from None
+    route = table.get("solver")
+    if route is not None and not isinstance(route, str):
+        raise where.error("[friction].solver", f"must be a string, got {_describe(route)}")
+    try:
+        route, method = _friction_route(law, route)
+    except InvalidInputError as exc:
+        raise where.rewrap("[friction].solver", exc) from None
+    named, extra = _solver_parameters(method)
+    for fixed in ("r0", "facets"):  # set by FrictionalProblem.solve
+        named.pop(fixed, None)
+    named["tol"] = inspect.signature(FrictionalProblem.solve).parameters["tol"].default
+    options = _route_options(where, table, "[friction]", f"friction solver '{route}'", named,
+                             extra, ("solver", *_FRICTION_LAW_KEYS))
+    try:
+        problem = FrictionalProblem(model, loads, obstacles, law.mu, law.cohesion, law.facets,
+                                    certificate_tol=certificate_tol)
+    except InvalidInputError as exc:
+        raise where.rewrap("[friction]", exc) from None
+    return problem, route, options
+
+
+def _points(where: _Where, value, n: int) -> np.ndarray:
+    """``[loading].points``: a matrix, a file holding one, or a list of vectors and files."""
+    key = "[loading].points"
+    if isinstance(value, list) and any(_is_file_ref(item) for item in value):
+        rows = [_array(where, item, f"{key} #{number}", 1)
+                for number, item in enumerate(value, 1)]
+        for number, row in enumerate(rows, 1):
+            if row.size != n:
+                raise where.error(f"{key} #{number}", f"has {_count(row.size, 'value')}, the "
+                                                      f"model has {_count(n, 'freedom')}")
+        return np.array(rows)
+    points = _array(where, value, key, 2)
+    if points.shape[1] != n or points.shape[0] == 0:
+        raise where.error(key, f"must have rows of {n} values (one per freedom), got shape "
+                               f"{points.shape}")
+    return points
+
+
+def _loading(where: _Where, table, loads: np.ndarray | None, n: int):
+    """``(history, factors)`` of ``[loading]``: loads of each step (K, n) and, for
+    ``factors``, each step's multiple of ``loads`` (K,), else None."""
+    table = _table(where, table, "[loading]")
+    _check_keys(where, table, _LOADING_KEYS, "[loading]")
+    given = [name for name in ("factors", "points") if name in table]
+    if len(given) != 1:
+        found = "both" if given else "neither"
+        raise where.error("[loading]", f"give exactly one of factors and points ({found} given)")
+    steps = _option(where, "steps", table.get("steps", 1), 1, "[loading].steps")
+    if "factors" in table:
+        if loads is None:
+            raise where.error("[loading].factors", "are multiples of [loads], which is missing")
+        factors = _array(where, table["factors"], "[loading].factors", 1)
+        if factors.size == 0:
+            raise where.error("[loading].factors", "is empty")
+        turning = factors[:, None]
+    else:
+        if loads is not None:
+            raise where.error("[loading].points", "give the loads here or in [loads], not both "
+                                                  "(factors = [...] scales [loads])")
+        turning = _points(where, table["points"], n)
+    try:
+        path = linear_path(turning, steps)
+    except InvalidInputError as exc:
+        raise where.rewrap("[loading].steps", exc) from None
+    if "factors" in table:
+        return path * loads, path[:, 0]
+    return path, None
 
 
 # --------------------------------------------------------------------------------------------
@@ -810,32 +1040,79 @@ class ProblemSpec:
 
     Attributes
     ----------
-    problem : ContactProblem
-        The assembled problem (loads in N, lengths in m, as in the file).
+    problem : ContactProblem or FrictionalProblem
+        The assembled problem (loads in N, lengths in m, as in the file): a
+        :class:`~contactqp.FrictionalProblem` when the file has ``[friction]``.
     solver : str
-        A name from :data:`contactqp.SOLVERS`.
+        A name from :data:`contactqp.SOLVERS`, or the friction route (``"coulomb"``,
+        ``"tresca"`` or ``"polygonal"``).
     options : dict
-        Keyword options for the solver, ready for ``solve(problem, solver, **options)``.
+        Keyword options for the solver (``[solver]``'s, or ``[friction]``'s for friction).
     name : str
         The problem's name (the file's stem when the file gives none).
     path : pathlib.Path or None
         The TOML file, as given to :func:`load_problem_file`.
+    history : ndarray, shape (K, n_freedoms), optional
+        Loads of each step (N) of ``[loading]``; None for a single load.
+    factors : ndarray, shape (K,), optional
+        Each step's multiple of ``[loads]`` for ``[loading].factors``; None otherwise.
     """
 
-    problem: ContactProblem
+    problem: ContactProblem | FrictionalProblem
     solver: str = "active-set"
     options: dict = field(default_factory=dict)
     name: str = ""
     path: Path | None = None
+    history: np.ndarray | None = None
+    factors: np.ndarray | None = None
 
-    def solve(self) -> ContactResult:
-        """Solve :attr:`problem` with :attr:`solver` and :attr:`options`.
+    @property
+    def frictional(self) -> bool:
+        """True when the problem has friction."""
+        return isinstance(self.problem, FrictionalProblem)
+
+    def solve(self) -> ContactResult | FrictionalResult | HistoryResult:
+        """Solve :attr:`problem` (along :attr:`history` when given) with :attr:`solver`.
 
         Returns
         -------
-        ContactResult
+        ContactResult, FrictionalResult or HistoryResult
+            Frictionless, with friction, or one certified result per step of the history.
         """
+        if self.history is not None:
+            return solve_history(self.problem, self.history, solver=self.solver, **self.options)
+        if self.frictional:
+            return self.problem.solve(solver=self.solver, **self.options)
         return solve(self.problem, solver=self.solver, **self.options)
+
+    def step_factor(self, step: int) -> float | None:
+        """Multiple of ``[loads]`` at ``step`` of a ``factors`` history, else None."""
+        return None if self.factors is None else float(self.factors[step])
+
+    def summary(self, result) -> dict:
+        """A JSON-ready summary (no arrays) of ``result``, an answer of :meth:`solve`.
+
+        A single result gives its own ``summary()``. A history gives ``success``, ``solver``,
+        ``steps`` (count), ``failed_steps`` (indices), ``iterations``, ``seconds``,
+        ``dissipated`` (J, all steps), ``certificate_worst`` (largest residual of any step),
+        ``final`` (open, stick and slip counts of the last step) and ``records``: per step,
+        ``step``, ``factor`` (None for ``points``) and the step's ``summary()``.
+        """
+        if not isinstance(result, HistoryResult):
+            return result.summary()
+        steps = result.steps
+        last = steps[-1].summary()
+        return {
+            "success": result.success, "solver": self.solver, "steps": len(steps),
+            "failed_steps": [k for k, step in enumerate(steps) if not step.success],
+            "iterations": sum(step.nit for step in steps),
+            "seconds": sum(step.wall_time for step in steps),
+            "dissipated": float(np.sum(result.dissipated)),
+            "certificate_worst": max(step.certificate.worst for step in steps),
+            "final": {label: last[label] for label in STATUS_LABELS},
+            "records": [{"step": k, "factor": self.step_factor(k), **step.summary()}
+                        for k, step in enumerate(steps)],
+        }
 
 
 def load_problem_file(path) -> ProblemSpec:
@@ -856,8 +1133,9 @@ def load_problem_file(path) -> ProblemSpec:
         The TOML file or a file it names is missing or unreadable, or the TOML is malformed.
     InvalidInputError
         Any content error: unknown key, wrong type or length, NaN or inf, unknown obstacle type
-        or solver. Errors of the model or problem (e.g. :class:`NotPositiveDefiniteError`) keep
-        their class. Every message is one line naming the file and the key.
+        or solver, a friction law or load history that does not fit the model. Errors of the
+        model or problem (e.g. :class:`NotPositiveDefiniteError`) keep their class. Every
+        message is one line naming the file and the key.
     """
     path = Path(path)
     where = _Where(path)
@@ -876,15 +1154,30 @@ def load_problem_file(path) -> ProblemSpec:
     name = doc.get("name", path.stem)
     if not isinstance(name, str):
         raise where.error("name", f"must be a string, got {_describe(name)}")
-    solver, options, certificate_tol = _solver(where, doc)
+    frictional = "friction" in doc
+    if "loading" in doc and not frictional:
+        raise where.error("[loading]", "a load history needs [friction] (without friction the "
+                                       "answer does not depend on the load path)")
+    solver, options, certificate_tol = _solver(where, doc, frictional)
     model = _build_model(where, doc)
-    loads = _loads(where, doc, model)
+    loading = _table(where, doc.get("loading", {}), "[loading]")
+    loads = None if "points" in loading and "loads" not in doc else _loads(where, doc, model)
     obstacles = _obstacles(where, doc, model)
-    try:
-        problem = ContactProblem(model, loads, obstacles, certificate_tol=certificate_tol)
-    except InvalidInputError as exc:
-        raise where.rewrap("problem", exc) from None
-    return ProblemSpec(problem=problem, solver=solver, options=options, name=name, path=path)
+    history = factors = None
+    if "loading" in doc:
+        history, factors = _loading(where, loading, loads, model.n_freedoms)
+        if loads is None:
+            loads = history[0]
+    if frictional:
+        problem, solver, options = _friction(where, doc["friction"], model, loads, obstacles,
+                                             certificate_tol)
+    else:
+        try:
+            problem = ContactProblem(model, loads, obstacles, certificate_tol=certificate_tol)
+        except InvalidInputError as exc:
+            raise where.rewrap("problem", exc) from None
+    return ProblemSpec(problem=problem, solver=solver, options=options, name=name, path=path,
+                       history=history, factors=factors)
 
 
 def _float_text(value) -> str:
@@ -909,87 +1202,138 @@ def _json_ready(value):
     return str(value)
 
 
-def write_results(spec: ProblemSpec, result: ContactResult, out_dir) -> list[Path]:
-    """Write a solved problem's results to a directory.
+def _write_csv(path: Path, header, rows) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(header)
+        writer.writerows(rows)
 
-    Files written (see :data:`RESULT_FILES`):
 
-    * ``displacements.csv``: columns ``node, freedom, u``, one row per freedom; ``freedom`` is
-      the global freedom index, ``u`` the displacement (m).
-    * ``contacts.csv``: columns ``row, node, label, gap0, gap, force, status``, one row per
-      constraint: initial gap and final gap (m), contact force (N), ``closed`` or ``open``.
-    * ``result.npz``: arrays ``x`` (m), ``forces`` (N), ``nodal_forces`` (N), ``gaps`` (m) and
-      ``closed`` (bool), as in :class:`~contactqp.ContactResult`.
-    * ``summary.json``: ``name``, ``problem`` (absolute path of the problem file), ``solver``,
-      ``options`` and ``result`` (:meth:`ContactResult.summary`); NaN and inf are written as
-      ``null``.
+def _expected_steps(spec: ProblemSpec, result) -> list:
+    """The results of each step of ``result``, after checking its kind and shapes."""
+    problem = spec.problem
+    if spec.history is not None:
+        kind, steps = HistoryResult, getattr(result, "steps", [])
+    else:
+        kind, steps = FrictionalResult if spec.frictional else ContactResult, [result]
+    if not isinstance(result, kind):
+        raise InvalidInputError(f"result must be a {kind.__name__} for this problem, got "
+                                f"{type(result).__name__}")
+    if spec.history is not None and len(steps) != len(spec.history):
+        raise InvalidInputError(f"result has {len(steps)} steps, the history has "
+                                f"{len(spec.history)}")
+    n, m = problem.model.n_freedoms, problem.constraints.n_constraints
+    for step in steps:
+        if np.shape(step.x) != (n,) or np.shape(step.forces)[:1] != (m,):
+            raise InvalidInputError(
+                f"result has {np.size(step.x)} displacements and {len(step.forces)} contacts; "
+                f"the problem has {n} freedoms and {m} constraints")
+    return steps
 
-    Floats are written in their shortest exact form (:func:`repr`), so they read back exactly.
+
+def _tangential_header(name: str, dim: int) -> list[str]:
+    return [name] if dim == 2 else [f"{name}_{j}" for j in range(1, dim)]
+
+
+def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
+    """Write a solved problem's results to a directory (files and columns: module docstring).
 
     Parameters
     ----------
     spec : ProblemSpec
-    result : ContactResult
-        The answer to ``spec.problem``.
+    result : ContactResult, FrictionalResult or HistoryResult
+        The answer of ``spec.solve()``.
     out_dir : str or os.PathLike
         Created, with its parents, when missing; files in it are overwritten.
 
     Returns
     -------
     list of pathlib.Path
-        The files written, in the order above.
+        The files written, in the order of :data:`RESULT_FILES` (:data:`HISTORY_FILES` for a
+        load history).
 
     Raises
     ------
     InvalidInputError
-        ``result`` does not have the shapes of ``spec.problem``.
+        ``result`` is not of the kind, or does not have the shapes, of ``spec.problem``.
     FileFormatError
         The directory or a file cannot be written.
     """
+    steps = _expected_steps(spec, result)
     problem = spec.problem
     model, constraints = problem.model, problem.constraints
-    if np.shape(result.x) != (model.n_freedoms,) or np.shape(result.forces) != (
-            constraints.n_constraints,):
-        raise InvalidInputError(
-            f"result has {np.size(result.x)} displacements and {np.size(result.forces)} forces; "
-            f"the problem has {model.n_freedoms} freedoms and {constraints.n_constraints} "
-            "constraints"
-        )
+    history = spec.history is not None
+    lead = ["step"] if history else []
     out = Path(out_dir)
-    paths = [out / name for name in RESULT_FILES]
+    paths = [out / name for name in (HISTORY_FILES if history else RESULT_FILES)]
+
+    def rows_of(make):  # rows of every step, prefixed by the step index for a history
+        return [[k] * history + row for k, step in enumerate(steps) for row in make(step)]
+
+    freedoms = [(node, int(freedom)) for node in range(model.n_nodes)
+                for freedom in model.freedoms(node)]
+    displacements = rows_of(lambda step: [[node, freedom, _float_text(step.x[freedom])]
+                                          for node, freedom in freedoms])
+    base = ["row", "node", "label", "gap0", "gap"]
+    fixed = [[row, int(constraints.nodes[row]), constraints.labels[row],
+              _float_text(constraints.gaps[row])] for row in range(constraints.n_constraints)]
+    if spec.frictional:
+        dim = problem.dim
+        header = base + ["normal_force"] + [
+            column for name in ("tangential_force", "slip", "tangential_displacement")
+            for column in _tangential_header(name, dim)] + ["dissipated", "status"]
+        contacts = rows_of(lambda step: [
+            fixed[row] + [_float_text(v) for v in (
+                step.gaps[row], *step.forces[row], *step.slip[row],
+                *step.tangential_displacements[row], step.dissipation[row])]
+            + [step.status_labels[row]] for row in range(constraints.n_constraints)])
+        fields = ("x", "forces", "nodal_forces", "gaps", "slip", "tangential_displacements",
+                  "contact_status", "dissipation")
+        arrays = {"normals": problem.frames.normals, "tangents": problem.frames.tangents}
+    else:
+        header = base + ["force", "status"]
+        contacts = rows_of(lambda step: [
+            fixed[row] + [_float_text(step.gaps[row]), _float_text(step.forces[row]),
+                          step.status_labels[row]] for row in range(constraints.n_constraints)])
+        fields = ("x", "forces", "nodal_forces", "gaps", "closed")
+        arrays = {}
+    for name in fields:
+        stacked = np.array([getattr(step, name) for step in steps])
+        arrays[name] = stacked if history else stacked[0]
+    if history:
+        arrays["loads"] = np.array([step.loads for step in steps])
+        arrays["success"] = np.array([step.success for step in steps], dtype=bool)
+        if spec.factors is not None:
+            arrays["factors"] = np.asarray(spec.factors, dtype=float)
+    summary = {
+        "name": spec.name,
+        "problem": os.path.abspath(spec.path) if spec.path is not None else None,
+        "solver": spec.solver,
+        "options": spec.options,
+        "result": spec.summary(result),
+    }
+    if spec.frictional:
+        law = problem.law
+        summary["friction"] = {"mu": law.mu, "cohesion": law.cohesion, "facets": law.facets}
     try:
         out.mkdir(parents=True, exist_ok=True)
-        with open(paths[0], "w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(["node", "freedom", "u"])
-            for node in range(model.n_nodes):
-                for freedom in model.freedoms(node):
-                    writer.writerow([node, int(freedom), _float_text(result.x[freedom])])
-        with open(paths[1], "w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(["row", "node", "label", "gap0", "gap", "force", "status"])
-            labels = result.status_labels
-            for row in range(constraints.n_constraints):
-                writer.writerow([row, int(constraints.nodes[row]), constraints.labels[row],
-                                 _float_text(constraints.gaps[row]),
-                                 _float_text(result.gaps[row]),
-                                 _float_text(result.forces[row]), labels[row]])
+        _write_csv(paths[0], lead + ["node", "freedom", "u"], displacements)
+        _write_csv(paths[1], lead + header, contacts)
         with open(paths[2], "wb") as handle:
-            np.savez(handle, x=np.asarray(result.x, dtype=float),
-                     forces=np.asarray(result.forces, dtype=float),
-                     nodal_forces=np.asarray(result.nodal_forces, dtype=float),
-                     gaps=np.asarray(result.gaps, dtype=float),
-                     closed=np.asarray(result.closed, dtype=bool))
-        summary = {
-            "name": spec.name,
-            "problem": os.path.abspath(spec.path) if spec.path is not None else None,
-            "solver": spec.solver,
-            "options": spec.options,
-            "result": result.summary(),
-        }
+            np.savez(handle, **arrays)
         with open(paths[3], "w", encoding="utf-8") as handle:
             json.dump(_json_ready(summary), handle, indent=2, allow_nan=False)
             handle.write("\n")
+        if history:
+            cumulative = np.cumsum([step.dissipated for step in steps])
+            _write_csv(paths[4], ["step", "factor", *STATUS_LABELS, "dissipated",
+                                  "cumulative_dissipated", "iterations", "certificate_worst",
+                                  "success"], [
+                [k, "" if spec.factors is None else _float_text(spec.factors[k]),
+                 *np.bincount(step.contact_status, minlength=3).tolist(),
+                 _float_text(step.dissipated), _float_text(cumulative[k]), step.nit,
+                 _float_text(step.certificate.worst), step.success]
+                for k, step in enumerate(steps)])
     except OSError as exc:
         raise FileFormatError(_one_line(f"cannot write results to '{out}': {exc}")) from None
     return paths
