@@ -1,0 +1,555 @@
+r"""Variation simulation: many gap fields on one reduced model, stored as they come, resumable.
+
+A *case* solves one sample from its initial gaps; a *source* gives the gaps of sample ``k``.
+:func:`run_batch` solves samples ``0 .. N-1`` in chunks of consecutive samples, each sample warm
+started from the previous one of its chunk, and writes each finished chunk to an HDF5 file (one
+row per sample and field, then the ``done`` flag, each flushed). Running it again on the same
+file computes only the samples not yet done, with the warm start of the interrupted chunk read
+back from the file, so the results do not depend on interruptions, on the number of workers or
+on the executor (in-process, local process pool, Dask cluster).
+
+Gaussian gap fields (:class:`GaussianGapField`) have the squared-exponential covariance
+
+.. math::
+
+    C(x, x') = \sigma^2 \exp\!\Big(-\frac{\|x - x'\|^2}{2 \ell^2}\Big)
+
+(amplitude :math:`\sigma`, correlation length :math:`\ell`); sample ``k`` is
+``mean + L z_k`` with ``L L^T = C`` and ``z_k`` standard normal drawn from
+``SeedSequence(seed, spawn_key=(k,))``: the same whoever computes it.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import FileFormatError, InvalidInputError, MissingDependencyError
+from .model import finite_array
+from .problem import ContactProblem
+from .solvers import solve
+
+__all__ = ["variant", "GapVariation", "GaussianGapField", "GapSamples", "load_gap_samples",
+           "run_batch", "BatchSummary", "load_batch", "BatchData", "GapStatistics",
+           "plot_statistics"]
+
+FORMAT = "contactqp-batch/1"
+DEFAULT_CHUNK = 50
+
+
+def variant(problem: ContactProblem, *, loads=None, gaps=None) -> ContactProblem:
+    """The same model and constraints with other loads and/or gaps, nothing assembled again.
+
+    The dual's ``W`` and influence are shared with ``problem`` (assembled on first use); only
+    ``b = A R P - Delta`` (and ``R P`` for new loads) is recomputed.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+    loads : array_like, shape (n_freedoms,), optional
+        External forces (N).
+    gaps : array_like, shape (m,), optional
+        Initial gaps of the constraints, in their order (m).
+    """
+    twin = copy.copy(problem)
+    dual = copy.copy(problem.dual())
+    if loads is not None:
+        twin.loads = finite_array(loads, "loads", 1)
+        if twin.loads.shape != problem.loads.shape:
+            raise InvalidInputError(f"loads must have shape {problem.loads.shape}, got "
+                                    f"{twin.loads.shape}")
+        dual.free_displacements = problem.model.displacements(twin.loads)
+    if gaps is not None:
+        values = finite_array(gaps, "gaps", 1)
+        if values.shape != (problem.n_constraints,):
+            raise InvalidInputError(f"gaps must have shape ({problem.n_constraints},), got "
+                                    f"{values.shape}")
+        twin.constraints = dataclasses.replace(problem.constraints, gaps=values)
+    dual.b = twin.constraints.matrix @ dual.free_displacements - twin.constraints.gaps
+    twin._dual = dual  # ContactProblem has no public way to share its dual (see the report)
+    return twin
+
+
+def _digest(*arrays) -> str:
+    sha = hashlib.sha1()
+    for array in arrays:
+        sha.update(np.ascontiguousarray(array, dtype=float).tobytes())
+    return sha.hexdigest()
+
+
+class GapVariation:
+    """A frictionless :class:`~contactqp.ContactProblem` whose initial gaps vary by sample.
+
+    Records (one row per sample in the store): ``gap`` final gaps (m), ``force`` contact forces
+    (N), ``closed`` contact status, ``success``, ``iterations``. The warm start of a sample is the
+    previous sample's ``force``.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        Its gaps are replaced by each sample's; its dual is assembled once.
+    **options
+        Passed to :func:`~contactqp.solve` (active-set solver), e.g. ``tol``.
+    """
+
+    def __init__(self, problem: ContactProblem, **options):
+        if not isinstance(problem, ContactProblem):
+            raise InvalidInputError(f"problem must be a ContactProblem, got {type(problem).__name__}")
+        self.problem = problem
+        self.options = {"tol": 1e-10, **options}
+        problem.dual()
+
+    @property
+    def n_contacts(self) -> int:
+        """Number of constraints ``m`` (the length of a gap field)."""
+        return self.problem.n_constraints
+
+    def fields(self) -> dict:
+        """``{name: (shape, dtype)}`` of one sample's record."""
+        m = (self.n_contacts,)
+        return {"gap": (m, "f8"), "force": (m, "f8"), "closed": (m, "?"), "success": ((), "?"),
+                "iterations": ((), "i8")}
+
+    @staticmethod
+    def _record(result) -> dict:
+        return {"gap": result.gaps, "force": result.forces, "closed": result.closed,
+                "success": result.success, "iterations": result.nit}
+
+    def solve_sample(self, gaps, warm):
+        """Solve one sample: ``(record, warm start of the next sample)``."""
+        result = solve(variant(self.problem, gaps=gaps), "active-set", forces0=warm,
+                       **self.options)
+        return self._record(result), result.forces
+
+    def warm_start(self, record) -> np.ndarray:
+        """The warm start a stored record gives to the next sample."""
+        return np.asarray(record["force"], dtype=float)
+
+    def describe(self) -> dict:
+        """What identifies the case in a store (a digest of ``W``, the loads, the options)."""
+        return {"type": type(self).__name__, "contacts": self.n_contacts,
+                "digest": _digest(self.problem.dual().W, self.problem.loads),
+                "options": {k: repr(v) for k, v in sorted(self.options.items())}}
+
+
+class GaussianGapField:
+    """Gaussian random gap fields with squared-exponential covariance (see the module notes).
+
+    Parameters
+    ----------
+    coordinates : array_like, shape (m, d)
+        Position of each gap (m).
+    amplitude : float
+        Standard deviation ``sigma`` (m), >= 0.
+    correlation_length : float
+        ``ell`` (m), > 0.
+    mean : float or array_like, shape (m,)
+        Nominal gap field (m).
+    seed : int
+        Root of the per-sample seed sequences.
+    """
+
+    def __init__(self, coordinates, amplitude: float, correlation_length: float, mean=0.0,
+                 seed: int = 0):
+        self.coordinates = finite_array(coordinates, "coordinates", 2)
+        m = len(self.coordinates)
+        if not (np.isfinite(amplitude) and amplitude >= 0):
+            raise InvalidInputError(f"amplitude must be finite and >= 0, got {amplitude!r}")
+        if not (np.isfinite(correlation_length) and correlation_length > 0):
+            raise InvalidInputError(f"correlation_length must be > 0, got {correlation_length!r}")
+        self.amplitude, self.correlation_length = float(amplitude), float(correlation_length)
+        self.mean = np.broadcast_to(finite_array(np.atleast_1d(mean), "mean", 1), (m,)).copy()
+        if isinstance(seed, bool) or int(seed) != seed or seed < 0:
+            raise InvalidInputError(f"seed must be an integer >= 0, got {seed!r}")
+        self.seed = int(seed)
+        self._factor = None
+
+    @property
+    def n_available(self):
+        """None: any number of samples."""
+        return None
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """``C`` (m^2), shape (m, m)."""
+        diff = self.coordinates[:, None, :] - self.coordinates[None, :, :]
+        squared = np.einsum("ijk,ijk->ij", diff, diff)
+        return self.amplitude ** 2 * np.exp(-squared / (2.0 * self.correlation_length ** 2))
+
+    def _square_root(self) -> np.ndarray:
+        """``L`` with ``L L^T = C``, from the eigenvectors (``C`` is often numerically singular)."""
+        if self._factor is None:
+            values, vectors = np.linalg.eigh(self.covariance)
+            self._factor = vectors * np.sqrt(np.clip(values, 0.0, None))
+        return self._factor
+
+    def realisations(self, indices) -> np.ndarray:
+        """Gap fields of the samples ``indices`` (m), shape (len(indices), m)."""
+        factor = self._square_root()
+        normal = np.array([np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(int(k),)))
+                           .standard_normal(len(self.mean)) for k in indices])
+        return self.mean + normal.reshape(len(indices), -1) @ factor.T
+
+    def describe(self) -> dict:
+        return {"type": "gaussian", "amplitude": self.amplitude,
+                "correlation_length": self.correlation_length, "seed": self.seed,
+                "digest": _digest(self.coordinates, self.mean)}
+
+
+class GapSamples:
+    """Gap fields given as an array, one realisation per row (m), shape (N, m)."""
+
+    def __init__(self, samples):
+        self.samples = finite_array(samples, "gap samples", 2)
+
+    @property
+    def n_available(self) -> int:
+        """Number of realisations ``N``."""
+        return len(self.samples)
+
+    def realisations(self, indices) -> np.ndarray:
+        """Rows ``indices``, shape (len(indices), m)."""
+        return self.samples[np.asarray(indices, dtype=int)]
+
+    def describe(self) -> dict:
+        return {"type": "array", "shape": list(self.samples.shape),
+                "digest": _digest(self.samples)}
+
+
+def load_gap_samples(path) -> GapSamples:
+    """Realisations from a file: ``.npy``, or ``.csv`` (comma-separated, one row per sample).
+
+    Values in metres, shape (N, m).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileFormatError(f"{path}: gap samples file not found")
+    try:
+        if path.suffix == ".npy":
+            data = np.load(path, allow_pickle=False)
+        elif path.suffix in (".csv", ".txt"):
+            data = np.loadtxt(path, delimiter=",", ndmin=2)
+        else:
+            raise FileFormatError(f"{path}: gap samples must be .npy or .csv")
+    except ValueError as exc:
+        raise FileFormatError(f"{path}: unreadable gap samples ({exc})") from None
+    return GapSamples(data)
+
+
+@dataclass(frozen=True)
+class BatchSummary:
+    """What a :func:`run_batch` call did.
+
+    Attributes
+    ----------
+    samples : int
+        Samples of the study (``N``).
+    computed : int
+        Samples solved by this call.
+    reused : int
+        Samples found already done in the store.
+    failed : int
+        Samples in the store whose solve failed (not converged or certificate failed).
+    seconds : float
+        Wall time of the call.
+    path : Path
+        The HDF5 store.
+    """
+
+    samples: int
+    computed: int
+    reused: int
+    failed: int
+    seconds: float
+    path: Path
+
+    @property
+    def complete(self) -> bool:
+        """True when every sample is done."""
+        return self.computed + self.reused == self.samples
+
+    def as_dict(self) -> dict:
+        return {"samples": self.samples, "computed": self.computed, "reused": self.reused,
+                "failed": self.failed, "seconds": self.seconds}
+
+
+def _h5py():
+    try:
+        import h5py
+    except ImportError:
+        raise MissingDependencyError("batch stores need h5py: pip install 'contactqp[hdf5]'") from None
+    return h5py
+
+
+def _open_store(path: Path, case, source, n_samples: int, chunk: int):
+    """Open (or create) the store, check it belongs to this study, grow it to ``n_samples``."""
+    h5py = _h5py()
+    identity = json.dumps({"case": case.describe(), "source": source.describe()}, sort_keys=True)
+    fields = {"initial_gap": ((case.n_contacts,), "f8"), **case.fields()}
+    store = h5py.File(path, "a")
+    try:
+        if "done" not in store:
+            store.attrs.update({"format": FORMAT, "identity": identity, "chunk": chunk})
+            store.create_dataset("done", shape=(0,), maxshape=(None,), dtype="?", chunks=(chunk,))
+            for name, (shape, dtype) in fields.items():
+                store.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
+                                     dtype=dtype, chunks=(chunk, *shape))
+        elif store.attrs.get("format") != FORMAT or store.attrs.get("identity") != identity:
+            raise InvalidInputError(f"{path} holds another study (other model, options or gap "
+                                    "source): give another output")
+        if store["done"].shape[0] < n_samples:
+            for name in ("done", *fields):
+                store[name].resize(n_samples, axis=0)
+    except BaseException:
+        store.close()
+        raise
+    return store
+
+
+def _runs(pending: np.ndarray, chunk: int) -> list:
+    """Split sorted pending indices into runs of consecutive samples within one chunk."""
+    breaks = np.flatnonzero((np.diff(pending) != 1) | (np.diff(pending // chunk) != 0)) + 1
+    return np.split(pending, breaks) if pending.size else []
+
+
+def _solve_chunk(state, indices, warm):
+    """Solve consecutive samples, each warm started from the previous: ``(indices, records)``."""
+    case, source = state
+    rows = []
+    for gaps in source.realisations(indices):
+        record, warm = case.solve_sample(gaps, warm)
+        record["initial_gap"] = gaps
+        rows.append(record)
+    return indices, {name: np.array([row[name] for row in rows]) for name in rows[0]}
+
+
+_WORKER_STATE = None
+
+
+def _init_worker(state, threads):
+    global _WORKER_STATE
+    _WORKER_STATE = state
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # BLAS threads are then as the environment sets them
+        return
+    threadpool_limits(threads)
+
+
+def _pool_chunk(indices, warm):
+    return _solve_chunk(_WORKER_STATE, indices, warm)
+
+
+def _serial(state, tasks):
+    for indices, warm in tasks:
+        yield _solve_chunk(state, indices, warm)
+
+
+def _process_pool(state, tasks, workers):
+    import os
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    threads = max(1, (os.cpu_count() or 1) // workers)
+    executor = ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(state, threads))
+    try:
+        futures = [executor.submit(_pool_chunk, indices, warm) for indices, warm in tasks]
+        for future in as_completed(futures):
+            yield future.result()
+    finally:
+        executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _dask(state, tasks, scheduler):
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise MissingDependencyError("a Dask scheduler needs distributed: pip install "
+                                     "'contactqp[cluster]'") from None
+    with Client(scheduler) as client:
+        shared = client.scatter(state, broadcast=True)
+        futures = [client.submit(_solve_chunk, shared, indices, warm, pure=False)
+                   for indices, warm in tasks]
+        try:
+            for future in as_completed(futures):
+                yield future.result()
+        finally:
+            client.cancel(futures)
+
+
+def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler=None,
+              chunk_size: int = DEFAULT_CHUNK, limit: int | None = None,
+              progress=None) -> BatchSummary:
+    """Solve samples ``0 .. n_samples-1`` of ``source`` with ``case``; store and resume.
+
+    Parameters
+    ----------
+    case : GapVariation
+        Or any object with its methods (``n_contacts``, ``fields``, ``solve_sample``,
+        ``warm_start``, ``describe``); picklable for workers.
+    source : GaussianGapField or GapSamples
+        Gap fields (``realisations(indices)``, ``describe()``, ``n_available``).
+    n_samples : int
+    path : str or Path
+        HDF5 store, created or resumed (it must hold the same case and source).
+    workers : int
+        Local worker processes (1: in this process).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler; ``workers`` is then ignored.
+    chunk_size : int
+        Samples per task, for a new store (a resumed store keeps its own).
+    limit : int, optional
+        Solve at most this many samples in this call (a time budget; the rest on resume).
+    progress : callable, optional
+        ``progress(done, n_samples)`` after each stored chunk.
+
+    Returns
+    -------
+    BatchSummary
+    """
+    start = time.perf_counter()
+    if isinstance(n_samples, bool) or int(n_samples) != n_samples or n_samples < 1:
+        raise InvalidInputError(f"n_samples must be an integer >= 1, got {n_samples!r}")
+    n_samples = int(n_samples)
+    if source.n_available is not None and n_samples > source.n_available:
+        raise InvalidInputError(f"asked for {n_samples} samples, the source has "
+                                f"{source.n_available}")
+    if int(workers) < 1 or int(chunk_size) < 1:
+        raise InvalidInputError(f"workers and chunk_size must be >= 1, got {workers}, {chunk_size}")
+    path = Path(path)
+    store = _open_store(path, case, source, n_samples, int(chunk_size))
+    with store:
+        chunk = int(store.attrs["chunk"])
+        done = store["done"][:n_samples]
+        reused = int(np.count_nonzero(done))
+        pending = np.flatnonzero(~done)
+        if limit is not None:
+            pending = pending[:max(int(limit), 0)]
+        tasks = []
+        for run in _runs(pending, chunk):
+            before = run[0] - 1
+            resumed = before >= 0 and before // chunk == run[0] // chunk and done[before]
+            warm = case.warm_start({name: store[name][before] for name in case.fields()}) \
+                if resumed else None
+            tasks.append((run, warm))
+        state = (case, source)
+        if scheduler is not None:
+            results = _dask(state, tasks, scheduler)
+        elif int(workers) > 1 and len(tasks) > 1:
+            results = _process_pool(state, tasks, int(workers))
+        else:
+            results = _serial(state, tasks)
+        computed = 0
+        for indices, records in results:
+            first, last = int(indices[0]), int(indices[-1]) + 1
+            for name, values in records.items():
+                store[name][first:last] = values
+            store.flush()
+            store["done"][first:last] = True
+            store.flush()
+            computed += len(indices)
+            if progress is not None:
+                progress(reused + computed, n_samples)
+        finished = store["done"][:n_samples]
+        failed = int(np.count_nonzero(finished & ~store["success"][:n_samples]))
+    return BatchSummary(n_samples, computed, reused, failed, time.perf_counter() - start, path)
+
+
+@dataclass(frozen=True)
+class GapStatistics:
+    """Per-contact statistics of the final gaps over the successful samples.
+
+    Attributes
+    ----------
+    samples : int
+        Samples used.
+    mean : ndarray, shape (m,)
+        Mean final gap (m).
+    levels : ndarray, shape (q,)
+        Quantile levels.
+    quantiles : ndarray, shape (q, m)
+        Final-gap quantiles (m).
+    contact_probability : ndarray, shape (m,)
+        Fraction of samples in which the contact is closed.
+    """
+
+    samples: int
+    mean: np.ndarray
+    levels: np.ndarray
+    quantiles: np.ndarray
+    contact_probability: np.ndarray
+
+
+@dataclass(frozen=True)
+class BatchData:
+    """The done samples of a store.
+
+    Attributes
+    ----------
+    indices : ndarray of int, shape (s,)
+        Sample numbers done.
+    fields : dict of ndarray
+        Each stored field, rows in the order of ``indices``.
+    """
+
+    indices: np.ndarray
+    fields: dict
+
+    def statistics(self, levels=(0.05, 0.5, 0.95)) -> GapStatistics:
+        """:class:`GapStatistics` of the ``gap`` and ``closed`` fields (successful samples)."""
+        ok = self.fields["success"]
+        if not ok.any():
+            raise InvalidInputError("no successful sample to compute statistics from")
+        gaps, closed = self.fields["gap"][ok], self.fields["closed"][ok]
+        levels = np.asarray(levels, dtype=float)
+        return GapStatistics(int(ok.sum()), gaps.mean(axis=0), levels,
+                             np.quantile(gaps, levels, axis=0), closed.mean(axis=0))
+
+
+def load_batch(path) -> BatchData:
+    """Read the done samples of a store written by :func:`run_batch`."""
+    h5py = _h5py()
+    path = Path(path)
+    if not path.is_file():
+        raise FileFormatError(f"{path}: no such batch store")
+    with h5py.File(path, "r") as store:
+        if store.attrs.get("format") != FORMAT:
+            raise FileFormatError(f"{path} is not a contactqp batch store")
+        done = np.flatnonzero(store["done"][:])
+        fields = {name: store[name][:][done] for name in store if name != "done"}
+    return BatchData(done, fields)
+
+
+def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
+    """Maps of the mean final gap, its highest quantile and the probability of contact (PNG).
+
+    ``coordinates``: shape (m, 2), the position of each contact (m); drawn in mm.
+    """
+    from .plot import _pyplot
+
+    plt = _pyplot()
+    xy = np.asarray(coordinates, dtype=float) * 1e3
+    panels = [(statistics.mean * 1e3, "mean final gap (mm)"),
+              (statistics.quantiles[-1] * 1e3,
+               f"{statistics.levels[-1]:.0%} quantile of the final gap (mm)"),
+              (statistics.contact_probability, "probability of contact")]
+    figure, axes = plt.subplots(len(panels), 1, figsize=(7, 9.5), sharex=True)
+    for ax, (values, title) in zip(axes, panels):
+        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, s=18, cmap="viridis")
+        figure.colorbar(shown, ax=ax)
+        ax.set_title(f"{title}, {statistics.samples} samples")
+        ax.set_ylabel("y (mm)")
+        ax.set_aspect("equal")
+    axes[-1].set_xlabel("x (mm)")
+    figure.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path

@@ -1,0 +1,77 @@
+"""Result export: VTU meshes with point data (meshio) and CSV tables, for any result."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidInputError, MissingDependencyError
+
+__all__ = ["write_vtu", "write_csv"]
+
+
+def write_vtu(path, points, cells, point_data) -> Path:
+    """Write a mesh and its point fields to a VTU file (ParaView).
+
+    Parameters
+    ----------
+    path : str or Path
+    points : array_like, shape (n, 2) or (n, 3)
+        Coordinates (m); 2-D points get ``z = 0``.
+    cells : sequence of (str, array_like)
+        meshio cell blocks, e.g. ``[("quad", quads)]`` with ``quads`` of shape (c, 4).
+    point_data : dict of array_like
+        Fields of shape (n,) or (n, k), one value per point.
+
+    Returns
+    -------
+    Path
+    """
+    try:
+        import meshio
+    except ImportError:
+        raise MissingDependencyError("VTU output needs meshio: pip install 'contactqp[fem]'") from None
+    xyz = np.asarray(points, dtype=float)
+    if xyz.ndim != 2 or xyz.shape[1] not in (2, 3):
+        raise InvalidInputError(f"points must have shape (n, 2) or (n, 3), got {xyz.shape}")
+    if xyz.shape[1] == 2:
+        xyz = np.column_stack([xyz, np.zeros(len(xyz))])
+    data = {name: np.asarray(values) for name, values in point_data.items()}
+    for name, values in data.items():
+        if values.shape[0] != len(xyz):
+            raise InvalidInputError(f"point_data[{name!r}] has {values.shape[0]} rows for "
+                                    f"{len(xyz)} points")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meshio.write(str(path), meshio.Mesh(xyz, list(cells), point_data=data), file_format="vtu")
+    return path
+
+
+def write_csv(path, columns) -> Path:
+    """Write equal-length columns as a CSV table with a header row.
+
+    Parameters
+    ----------
+    path : str or Path
+    columns : dict of array_like
+        ``{header: values}``, each of shape (r,); floats written with full precision
+        (``repr``), so that a table read back gives the same numbers.
+
+    Returns
+    -------
+    Path
+    """
+    names = list(columns)
+    values = [np.asarray(columns[name]).reshape(-1) for name in names]
+    if not names or len({len(v) for v in values}) != 1:
+        raise InvalidInputError("columns must be non-empty and of one length, got lengths "
+                                f"{[len(v) for v in values]}")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(names)
+        writer.writerows(zip(*(v.tolist() for v in values)))
+    return path

@@ -1,0 +1,144 @@
+"""Riveting: the plate model against Navier's series, one fastener against the direct solve,
+fastening sequences, the two routes, outputs and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from contactqp.errors import InvalidInputError
+from contactqp.riveting import (Assembly, FastenerClosure, Plate, plate_flexibility, plot_status,
+                                write_vtu)
+
+ALL_EDGES = ("left", "right", "bottom", "top")
+
+
+def navier(points, plate: Plate, terms: int = 200) -> np.ndarray:
+    """Deflection at ``points`` under unit forces at ``points``, simply supported rectangle.
+
+    Navier's double sine series (Timoshenko & Woinowsky-Krieger, Theory of plates and shells,
+    sec. 29): ``w = 4 P / (pi^4 D a b) sum sin sin sin sin / ((m/a)^2 + (n/b)^2)^2``.
+    """
+    a, b = plate.length, plate.width
+    k = np.arange(1, terms + 1)
+    sx = np.sin(np.pi * np.outer(points[:, 0], k) / a)  # (p, m)
+    sy = np.sin(np.pi * np.outer(points[:, 1], k) / b)  # (p, n)
+    weight = 1.0 / ((k[:, None] / a) ** 2 + (k[None, :] / b) ** 2) ** 2
+    series = np.einsum("im,in,mn,jm,jn->ij", sx, sy, weight, sx, sy)
+    return 4.0 / (np.pi ** 4 * plate.rigidity * a * b) * series
+
+
+def test_plate_flexibility_converges_to_navier_at_second_order():
+    # 7 x 3 interior points, 25 mm apart, of a plate simply supported on its four edges; the
+    # Morley element converges as h^2 (a halving of h divides the error by about 4)
+    plate = Plate()
+    xs, ys = np.meshgrid(np.arange(1, 8) * 0.025, np.arange(1, 4) * 0.025)
+    points = np.column_stack([xs.ravel(), ys.ravel()])
+    exact = navier(points, plate)
+    errors = [np.max(np.abs(plate_flexibility(plate, points, (8 * r, 4 * r), ALL_EDGES) - exact))
+              / np.max(exact) for r in (4, 8)]
+    assert errors[1] < 0.02
+    assert errors[0] / errors[1] > 3.0
+
+
+@pytest.fixture(scope="module")
+def small():
+    """11 x 7 pairs, plates of different thickness, fasteners in a row."""
+    assembly = Assembly(lower=Plate(thickness=0.002), upper=Plate(thickness=0.0016),
+                        grid=(11, 7), fasteners=((1, 3), (5, 3), (9, 3)), refine=2)
+    return assembly.build()
+
+
+def test_default_assembly_layout():
+    assembly = Assembly()
+    nx, ny = assembly.grid
+    assert 450 <= nx * ny <= 550
+    cells = assembly.fastener_cells()
+    assert len(cells) >= 4 and all(j == ny // 2 for _, j in cells)
+
+
+def test_one_fastener_closing_a_uniform_gap_matches_the_direct_solve(small):
+    # One fastener pulling the plates shut over a uniform gap g: if only its pair closes, its
+    # tension is g / W_ff and the gaps become g (1 - W_if / W_ff), W = R_lower + R_upper
+    # computed here from the two plates directly.
+    k, f, g = small.n_pairs, 5, 3e-4  # mid-span on a free edge: no other pair deflects more
+    held = small.assembly.supports
+    cells = (2 * 12, 2 * 6)  # refine 2 over 12 x 6 intervals (left/right held, y edges free)
+    W = sum(plate_flexibility(p, small.points, cells, held)
+            for p in (small.assembly.lower, small.assembly.upper))
+    assert np.all(np.delete(W[:, f], f) < W[f, f])  # the premise: no other pair closes
+    closure = FastenerClosure(small.problem(np.full(k, g)), [f])
+    for method in ("nnls", "active-set"):
+        state = closure.solve(method=method)
+        assert state.success
+        np.testing.assert_allclose(state.fastener_forces, [g / W[f, f]], rtol=1e-9)
+        np.testing.assert_allclose(state.contact.gaps, g * (1 - W[:, f] / W[f, f]), rtol=1e-9,
+                                   atol=1e-12 * g)
+        assert np.all(state.contact.forces == 0) and state.closure < 1e-12 * g
+        assert np.bincount(state.status, minlength=3).tolist() == [k - 1, 0, 1]
+
+
+@pytest.fixture(scope="module")
+def rough_gaps(small):
+    rng = np.random.default_rng(7)
+    return 2e-4 + 1e-4 * rng.standard_normal(small.n_pairs)
+
+
+def test_sequence_order_changes_the_path_not_the_end_without_friction(small, rough_gaps):
+    forward = small.fasten(rough_gaps)
+    backward = small.fasten(rough_gaps, order=[2, 1, 0], method="active-set")
+    assert forward.success and backward.success and len(forward.steps) == 3
+    assert not np.allclose(forward.steps[0].contact.gaps, backward.steps[0].contact.gaps)
+    np.testing.assert_allclose(forward.final.contact.gaps, backward.final.contact.gaps,
+                               rtol=1e-7, atol=1e-12)
+    np.testing.assert_array_equal(backward.final.fasteners, small.fasteners[::-1])
+    np.testing.assert_allclose(forward.final.fastener_forces,
+                               backward.final.fastener_forces[::-1], rtol=1e-7, atol=1e-9)
+    final = forward.final
+    assert final.closure < 1e-12
+    assert np.all(final.status[small.fasteners] == 2)
+
+
+def test_routes_agree_on_a_rough_gap_field(small, rough_gaps):
+    closure = FastenerClosure(small.problem(rough_gaps), small.fasteners)
+    a, b = closure.solve(method="nnls"), closure.solve(method="active-set")
+    assert a.success and b.success
+    assert np.count_nonzero(a.contact.closed) > 0
+    np.testing.assert_allclose(a.multipliers, b.multipliers, rtol=1e-6,
+                               atol=1e-8 * np.max(np.abs(a.multipliers)))
+    np.testing.assert_array_equal(a.status, b.status)
+
+
+def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
+    meshio = pytest.importorskip("meshio")
+    final = small.fasten(rough_gaps).final
+    path = write_vtu(small, final, tmp_path / "r.vtu", rough_gaps)
+    mesh = meshio.read(path)
+    k = small.n_pairs
+    assert mesh.points.shape == (2 * k, 3)
+    np.testing.assert_allclose(mesh.point_data["gap"][:k], final.contact.gaps)
+    np.testing.assert_allclose(mesh.point_data["displacement"][:, 2], final.contact.x)
+    np.testing.assert_array_equal(mesh.point_data["status"][k:], final.status)
+    assert mesh.cells[0].data.shape == (2 * 10 * 6, 4)
+    png = plot_status(small, final, rough_gaps, tmp_path / "s.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"fasteners": ((11, 3),)}, "outside"),
+    ({"fasteners": ((1, 3), (1, 3))}, "share"),
+    ({"supports": ("left", "middle")}, "supports"),
+    ({"upper": Plate(length=0.3)}, "same length"),
+])
+def test_bad_assemblies(kwargs, match):
+    with pytest.raises(InvalidInputError, match=match):
+        Assembly(**{"grid": (11, 7), "refine": 1, **kwargs}).build()
+
+
+def test_bad_fastening(small, rough_gaps):
+    with pytest.raises(InvalidInputError, match="permutation"):
+        small.fasten(rough_gaps, order=[0, 0, 1])
+    with pytest.raises(InvalidInputError, match="method"):
+        FastenerClosure(small.problem(rough_gaps), [3]).solve(method="simplex")
+    with pytest.raises(InvalidInputError, match="gaps"):
+        small.problem(rough_gaps[:-1])
