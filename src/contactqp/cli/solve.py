@@ -1,4 +1,11 @@
-"""``contactqp solve``: a frictionless problem described by a TOML file."""
+"""``contactqp solve``: a contact problem described by a TOML file.
+
+Frictionless, with friction (``[friction]``) or along a load history (``[loading]``); the file
+format and the files ``--out`` writes (columns and units) are described in
+:mod:`contactqp.io.problem_file`. ``--json`` prints :meth:`ProblemSpec.summary` on one line,
+with the problem's ``name`` and path. Exit 1 when the solve (or a step of the history) did not
+converge or its certificate failed, with one line on stderr naming the first such step.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +14,7 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
 from .app import EXIT_NOT_SOLVED, cli, console, fail
 
@@ -15,40 +23,115 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
 @click.argument("problem_file", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON line.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path),
-              help="Write displacements.csv, contacts.csv, result.npz and summary.json here.")
+              help="Write displacements.csv, contacts.csv, result.npz and summary.json here "
+                   "(and steps.csv for a load history).")
 def solve(problem_file, as_json, out):
-    """Solve the frictionless contact problem described by a TOML file."""
+    """Solve the contact problem (with friction, or a load history) in a TOML file."""
     from ..io.problem_file import load_problem_file, write_results
-    from ..solvers import solve as run_solver
 
     spec = load_problem_file(problem_file)
-    result = run_solver(spec.problem, spec.solver, **spec.options)
+    result = spec.solve()
     written = write_results(spec, result, out) if out else []
-    summary = {"name": spec.name, "problem": str(problem_file), **result.summary()}
+    summary = spec.summary(result)
     if as_json:
-        click.echo(json.dumps(summary))
+        click.echo(json.dumps({"name": spec.name, "problem": str(problem_file), **summary}))
+    elif spec.history is not None:
+        _history_table(spec, result, summary, written)
     else:
-        _solve_table(spec, result, written)
-    if not result.success:
+        _result_table(spec, result, spec.name)
+        _print_written(written)
+    if spec.history is not None:
+        failed = summary["failed_steps"]
+        if failed:
+            first = result.steps[failed[0]]
+            factor = spec.step_factor(failed[0])
+            at = "" if factor is None else f" (factor {factor:g})"
+            more = f" ({len(failed) - 1} more steps failed)" if len(failed) > 1 else ""
+            fail(f"{problem_file}: step {failed[0]}{at}: {first.message}{more}")
+            sys.exit(EXIT_NOT_SOLVED)
+    elif not result.success:
         fail(f"{problem_file}: {result.message}")
         sys.exit(EXIT_NOT_SOLVED)
 
 
-def _solve_table(spec, result, written):
+def _table(title: str, columns, number_width: int | None = 10):
+    """A rich table; numeric columns at least ``number_width`` wide (None: their longest word)."""
+    from rich import box
     from rich.table import Table
 
-    table = Table(title=f"{spec.name}: {result.solver}, {result.message}")
-    for column in ("contact", "gap0 (m)", "gap (m)", "force (N)", "status"):
-        table.add_column(column, justify="right" if column != "contact" else "left")
+    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
+    for column in columns:  # numbers keep their width, labels wrap
+        if column == "contact":
+            table.add_column(column, overflow="fold")
+        else:
+            table.add_column(column, justify="right", overflow="fold",
+                             min_width=number_width or max(map(len, column.split())))
+    return table
+
+
+def _result_table(spec, result, title):
+    """Per-contact table and certificate of one result (frictionless or with friction).
+
+    With friction: gap, normal force, tangential force(s) and slip of the step along the
+    tangent(s), and the status; the per-contact dissipation is in ``--out``'s contacts.csv.
+    """
     constraints = spec.problem.constraints
-    for k in range(constraints.n_constraints):
-        table.add_row(constraints.labels[k], f"{constraints.gaps[k]:.6g}", f"{result.gaps[k]:.6g}",
-                      f"{result.forces[k]:.6g}", result.status_labels[k])
     out = console()
-    out.print(table)
     cert = result.certificate
-    out.print(f"energy {result.energy:.6g} J, {result.nit} iterations, "
+    if not spec.frictional:
+        table = _table(f"{title}: {result.solver}, {result.message}",
+                       ("contact", "gap0 (m)", "gap (m)", "force (N)", "status"))
+        for k in range(constraints.n_constraints):
+            table.add_row(constraints.labels[k], f"{constraints.gaps[k]:.6g}",
+                          f"{result.gaps[k]:.6g}", f"{result.forces[k]:.6g}",
+                          result.status_labels[k])
+        out.print(table)
+        out.print(f"energy {result.energy:.6g} J, {result.nit} iterations, "
                   f"{result.wall_time * 1e3:.3g} ms; certificate worst residual {cert.worst:.2e} "
                   f"({'passed' if cert.passed else 'FAILED'})")
+        return
+    tangents = ["tangential"] if spec.problem.dim == 2 else ["t1", "t2"]
+    table = _table(f"{title}: {result.solver}, {result.message}", (
+        "contact", "gap (m)", "normal (N)", *[f"{t} (N)" for t in tangents],
+        *[f"slip {t} (m)" if len(tangents) > 1 else "slip (m)" for t in tangents], "status"))
+    for k in range(constraints.n_constraints):
+        table.add_row(constraints.labels[k],
+                      *[f"{v:.4g}" for v in (result.gaps[k], *result.forces[k], *result.slip[k])],
+                      result.status_labels[k])
+    out.print(table)
+    residuals = ", ".join(f"{name} {getattr(cert, name):.1e}" for name in (
+        "cone", "complementarity", "dissipation", "equilibrium", "natural_map"))
+    out.print(f"dissipated {result.dissipated:.6g} J, elastic energy {result.elastic_energy:.6g} J, "
+              f"{result.nit} iterations, {result.wall_time * 1e3:.3g} ms; certificate worst "
+              f"residual {cert.worst:.2e} ({'passed' if cert.passed else 'FAILED'}; {residuals})")
+
+
+def _history_table(spec, result, summary, written):
+    """Per-step table, totals and the final state of a load history."""
+    table = _table(f"{spec.name}: {spec.solver}, {summary['steps']} steps", (
+        "step", "factor", "stick", "slip", "open", "dissipated (J)", "cumulative (J)", "iter",
+        "residual"), number_width=None)
+    cumulative = np.cumsum(result.dissipated)
+    for k, step in enumerate(result.steps):
+        factor = spec.step_factor(k)
+        counts = np.bincount(step.contact_status, minlength=3)
+        table.add_row(str(k), "-" if factor is None else f"{factor:g}", str(counts[1]),
+                      str(counts[2]), str(counts[0]), f"{step.dissipated:.4g}",
+                      f"{cumulative[k]:.4g}", str(step.nit),
+                      f"{step.certificate.worst:.1e}" if step.success else "FAILED")
+    out = console()
+    out.print(table)
+    failed = summary["failed_steps"]
+    out.print(f"total dissipated {summary['dissipated']:.6g} J, {summary['iterations']} "
+              f"iterations, {summary['seconds'] * 1e3:.3g} ms; worst certificate residual "
+              f"{summary['certificate_worst']:.2e} "
+              f"({'all steps passed' if not failed else f'{len(failed)} steps FAILED'})")
+    last = len(result.steps) - 1
+    _result_table(spec, result.steps[last], f"final state (step {last})")
+    _print_written(written)
+
+
+def _print_written(written):
+    out = console()
     for path in written:
         out.print(f"wrote {path}")

@@ -1096,13 +1096,14 @@ class ProblemSpec:
         ``steps`` (count), ``failed_steps`` (indices), ``iterations``, ``seconds``,
         ``dissipated`` (J, all steps), ``certificate_worst`` (largest residual of any step),
         ``final`` (open, stick and slip counts of the last step) and ``records``: per step,
-        ``step``, ``factor`` (None for ``points``) and the step's ``summary()``.
+        ``step``, ``factor`` (None for ``points``) and the step's ``summary()``. NaN and inf
+        become None, so that the summary is valid JSON.
         """
         if not isinstance(result, HistoryResult):
-            return result.summary()
+            return _json_ready(result.summary())
         steps = result.steps
         last = steps[-1].summary()
-        return {
+        return _json_ready({
             "success": result.success, "solver": self.solver, "steps": len(steps),
             "failed_steps": [k for k, step in enumerate(steps) if not step.success],
             "iterations": sum(step.nit for step in steps),
@@ -1112,7 +1113,7 @@ class ProblemSpec:
             "final": {label: last[label] for label in STATUS_LABELS},
             "records": [{"step": k, "factor": self.step_factor(k), **step.summary()}
                         for k, step in enumerate(steps)],
-        }
+        })
 
 
 def load_problem_file(path) -> ProblemSpec:
