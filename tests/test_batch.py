@@ -1,0 +1,165 @@
+"""Variation simulation: gap fields against their target statistics, shared duals against fresh
+problems, identical results serially / on a process pool / on a Dask cluster, resumption."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from contactqp import ContactProblem, NodePairs, solve
+from contactqp.batch import (GapSamples, GapVariation, GaussianGapField, load_batch,
+                             load_gap_samples, plot_statistics, run_batch, variant)
+from contactqp.errors import FileFormatError, InvalidInputError
+from contactqp.riveting import Assembly, FasteningCase
+
+N = 24
+
+
+@pytest.fixture(scope="module")
+def riveted():
+    return Assembly(grid=(11, 7), refine=1, fasteners=((1, 3), (5, 3), (9, 3))).build()
+
+
+@pytest.fixture(scope="module")
+def source(riveted):
+    return GaussianGapField(riveted.points, 1e-4, 0.03, mean=1.5e-4, seed=11)
+
+
+def test_gaussian_field_has_its_target_amplitude_and_correlation():
+    x = np.arange(40) * 0.01
+    field = GaussianGapField(np.column_stack([x, 0 * x]), amplitude=2e-4,
+                             correlation_length=0.03, mean=5e-4, seed=3)
+    samples = field.realisations(range(4000))
+    # 4000 samples: standard errors about 1.1 % of sigma for the deviation, 0.016 for a
+    # correlation; the bounds are 4 to 5 standard errors
+    np.testing.assert_allclose(samples.mean(axis=0), 5e-4, atol=0.1 * 2e-4)
+    np.testing.assert_allclose(samples.std(axis=0), 2e-4, rtol=0.05)
+    corr = np.corrcoef(samples.T)
+    for lag in (1, 2, 3, 5):
+        target = np.exp(-(lag * 0.01) ** 2 / (2 * 0.03 ** 2))
+        np.testing.assert_allclose(np.diagonal(corr, lag).mean(), target, atol=0.03)
+
+
+def test_sample_k_does_not_depend_on_who_draws_it(source):
+    np.testing.assert_array_equal(source.realisations([5, 17])[1], source.realisations(range(18))[17])
+    other = GaussianGapField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=12)
+    assert not np.allclose(other.realisations([5]), source.realisations([5]))
+
+
+def test_shared_dual_gives_the_fresh_problem_answer(riveted, source):
+    # GapVariation re-uses one assembled dual; a fresh ContactProblem assembles everything
+    k = riveted.n_pairs
+    pairs = np.column_stack([np.arange(k), k + np.arange(k)])
+    loads = np.zeros(2 * k)
+    loads[riveted.fasteners] = 40.0   # clamping forces: plates pushed together at the fasteners
+    loads[k + riveted.fasteners] = -40.0
+    base = ContactProblem(riveted.model, loads, [NodePairs(pairs, np.zeros(k))])
+    case = GapVariation(base)
+    warm = None
+    for gaps in source.realisations(range(3)):
+        record, warm = case.solve_sample(gaps, warm)
+        fresh = solve(ContactProblem(riveted.model, loads, [NodePairs(pairs, gaps)]))
+        assert record["success"] and fresh.success and np.any(fresh.closed)
+        np.testing.assert_allclose(record["force"], fresh.forces, rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(record["gap"], fresh.gaps, rtol=1e-8, atol=1e-14)
+    twin = variant(base, gaps=np.ones(k))
+    assert twin.dual().W is base.dual().W and np.all(base.constraints.gaps == 0)
+
+
+@pytest.fixture(scope="module")
+def serial(riveted, source, tmp_path_factory):
+    path = tmp_path_factory.mktemp("serial") / "s.h5"
+    summary = run_batch(FasteningCase(riveted, method="active-set"), source, N, path, chunk_size=5)
+    assert summary.as_dict() | {"seconds": 0} == {"samples": N, "computed": N, "reused": 0,
+                                                  "failed": 0, "seconds": 0}
+    return load_batch(path)
+
+
+def assert_same(data, reference):
+    """Equal up to round-off: BLAS may sum in another order in another process or thread."""
+    np.testing.assert_array_equal(data.indices, reference.indices)
+    for name, values in reference.fields.items():
+        scale = float(np.max(np.abs(values.astype(float))))
+        np.testing.assert_allclose(data.fields[name], values, rtol=1e-10, atol=1e-12 * scale,
+                                   err_msg=name)
+
+
+def test_process_pool_gives_the_serial_results(riveted, source, serial, tmp_path):
+    summary = run_batch(FasteningCase(riveted, method="active-set"), source, N,
+                        tmp_path / "p.h5", workers=2, chunk_size=5)
+    assert summary.computed == N
+    assert_same(load_batch(tmp_path / "p.h5"), serial)
+
+
+def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    # threads in this process, reached over TCP like a remote scheduler
+    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
+                                  protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        summary = run_batch(FasteningCase(riveted, method="active-set"), source, N,
+                            tmp_path / "d.h5", scheduler=cluster.scheduler_address, chunk_size=5)
+    assert summary.computed == N
+    assert_same(load_batch(tmp_path / "d.h5"), serial)
+
+
+def test_interrupted_runs_resume_with_the_rest_only(riveted, source, serial, tmp_path):
+    case, path = FasteningCase(riveted, method="active-set"), tmp_path / "r.h5"
+    first = run_batch(case, source, N, path, chunk_size=5, limit=7)  # stops inside a chunk
+    assert (first.computed, first.reused, first.complete) == (7, 0, False)
+
+    def interrupt(done, total):  # Ctrl-C after the next stored chunk
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(case, source, N, path, progress=interrupt)
+    partial = load_batch(path)
+    assert partial.indices.tolist() == list(range(10))
+    rest = run_batch(case, source, N, path)
+    assert (rest.computed, rest.reused, rest.complete) == (N - 10, 10, True)
+    assert_same(load_batch(path), serial)
+    again = run_batch(case, source, N, path)
+    assert (again.computed, again.reused) == (0, N)
+
+
+def test_a_store_refuses_another_study(riveted, source, tmp_path):
+    path = tmp_path / "x.h5"
+    run_batch(FasteningCase(riveted), source, 3, path)
+    other = GaussianGapField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=99)
+    with pytest.raises(InvalidInputError, match="another study"):
+        run_batch(FasteningCase(riveted), other, 3, path)
+
+
+def test_statistics_from_file_samples_match_direct_solves(riveted, source, tmp_path):
+    gaps = source.realisations(range(6))
+    np.save(tmp_path / "g.npy", gaps)
+    np.savetxt(tmp_path / "g.csv", gaps, delimiter=",")
+    from_csv = load_gap_samples(tmp_path / "g.csv")
+    np.testing.assert_allclose(from_csv.samples, gaps, rtol=1e-15)
+    case = FasteningCase(riveted)
+    summary = run_batch(case, load_gap_samples(tmp_path / "g.npy"), 6, tmp_path / "f.h5",
+                        workers=2, chunk_size=2)
+    assert summary.complete and summary.failed == 0
+    stats = load_batch(tmp_path / "f.h5").statistics(levels=(0.5, 0.9))
+    final = [riveted.fasten(g).final.contact for g in gaps]
+    np.testing.assert_allclose(stats.mean, np.mean([r.gaps for r in final], axis=0),
+                               rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(stats.quantiles[1], np.quantile([r.gaps for r in final], 0.9,
+                                                               axis=0), rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(stats.contact_probability,
+                               np.mean([r.closed for r in final], axis=0))
+    assert 0 < stats.contact_probability.max() <= 1
+    png = plot_statistics(stats, riveted.points, tmp_path / "stats.png")
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(InvalidInputError, match="has 6"):
+        run_batch(case, GapSamples(gaps), 7, tmp_path / "g.h5")
+
+
+def test_bad_sources(tmp_path):
+    with pytest.raises(FileFormatError, match="not found"):
+        load_gap_samples(tmp_path / "none.npy")
+    (tmp_path / "g.txt").write_text("1,2\n3,x\n")
+    with pytest.raises(FileFormatError, match="unreadable"):
+        load_gap_samples(tmp_path / "g.txt")
+    with pytest.raises(InvalidInputError, match="correlation_length"):
+        GaussianGapField(np.zeros((3, 2)), 1e-4, 0.0)
