@@ -59,12 +59,14 @@ from .pgs import GaussSeidel
 
 __all__ = ["solve_coulomb", "alart_curnier"]
 
-REGULARISATION = 1e-2  # largest eta of the Newton matrix A + B (W + eta D)
-MEMORY = 5  # iterations looked back by the non-monotone line search
+REGULARISATION = 1e-2  # largest eta of the Newton matrix A + B (W + eta D); LM start
+LM_MIN, LM_MAX, LM_TRIES = 1e-12, 1e6, 3  # Levenberg-Marquardt range of eta, tries per step
+MEMORY = 5  # iterations looked back by the non-monotone line search (twice that for LM)
 ARMIJO = 1e-4  # sufficient-decrease constant
 MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
-PGS_SWEEPS = 200  # Gauss-Seidel sweeps between two Newton runs
-ROUNDS = 3  # Newton / Gauss-Seidel alternations before giving up
+STALL = 20  # a Newton run stops when its best error has not halved in this many iterations
+PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
+ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
 
 
 def alart_curnier(R, U, mu, rho, jacobian: bool = False):
@@ -127,7 +129,32 @@ class _Newton:
         self.rho = 1.0 / self.scale
         self.error_of = error_of
         if self.sparse:
-            self.block_pointers = (np.arange(self.nc), np.arange(self.nc + 1))
+            self._block_structure()
+
+    def _block_structure(self):
+        """Blocks of ``W`` (diagonal blocks always stored) and their order in CSC storage.
+
+        ``A + B W`` has the block pattern of ``W`` plus the diagonal: each Newton step only
+        rescales the stored blocks (``B_c W_cj``), adds ``A_c`` and permutes the values to CSC.
+        """
+        nc, d, m = self.nc, self.d, self.W.shape[0]
+        coo = sp.coo_matrix(self.W)
+        block = np.arange(nc).repeat(d * d)
+        local = np.tile(np.arange(d * d), nc)
+        rows = np.concatenate([coo.row, block * d + local // d])
+        cols = np.concatenate([coo.col, block * d + local % d])
+        values = np.concatenate([coo.data, np.zeros(nc * d * d)])
+        blocks = sp.csr_matrix((values, (rows, cols)), shape=(m, m)).tobsr(blocksize=(d, d))
+        blocks.sort_indices()
+        self.W_blocks = blocks.data
+        self.block_row = np.repeat(np.arange(nc), np.diff(blocks.indptr))
+        self.diagonal_blocks = np.flatnonzero(blocks.indices == self.block_row)
+        positions = sp.bsr_matrix(
+            (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
+             blocks.indptr), shape=(m, m)).tocsc()
+        positions.sort_indices()
+        self.csc_order = positions.data.astype(np.int64) - 1
+        self.csc_indices, self.csc_indptr = positions.indices, positions.indptr
 
     def residual(self, r):
         u = self.W @ r + self.q
@@ -146,10 +173,12 @@ class _Newton:
             if self.sparse:
                 from scipy.sparse.linalg import splu
 
-                Bs = sp.bsr_matrix((B, *self.block_pointers), shape=(m, m))
-                As = sp.bsr_matrix((A, *self.block_pointers), shape=(m, m))
+                values = B[self.block_row] @ self.W_blocks
+                values[self.diagonal_blocks] += A
+                J = sp.csc_matrix((values.reshape(-1)[self.csc_order], self.csc_indices,
+                                   self.csc_indptr), shape=(m, m))
                 try:
-                    step = splu(sp.csc_matrix(Bs @ self.W + As)).solve(rhs)
+                    step = splu(J, permc_spec="MMD_AT_PLUS_A").solve(rhs)
                 except RuntimeError:  # exactly singular
                     return None
             else:
@@ -160,32 +189,59 @@ class _Newton:
                                              check_finite=False)
         return step if np.all(np.isfinite(step)) else None
 
-    def run(self, r, tol, max_iter):
-        """Iterate from ``r``; return ``(best r, its error, iterations, reason)``."""
+    def line_search(self, r, step, reference, merit, t):
+        """Backtrack from ``t`` to the non-monotone Armijo condition; None when it fails."""
+        for _ in range(MAX_HALVINGS):
+            trial = r + t * step
+            u, Phi = self.residual(trial)
+            if 0.5 * float(Phi @ Phi) <= reference - ARMIJO * t * merit:
+                return trial, u, Phi
+            t *= 0.5
+        return None
+
+    def run(self, r, tol, max_iter, adaptive):
+        """Iterate from ``r``; return ``(best r, its error, iterations, reason)``.
+
+        ``adaptive=False``: ``eta = min(1e-2, error)`` and a line search on each direction.
+        ``adaptive=True`` (Levenberg-Marquardt): ``eta`` is divided by 10 after a full step
+        is accepted and multiplied by 10 (new factorisation) when it is not, up to 3 times
+        before the line search takes over; a longer non-monotone memory.
+        A run stops early when its best error has not halved in the last 20 iterations.
+        """
+        memory = 2 * MEMORY if adaptive else MEMORY
+        eta = REGULARISATION
         u, Phi = self.residual(r)
         error = self.error_of(r, u)
         best = (r, error)
-        history = []
+        history, errors = [], [error]
         for k in range(max_iter):
             if error <= tol:
                 return r, error, k, "converged"
+            if len(errors) > STALL and min(errors[-STALL:]) > 0.5 * min(errors[:-STALL]):
+                return best[0], best[1], k, "stalled"
             merit = 0.5 * float(Phi @ Phi)
             history.append(merit)
-            reference = max(history[-MEMORY:])
-            step = self.direction(r, u, min(REGULARISATION, error))
+            reference = max(history[-memory:])
+            found = None
+            if adaptive:
+                for _ in range(LM_TRIES):
+                    step = self.direction(r, u, eta)
+                    if step is not None:
+                        found = self.line_search(r, step, reference, merit, 1.0)
+                        if found:
+                            eta = max(0.1 * eta, LM_MIN)
+                            break
+                    eta = min(10.0 * eta, LM_MAX)
+            else:
+                step = self.direction(r, u, min(REGULARISATION, error))
             if step is None:
                 return best[0], best[1], k, "singular Newton matrix"
-            t = 1.0
-            for _ in range(MAX_HALVINGS):
-                trial = r + t * step
-                u_trial, Phi_trial = self.residual(trial)
-                if 0.5 * float(Phi_trial @ Phi_trial) <= reference - ARMIJO * t * merit:
-                    break
-                t *= 0.5
-            else:
+            found = found or self.line_search(r, step, reference, merit, 1.0)
+            if found is None:
                 return best[0], best[1], k, "line search failed"
-            r, u, Phi = trial, u_trial, Phi_trial
+            r, u, Phi = found
             error = self.error_of(r, u)
+            errors.append(error)
             if error < best[1]:
                 best = (r, error)
         return best[0], best[1], max_iter, "iteration limit"
@@ -254,23 +310,27 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     def error_of(r_apex, u):
         return natural_map_error(problem, r_apex - shift, u)
 
+    r = r + shift
     newton = _Newton(W, q, mu, d, error_of)
-    r, error, iterations, reason = newton.run(r + shift, tol, max_iter)
-    stages = [f"newton {iterations} it. ({reason})"]
     gauss_seidel = None
-    for _ in range(ROUNDS - 1):
+    error, iterations, stages = math.inf, 0, []
+    for round_ in range(ROUNDS):
+        if round_:
+            gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
+            for sweep in range(1, PGS_SWEEPS + 1):
+                r = gauss_seidel.sweep(r)
+                if sweep % 10 == 0 and error_of(r, W @ r + q) <= tol:
+                    break
+            iterations += sweep
+            stages.append(f"gauss-seidel {sweep} sweeps")
+        for adaptive in (False, True):
+            r, error, k, reason = newton.run(r, tol, max_iter, adaptive)
+            iterations += k
+            stages.append(f"{'levenberg-marquardt' if adaptive else 'newton'} {k} it. ({reason})")
+            if error <= tol:
+                break
         if error <= tol:
             break
-        gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
-        for sweep in range(1, PGS_SWEEPS + 1):
-            r = gauss_seidel.sweep(r)
-            if sweep % 10 == 0 and error_of(r, W @ r + q) <= tol:
-                break
-        iterations += sweep
-        stages.append(f"gauss-seidel {sweep} sweeps")
-        r, error, k, reason = newton.run(r, tol, max_iter)
-        iterations += k
-        stages.append(f"newton {k} it. ({reason})")
     r = r - shift
     u = np.asarray(W @ r).reshape(-1) + problem.q
     error = natural_map_error(problem, r, u)
