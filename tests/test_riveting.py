@@ -142,3 +142,38 @@ def test_bad_fastening(small, rough_gaps):
         FastenerClosure(small.problem(rough_gaps), [3]).solve(method="simplex")
     with pytest.raises(InvalidInputError, match="gaps"):
         small.problem(rough_gaps[:-1])
+
+
+def test_cli_json_resume_and_outputs(tmp_path, capsys):
+    import json
+
+    from contactqp.cli import main
+
+    out = tmp_path / "study"
+    assert main(["riveting", "--samples", "12", "--seed", "4", "--out", str(out), "--json"]) == 0
+    first = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert {k: first[k] for k in ("samples", "computed", "reused", "failed")} == {
+        "samples": 12, "computed": 12, "reused": 0, "failed": 0}
+    assert len(first["residual_gap_mean"]) == 525 and min(first["residual_gap_mean"]) > -1e-15
+    assert main(["riveting", "--samples", "16", "--seed", "4", "--out", str(out), "--json",
+                 "--workers", "2"]) == 0
+    second = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert (second["computed"], second["reused"]) == (4, 12)
+    for name in ("nominal.vtu", "nominal_contacts.csv", "nominal_sequence.csv", "samples.h5",
+                 "statistics.csv"):
+        assert (out / name).stat().st_size > 0
+    table = np.genfromtxt(out / "statistics.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(table["mean_gap"], second["residual_gap_mean"], rtol=1e-12)
+    sequence = np.genfromtxt(out / "nominal_sequence.csv", delimiter=",", names=True)
+    assert len(sequence) == len(Assembly().fastener_cells()) and np.all(sequence["tension"] >= 0)
+    # another seed in the same directory is another study: refused, exit 2
+    assert main(["riveting", "--samples", "16", "--seed", "5", "--out", str(out)]) == 2
+    assert "another study" in capsys.readouterr().err
+
+
+def test_cli_bad_gap_file(tmp_path, capsys):
+    from contactqp.cli import main
+
+    np.save(tmp_path / "g.npy", np.zeros((3, 10)))
+    assert main(["riveting", "--gaps", str(tmp_path / "g.npy"), "--out", str(tmp_path)]) == 2
+    assert "525 columns" in capsys.readouterr().err

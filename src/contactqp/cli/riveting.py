@@ -1,0 +1,136 @@
+"""``contactqp riveting``: two plates fastened over a gap field, nominal sequence and variation."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from .app import EXIT_NOT_SOLVED, cli, console, fail
+
+
+@cli.command()
+@click.option("--samples", type=click.IntRange(min=1), default=1000, show_default=True,
+              help="Gap-field samples of the variation study.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Root seed: sample k is the same whatever the workers.")
+@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:port).")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output directory; a study already there is resumed.")
+@click.option("--gaps", "gap_file", type=click.Path(dir_okay=False, path_type=Path),
+              help="Gap realisations (m), one per row (.npy or .csv), instead of random fields.")
+@click.option("--mean-gap", type=float, default=2e-4, show_default=True, help="Nominal gap (m).")
+@click.option("--amplitude", type=click.FloatRange(min=0), default=1e-4, show_default=True,
+              help="Standard deviation of the gap field (m).")
+@click.option("--correlation-length", type=click.FloatRange(min=0, min_open=True), default=0.04,
+              show_default=True, help="Correlation length of the gap field (m).")
+@click.option("--method", type=click.Choice(["nnls", "active-set"]), default="nnls",
+              show_default=True, help="Solver of each sample (active-set: warm started).")
+@click.option("--json", "as_json", is_flag=True,
+              help="End with one JSON line: samples, computed, reused, failed, seconds, "
+                   "residual_gap_mean.")
+@click.option("--plot", is_flag=True, help="Write nominal.png and statistics.png in --out.")
+def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitude,
+             correlation_length, method, as_json, plot):
+    """Two 200 x 100 x 2 mm aluminium plates riveted over a gap field (frictionless).
+
+    Writes to --out: nominal.vtu, nominal_contacts.csv and nominal_sequence.csv (the nominal
+    gap, fasteners installed one by one), samples.h5 (one row per sample, resumable) and
+    statistics.csv (mean, quantiles of the final gap and probability of contact per pair).
+    """
+    from ..batch import GaussianGapField, load_batch, load_gap_samples
+    from ..io.export import write_csv
+    from ..riveting import Assembly, FasteningCase, STATUS_LABELS, write_vtu
+
+    model = Assembly().build()
+    if gap_file is not None:
+        source = load_gap_samples(gap_file)
+        nominal_gaps = source.samples.mean(axis=0)
+    else:
+        source = GaussianGapField(model.points, amplitude, correlation_length, mean=mean_gap,
+                                  seed=seed)
+        nominal_gaps = source.mean
+    if nominal_gaps.shape != (model.n_pairs,):
+        raise click.BadParameter(f"gap realisations must have {model.n_pairs} columns, got "
+                                 f"{nominal_gaps.shape[0]}", param_hint="--gaps")
+    out.mkdir(parents=True, exist_ok=True)
+    sequence = model.fasten(nominal_gaps, method=method)
+    final = sequence.final
+    xy = model.points
+    write_vtu(model, final, out / "nominal.vtu", nominal_gaps)
+    write_csv(out / "nominal_contacts.csv", {
+        "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.contact.gaps,
+        "force": final.contact.forces, "status": [STATUS_LABELS[s] for s in final.status]})
+    pairs = model.fasteners[sequence.order]
+    write_csv(out / "nominal_sequence.csv", {
+        "step": np.arange(1, len(pairs) + 1), "pair": pairs, "x": xy[pairs, 0], "y": xy[pairs, 1],
+        "tension": [step.fastener_forces[-1] for step in sequence.steps],
+        "closed": [int(np.count_nonzero(step.contact.closed)) for step in sequence.steps],
+        "max_gap": [float(step.contact.gaps.max()) for step in sequence.steps]})
+
+    summary = _run(FasteningCase(model, method=method), source, samples, out / "samples.h5",
+                   workers, scheduler)
+    stats = load_batch(out / "samples.h5").statistics()
+    write_csv(out / "statistics.csv", {
+        "x": xy[:, 0], "y": xy[:, 1], "mean_gap": stats.mean,
+        **{f"gap_q{level * 100:g}": q for level, q in zip(stats.levels, stats.quantiles)},
+        "contact_probability": stats.contact_probability})
+    if plot:
+        from ..batch import plot_statistics
+        from ..riveting import plot_status
+
+        plot_status(model, final, nominal_gaps, out / "nominal.png")
+        plot_statistics(stats, xy, out / "statistics.png")
+    if as_json:
+        click.echo(json.dumps({**summary.as_dict(), "residual_gap_mean": stats.mean.tolist()}))
+    else:
+        _tables(model, sequence, summary, stats)
+    if not sequence.success:
+        fail("the nominal fastening sequence failed: "
+             + next(s.contact.message for s in sequence.steps if not s.success))
+        sys.exit(EXIT_NOT_SOLVED)
+    if summary.failed:
+        fail(f"{summary.failed} of {summary.samples} samples failed (see 'success' in "
+             f"{out / 'samples.h5'})")
+        sys.exit(EXIT_NOT_SOLVED)
+
+
+def _run(case, source, samples, path, workers, scheduler):
+    """run_batch with a progress bar on stderr."""
+    from rich.console import Console
+    from rich.progress import Progress
+
+    from ..batch import run_batch
+
+    with Progress(console=Console(stderr=True), transient=True) as bar:
+        task = bar.add_task("samples", total=samples)
+        return run_batch(case, source, samples, path, workers=workers, scheduler=scheduler,
+                         progress=lambda done, total: bar.update(task, completed=done))
+
+
+def _tables(model, sequence, summary, stats):
+    from rich.table import Table
+
+    out = console()
+    table = Table(title=f"Nominal fastening sequence ({model.n_pairs} pairs)")
+    for column in ("step", "x (mm)", "y (mm)", "tension (N)", "contacts", "max gap (mm)"):
+        table.add_column(column, justify="right")
+    for n, step in enumerate(sequence.steps, 1):
+        pair = step.fasteners[-1]
+        table.add_row(str(n), f"{model.points[pair, 0] * 1e3:.4g}",
+                      f"{model.points[pair, 1] * 1e3:.4g}", f"{step.fastener_forces[-1]:.4g}",
+                      str(int(np.count_nonzero(step.contact.closed))),
+                      f"{step.contact.gaps.max() * 1e3:.4g}")
+    out.print(table)
+    final = sequence.final
+    out.print("final fastener tensions (N): "
+              + ", ".join(f"{t:.4g}" for t in final.fastener_forces))
+    out.print(f"variation: {summary.samples} samples, {summary.computed} computed, "
+              f"{summary.reused} reused, {summary.failed} failed in {summary.seconds:.3g} s; "
+              f"mean final gap {stats.mean.mean() * 1e3:.4g} mm, largest probability of "
+              f"contact {stats.contact_probability.max():.3g}")
