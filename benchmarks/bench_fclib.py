@@ -95,7 +95,7 @@ def _table(rows, tol):
         fam = family(r["file"])
         published = PUBLISHED.get(fam)
         acc, ref, ratio = (
-            (f"{published[0]:.0e}", f"{published[1]:.2e}", f"{r['seconds'] / published[1]:.2g}")
+            (f"{published[0]:.0e}", f"{published[1]:.2e}", f"{r['seconds'] / published[1]:.3g}")
             if published else ("-", "-", "-")
         )
         mark = "" if r["converged"] else " (not converged)"

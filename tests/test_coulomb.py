@@ -30,6 +30,7 @@ from contactqp.local import (
     contact_status,
     natural_map_error,
 )
+from contactqp.solvers import coulomb
 from contactqp.solvers.coulomb import alart_curnier, solve_coulomb
 from contactqp.solvers.local import solve_local
 from contactqp.solvers.pgs import GaussSeidel
@@ -154,11 +155,19 @@ def test_newton_agrees_with_gauss_seidel_where_unique(dim, sparse):
     np.testing.assert_allclose(solution.r, reference, rtol=0, atol=1e-9 * np.abs(reference).max())
 
 
-def test_dense_and_sparse_w_give_the_same_solution():
-    dense = random_problem(10, 3, seed=7)
-    sparse = LocalProblem(sp.csr_matrix(dense.W), dense.q, dense.mu, 3)
-    a, b = solve_coulomb(dense, tol=1e-12), solve_coulomb(sparse, tol=1e-12)
-    np.testing.assert_allclose(a.r, b.r, rtol=0, atol=1e-10 * np.abs(a.r).max())
+def test_dense_and_sparse_newton_matrices_give_the_same_solution(monkeypatch):
+    # a small sparse W is factored dense; lift the thresholds to run the SuperLU path, on a full
+    # W and on one with missing blocks (diagonally dominant, so SPD)
+    monkeypatch.setattr(coulomb, "DENSE_SIZE", 0)
+    monkeypatch.setattr(coulomb, "DENSE_FILL", 2.0)
+    base = random_problem(10, 3, seed=7)
+    pattern = np.kron(np.random.default_rng(1).random((10, 10)) < 0.3, np.ones((3, 3)))
+    holes = base.W * np.maximum(pattern, pattern.T) + 3 * np.eye(30)
+    for W in (base.W, holes):
+        d = solve_coulomb(LocalProblem(W, base.q, base.mu, 3), tol=1e-12)
+        s = solve_coulomb(LocalProblem(sp.csr_matrix(W), base.q, base.mu, 3), tol=1e-12)
+        assert d.converged and s.converged
+        np.testing.assert_allclose(s.r, d.r, rtol=0, atol=1e-10 * np.abs(d.r).max())
 
 
 def test_warm_start():

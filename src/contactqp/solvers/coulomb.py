@@ -65,6 +65,7 @@ MEMORY = 5  # iterations looked back by the non-monotone line search (twice that
 ARMIJO = 1e-4  # sufficient-decrease constant
 MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
 STALL = 20  # a Newton run stops when its best error has not halved in this many iterations
+DENSE_SIZE, DENSE_FILL = 150, 0.2  # sparse W at most this size or this full is made dense
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
 
@@ -121,6 +122,9 @@ class _Newton:
     """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``."""
 
     def __init__(self, W, q, mu, dim, error_of):
+        m = W.shape[0]
+        if sp.issparse(W) and (m <= DENSE_SIZE or W.nnz >= DENSE_FILL * m * m):
+            W = W.toarray()  # LAPACK on a small or well-filled matrix beats SuperLU
         self.W, self.q, self.mu, self.d = W, q, mu, dim
         self.nc = mu.shape[0]
         self.sparse = sp.issparse(W)
