@@ -6,13 +6,13 @@ friction along a load history.
 
 The schema
 ----------
-A problem file has seven top-level entries, ``name``, ``[model]``, ``[loads]``,
-``[[obstacle]]``, ``[friction]``, ``[loading]`` and ``[solver]``; nothing else is accepted. Every table rejects keys it does not know, so that a
-typo (``flexibilty``, ``gap``, ``max_iters``) is an error and never a silently ignored setting.
-Units are SI (metres, newtons): the file stores numbers, the physics decides their units, and the
-results come back in the same units. Node and freedom indices count from 0; freedoms are ordered
-node by node. Numbered entries in messages (``[[obstacle]] #2``, ``[loads].entries #3``) count
-from 1, in the order they appear in the file.
+A problem file has seven top-level entries, ``name``, ``[model]``, ``[loads]``, ``[[obstacle]]``,
+``[friction]``, ``[loading]`` and ``[solver]``; nothing else is accepted. Every table rejects keys
+it does not know, so that a typo (``flexibilty``, ``gap``, ``max_iters``) is an error and never a
+silently ignored setting. Units are SI (metres, newtons): the file stores numbers, the physics
+decides their units, and the results come back in the same units. Node and freedom indices count
+from 0; freedoms are ordered node by node. Numbered entries in messages (``[[obstacle]] #2``,
+``[loads].entries #3``) count from 1, in the order they appear in the file.
 
 **Arrays.** Every array-valued key takes either an inline TOML array (``[1.0, 2.0]``,
 ``[[1, 0], [0, 1]]``) or a *file reference*: a path string (``"R.csv"``) or an inline table
@@ -1010,8 +1010,6 @@ def _loading(where: _Where, table, loads: np.ndarray | None, n: int):
         raise where.error("[loading]", f"give exactly one of factors and points ({found} given)")
     steps = _option(where, "steps", table.get("steps", 1), 1, "[loading].steps")
     if "factors" in table:
-        if loads is None:
-            raise where.error("[loading].factors", "are multiples of [loads], which is missing")
         factors = _array(where, table["factors"], "[loading].factors", 1)
         if factors.size == 0:
             raise where.error("[loading].factors", "is empty")
@@ -1042,7 +1040,8 @@ class ProblemSpec:
     ----------
     problem : ContactProblem or FrictionalProblem
         The assembled problem (loads in N, lengths in m, as in the file): a
-        :class:`~contactqp.FrictionalProblem` when the file has ``[friction]``.
+        :class:`~contactqp.FrictionalProblem` when the file has ``[friction]``, whose loads are
+        the first of ``[loading].points`` when these replace ``[loads]``.
     solver : str
         A name from :data:`contactqp.SOLVERS`, or the friction route (``"coulomb"``,
         ``"tresca"`` or ``"polygonal"``).
