@@ -1,4 +1,4 @@
-r"""Coulomb friction on the local form ``u = W r + q``: semismooth Newton with a Gauss-Seidel net.
+r"""Coulomb friction on the local form ``u = W r + q``: semismooth Newton, Gauss-Seidel fallback.
 
 Formulation (Alart and Curnier 1991). For each contact, with ``rho_i > 0``,
 
@@ -10,21 +10,24 @@ Formulation (Alart and Curnier 1991). For each contact, with ``rho_i > 0``,
 and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
 :class:`~contactqp.local.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
 ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
-contact, built for all contacts at once with numpy). Each Newton step factors it with LAPACK
-(``scipy.linalg.lu_factor``, dense ``W``) or SuperLU (``scipy.sparse.linalg.splu``, sparse
-``W``).
+contact, built for all contacts at once with numpy; ``rho_i`` = 1 / mean diagonal of ``W_ii``).
+Each Newton step factors it with LAPACK (``scipy.linalg.lu_factor``: dense ``W``, or sparse
+with ``m <= 150`` or 20 % fill) or SuperLU (``scipy.sparse.linalg.splu``; the matrix is assembled
+on ``W``'s stored blocks, straight into CSC storage).
 
 Safeguards, for the singular ``W`` of rigid multibody problems (more contact unknowns than body
 freedoms):
 
 * the Newton matrix is regularised as ``A + B (W + eta D)``, ``D`` the mean diagonal of each
-  contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (a
-  Levenberg-Marquardt-like choice: it vanishes at the solution, so convergence stays fast);
+  contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (it vanishes at
+  the solution, so convergence stays fast);
 * a non-monotone Armijo line search on the merit ``1/2 ||Phi||^2`` (the reference is the
   largest merit of the last 5 iterations; Grippo, Lampariello and Lucidi 1986), because the
   merit has kinks where contacts change status;
-* when Newton stalls, nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.solvers.pgs`) from the best
-  point so far, then Newton again from where they stop.
+* a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
+  (``eta`` adapted to the success of full steps) then continues from the best point;
+* if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.solvers.pgs`) and both
+  Newton runs again, in at most 3 rounds.
 
 Convergence is decided only by :func:`~contactqp.local.natural_map_error` (<= ``tol``), never by
 the solver's own residual. Cohesion is handled by translating each cone to its apex
@@ -193,9 +196,10 @@ class _Newton:
                                              check_finite=False)
         return step if np.all(np.isfinite(step)) else None
 
-    def line_search(self, r, step, reference, merit, t):
-        """Backtrack from ``t`` to the non-monotone Armijo condition; None when it fails."""
-        for _ in range(MAX_HALVINGS):
+    def line_search(self, r, step, reference, merit, tries=MAX_HALVINGS):
+        """Backtrack from a full step to the non-monotone Armijo condition; None if it fails."""
+        t = 1.0
+        for _ in range(tries):
             trial = r + t * step
             u, Phi = self.residual(trial)
             if 0.5 * float(Phi @ Phi) <= reference - ARMIJO * t * merit:
@@ -231,7 +235,7 @@ class _Newton:
                 for _ in range(LM_TRIES):
                     step = self.direction(r, u, eta)
                     if step is not None:
-                        found = self.line_search(r, step, reference, merit, 1.0)
+                        found = self.line_search(r, step, reference, merit, tries=1)
                         if found:
                             eta = max(0.1 * eta, LM_MIN)
                             break
@@ -240,7 +244,7 @@ class _Newton:
                 step = self.direction(r, u, min(REGULARISATION, error))
             if step is None:
                 return best[0], best[1], k, "singular Newton matrix"
-            found = found or self.line_search(r, step, reference, merit, 1.0)
+            found = found or self.line_search(r, step, reference, merit)
             if found is None:
                 return best[0], best[1], k, "line search failed"
             r, u, Phi = found

@@ -62,6 +62,8 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
         r[normal] = x
         return natural_map_error(problem, r)
 
+    if start.size == 0:
+        return start
     best, best_error = start, error_of(start)
     x = start
     for _ in range(steps):
