@@ -181,6 +181,18 @@ def test_warm_start():
     assert near.converged and near.iterations < cold.iterations
 
 
+def test_gauss_seidel_rounds_finish_what_newton_cannot():
+    # one Newton iteration per run cannot reach 1e-10 from zero; the Gauss-Seidel sweeps between
+    # rounds must, and land on the (unique) solution
+    problem = random_problem(12, 3, seed=3)
+    reference = solve_coulomb(problem, tol=1e-12)
+    solution = solve_coulomb(problem, tol=1e-10, max_iter=1)
+    assert solution.converged and "gauss-seidel" in solution.message
+    assert "levenberg-marquardt 1 it." in solution.message
+    np.testing.assert_allclose(solution.r, reference.r, rtol=0,
+                               atol=1e-7 * np.abs(reference.r).max())
+
+
 def test_non_convergence_is_reported_not_hidden():
     # W = 0 is positive semidefinite, but with q_N < 0 no reaction can close the contact:
     # u = q whatever r, so the problem has no solution (the iterates grow without bound and the
