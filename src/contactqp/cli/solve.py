@@ -59,7 +59,7 @@ def _table(title: str, columns, number_width: int | None = 10):
     from rich import box
     from rich.table import Table
 
-    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
+    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False, collapse_padding=True)
     for column in columns:  # numbers keep their width, labels wrap
         if column == "contact":
             table.add_column(column, overflow="fold")
@@ -72,8 +72,9 @@ def _table(title: str, columns, number_width: int | None = 10):
 def _result_table(spec, result, title):
     """Per-contact table and certificate of one result (frictionless or with friction).
 
-    With friction: gap, normal force, tangential force(s) and slip of the step along the
-    tangent(s), and the status; the per-contact dissipation is in ``--out``'s contacts.csv.
+    With friction: gap, normal force, tangential force(s), slip of the step (along the tangent
+    in 2-D, its length in 3-D) and status; ``--out``'s contacts.csv has every component and the
+    dissipation.
     """
     constraints = spec.problem.constraints
     out = console()
@@ -90,13 +91,15 @@ def _result_table(spec, result, title):
                   f"{result.wall_time * 1e3:.3g} ms; certificate worst residual {cert.worst:.2e} "
                   f"({'passed' if cert.passed else 'FAILED'})")
         return
-    tangents = ["tangential"] if spec.problem.dim == 2 else ["t1", "t2"]
+    planar = spec.problem.dim == 2
+    tangents = ["tangential (N)"] if planar else ["t1 (N)", "t2 (N)"]
     table = _table(f"{title}: {result.solver}, {result.message}", (
-        "contact", "gap (m)", "normal (N)", *[f"{t} (N)" for t in tangents],
-        *[f"slip {t} (m)" if len(tangents) > 1 else "slip (m)" for t in tangents], "status"))
+        "contact", "gap (m)", "normal (N)", *tangents, "slip (m)" if planar else "|slip| (m)",
+        "status"))
+    slips = result.slip[:, 0] if planar else np.linalg.norm(result.slip, axis=1)
     for k in range(constraints.n_constraints):
         table.add_row(constraints.labels[k],
-                      *[f"{v:.4g}" for v in (result.gaps[k], *result.forces[k], *result.slip[k])],
+                      *[f"{v:.4g}" for v in (result.gaps[k], *result.forces[k], slips[k])],
                       result.status_labels[k])
     out.print(table)
     residuals = ", ".join(f"{name} {getattr(cert, name):.1e}" for name in (
