@@ -67,9 +67,10 @@ class LocalProblem:
     r"""A local frictional-contact problem in FCLIB form, optionally with cohesion.
 
     Find ``r`` and ``u`` with ``u = W r + q`` and, for each contact ``i``, the Coulomb law in
-    its De Saxce form: ``r_i`` in the Mohr-Coulomb cone
-    ``C_i = {||r_T|| <= mu_i r_N + c_i}``, ``u_i + mu_i ||u_iT|| e_N`` in the dual cone of
-    ``C_i``'s direction cone, and the two complementary (see :func:`natural_map_error`).
+    its De Saxce form: ``r_i`` in the Mohr-Coulomb cone ``C_i = {||r_T|| <= mu_i r_N + c_i}``,
+    i.e. ``r~_i = r_i + (c_i / mu_i) e_N`` in the Coulomb cone ``K_i = {||r_T|| <= mu_i r_N}``,
+    ``u_i + mu_i ||u_iT|| e_N`` in the dual cone ``K_i*``, and the two orthogonal
+    (see :func:`natural_map_error`).
 
     With cohesion ``c_i > 0`` the cone is the Coulomb cone translated along the normal, its
     apex at ``r_N = -c_i / mu_i`` (the tensile strength of the interface): the contact transmits

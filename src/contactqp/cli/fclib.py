@@ -47,7 +47,7 @@ def fclib(files, tol, as_json, solution_dir):
                   "iterations": solution.iterations, "seconds": solution.seconds,
                   **{s: int(np.count_nonzero(solution.status == s)) for s in STATUSES}}
         if not solution.converged:
-            fail(f"{path}: {solution.message}; no solution written")
+            fail(f"{path}: {solution.message}" + ("; no solution written" if solution_dir else ""))
             exit_code = max(exit_code, EXIT_NOT_SOLVED)
         elif solution_dir:
             solution_dir.mkdir(parents=True, exist_ok=True)

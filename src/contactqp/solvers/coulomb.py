@@ -52,12 +52,8 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from ..errors import InvalidInputError
-from ..local import (
-    LocalProblem,
-    check_positive_semidefinite,
-    contact_status,
-    natural_map_error,
-)
+from ..local import LocalProblem, check_positive_semidefinite, natural_map_error
+from .local import finish
 from .pgs import GaussSeidel
 
 __all__ = ["solve_coulomb", "alart_curnier"]
@@ -306,8 +302,6 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
         If ``W`` is not positive semidefinite
         (:func:`~contactqp.local.check_positive_semidefinite`).
     """
-    from .local import LocalSolution
-
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
     check_positive_semidefinite(problem.W)
@@ -339,14 +333,4 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
                 break
         if error <= tol:
             break
-    r = r - shift
-    u = np.asarray(W @ r).reshape(-1) + problem.q
-    error = natural_map_error(problem, r, u)
-    converged = error <= tol
-    verdict = "converged" if converged else f"not converged to {tol:g}"
-    return LocalSolution(
-        r=r, u=u, error=error, converged=converged, iterations=iterations,
-        seconds=time.perf_counter() - start,
-        message=f"{verdict}: {', '.join(stages)}; natural-map error {error:.2e}",
-        status=contact_status(problem, r, u),
-    )
+    return finish(problem, r - shift, tol, iterations, start, ", ".join(stages))

@@ -115,9 +115,24 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
     reactions = _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
-    u = np.asarray(W @ r).reshape(-1) + problem.q
-    seconds = time.perf_counter() - start
+    return finish(problem, r, tol, solution.iterations, start, solution.message)
+
+
+def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
+           detail: str) -> LocalSolution:
+    """The :class:`LocalSolution` of reactions ``r``, checked by the natural-map error.
+
+    ``u``, the error, ``converged`` and the contact status are computed here from ``r`` alone,
+    independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
+    ``detail`` its account of the iterations, put in the message beside the verdict and error.
+    """
+    u = np.asarray(problem.W @ r).reshape(-1) + problem.q
     error = natural_map_error(problem, r, u)
-    return LocalSolution(r=r, u=u, error=float(error), converged=bool(error <= tol),
-                         iterations=solution.iterations, seconds=seconds, message=solution.message,
-                         status=contact_status(problem, r, u))
+    converged = bool(error <= tol)
+    verdict = "converged" if converged else f"not converged to {tol:g}"
+    return LocalSolution(
+        r=r, u=u, error=error, converged=converged, iterations=iterations,
+        seconds=time.perf_counter() - start,
+        message=f"{verdict}: {detail}; natural-map error {error:.2e}",
+        status=contact_status(problem, r, u),
+    )
