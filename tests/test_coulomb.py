@@ -123,6 +123,35 @@ def test_open_cohesive_contact_holds_tension_until_its_strength():
     assert broken.status.tolist() == ["open"]
 
 
+def assert_mohr_coulomb_law(problem, r, u, atol):
+    """The cohesive Coulomb law checked contact by contact, without the natural map."""
+    d, nc = problem.dim, problem.n_contacts
+    R, U = r.reshape(nc, d), u.reshape(nc, d)
+    mu, c = problem.mu, problem.cohesion
+    rt, ut = np.linalg.norm(R[:, 1:], axis=1), np.linalg.norm(U[:, 1:], axis=1)
+    bound = mu * R[:, 0] + c
+    assert np.all(rt <= bound + atol) and np.all(bound >= -atol)  # inside the cone
+    assert np.all(U[:, 0] >= -atol)  # no interpenetration
+    carrying = bound > atol  # reaction away from the apex: closed contact
+    np.testing.assert_allclose(U[carrying, 0], 0.0, atol=atol)
+    sliding = ut > atol  # slip: on the cone's edge, opposite to the slip velocity
+    np.testing.assert_allclose(R[sliding, 1:], -(bound / ut)[sliding, None] * U[sliding, 1:],
+                               atol=atol)
+    return carrying, sliding
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_cohesive_solution_obeys_the_law_contact_by_contact(dim):
+    base = random_problem(15, dim, seed=11)
+    cohesion = np.random.default_rng(5).uniform(0.0, 0.3, 15)
+    problem = LocalProblem(base.W, base.q, base.mu, dim, cohesion=cohesion)
+    solution = solve_coulomb(problem, tol=1e-12)
+    assert solution.converged
+    carrying, sliding = assert_mohr_coulomb_law(problem, solution.r, solution.u, 1e-9)
+    assert carrying.any() and sliding.any() and (carrying & ~sliding).any()
+    np.testing.assert_array_equal(solution.status == "slip", sliding & carrying)
+
+
 def random_problem(nc, dim, seed, mu=0.3, sparse=False):
     """A well-conditioned SPD W (condition number < 10) and a q that closes most contacts."""
     rng = np.random.default_rng(seed)
