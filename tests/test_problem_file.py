@@ -950,6 +950,9 @@ FRICTION_CASES = {
                           ["[friction].cohesion: cohesion must be >= 0"]),
     "cohesion without mu": (FRICTION.replace("mu = 0.3", "mu = [0.3, 0.0]") + "cohesion = 5.0\n",
                             ["[friction].cohesion: cohesion > 0 needs mu > 0", "contact 1"]),
+    "cohesion on a gapped contact": (
+        FRICTION.replace("gaps = [0.0, 0.0]", "gaps = [0.0, 1e-6]") + "cohesion = 5.0\n",
+        ["[friction]: cohesion models a bonded interface", "contact 1"]),
     "facets below 3": (FRICTION + "facets = 2\n",
                        ["[friction].facets: facets must be an integer >= 3, got 2"]),
     "facets not an integer": (FRICTION + "facets = 6.5\n",

@@ -77,7 +77,8 @@ Friction needs contact nodes with 2 freedoms (2-D) or 3 (3-D), the same number a
 ``mu``         Friction coefficient, >= 0 (required): a number, or one per contact (array or
                file, in contact order).
 ``cohesion``   Cohesion ``c`` (N), >= 0, a number or one per contact (default 0): the friction
-               set is ``|r_T| <= mu r_N + c``, and a contact with ``c > 0`` needs ``mu > 0``.
+               set is ``|r_T| <= mu r_N + c``; a contact with ``c > 0`` needs ``mu > 0`` and
+               no initial gap (a bonded interface, see :class:`~contactqp.FrictionalProblem`).
 ``facets``     Integer >= 3: each friction disc becomes the inscribed regular polygon of that
                many sides, the method's linear cone (in 2-D the cone is linear already).
 ``solver``     ``"coulomb"`` (default: exact cone, semismooth Newton), ``"tresca"`` (exact
