@@ -8,7 +8,7 @@ colour order, with one sparse row-block product and one batched local solve per 
 
 The one-contact problem is solved by the projected fixed point of the De Saxce formulation,
 ``r_i <- P_K(r_i - rho_i (u_i + mu_i ||u_iT|| e_N))`` with ``rho_i = 1 / ||W_ii||_F``
-(Jourdan, Alart and Jean 1998; Acary, Bremond and Huber 2018, section 4).
+(Jourdan, Alart and Jean, CMAME 155, 1998; Acary, Bremond and Huber, INRIA RR-9118, 2018).
 
 This is the robust, linearly convergent fallback of :func:`contactqp.solvers.coulomb.solve_coulomb`
 and works on the FCLIB form (no cohesion: the caller translates a cohesive problem first).
@@ -86,7 +86,7 @@ class GaussSeidel:
         else:
             self.diag_blocks = W.reshape(nc, d, nc, d)[idx, :, idx, :].copy()
         norms = np.sqrt(np.sum(self.diag_blocks ** 2, axis=(1, 2)))
-        self.rho = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+        self.rho = 1.0 / np.where(norms > 0, norms, 1.0)
 
     def _local_solve(self, Wb, b, mu, rho, R):
         """Batched one-contact solves ``u = Wb r + b`` by the projected fixed point, from R."""
