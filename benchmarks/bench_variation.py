@@ -9,10 +9,12 @@ model (assembly and condensation) is timed once, apart.
 
 Rows:
 
-* ``active-set, cold``: the project's box-QP solver on the Schur-reduced dual, every sample from
-  the solver's own cold start (chunks of one sample);
-* ``active-set, warm``: the same, each sample warm started from the previous one of its chunk;
-* ``nnls``: scipy's Lawson-Hanson NNLS on the Cholesky factor of the reduced dual (no warm start);
+* ``<method>, cold``: every sample from the solver's own cold start (chunks of one sample);
+* ``<method>, warm``: each sample warm started from the previous one of its chunk;
+
+for the methods of :meth:`contactqp.riveting.FastenerClosure.solve` on the Schur-reduced dual:
+``lawson-hanson`` (the default, bordered Cholesky factors), ``active-set`` (the project's
+primal-dual box-QP solver) and ``nnls`` (scipy's, cold only),
 
 each with 1 worker (in-process) and 2 worker processes. Then the target run: ``--target``
 samples (10,000 by default) with the fastest configuration.
@@ -63,13 +65,13 @@ def main(argv=None):
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         directory = Path(tmp)
-        configurations = [("active-set, cold", "active-set", 1), ("active-set, warm",
-                                                                  "active-set", args.chunk),
-                          ("nnls", "nnls", args.chunk)]
+        configurations = [(f"{method}, {start}", method, 1 if start == "cold" else args.chunk)
+                          for method in ("lawson-hanson", "active-set")
+                          for start in ("cold", "warm")] + [("nnls, cold", "nnls", args.chunk)]
         for label, method, chunk in configurations:
             case = FasteningCase(model, method=method)
             for workers in (1, 2):
-                samples = args.samples if method == "nnls" else max(args.samples // 4, 8)
+                samples = args.samples if method != "active-set" else max(args.samples // 4, 8)
                 per_second, failed = rate(case, source, samples, workers, chunk, directory,
                                           f"{method}-{chunk}-{workers}")
                 rows.append((label, workers, samples, per_second, failed))
@@ -81,10 +83,10 @@ def main(argv=None):
                   f"{1e4 / per_second:.0f} | {failed} |")
         if args.target:
             label, workers, *_ = max(rows, key=lambda r: r[3])
-            method = "nnls" if label == "nnls" else "active-set"
+            method, start = label.split(", ")
             case = FasteningCase(model, method=method)
             summary = run_batch(case, source, args.target, directory / "target.h5",
-                                workers=workers, chunk_size=args.chunk)
+                                workers=workers, chunk_size=1 if start == "cold" else args.chunk)
             print()
             print(f"target: {summary.samples} samples ({label}, {workers} workers) in "
                   f"{summary.seconds:.1f} s, {summary.failed} failed "

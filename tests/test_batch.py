@@ -41,7 +41,8 @@ def test_gaussian_field_has_its_target_amplitude_and_correlation():
 
 
 def test_sample_k_does_not_depend_on_who_draws_it(source):
-    np.testing.assert_array_equal(source.realisations([5, 17])[1], source.realisations(range(18))[17])
+    np.testing.assert_array_equal(source.realisations([5, 17])[1],
+                                  source.realisations(range(18))[17])
     other = GaussianGapField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=12)
     assert not np.allclose(other.realisations([5]), source.realisations([5]))
 
@@ -69,7 +70,7 @@ def test_shared_dual_gives_the_fresh_problem_answer(riveted, source):
 @pytest.fixture(scope="module")
 def serial(riveted, source, tmp_path_factory):
     path = tmp_path_factory.mktemp("serial") / "s.h5"
-    summary = run_batch(FasteningCase(riveted, method="active-set"), source, N, path, chunk_size=5)
+    summary = run_batch(FasteningCase(riveted), source, N, path, chunk_size=5)
     assert summary.as_dict() | {"seconds": 0} == {"samples": N, "computed": N, "reused": 0,
                                                   "failed": 0, "seconds": 0}
     return load_batch(path)
@@ -85,7 +86,7 @@ def assert_same(data, reference):
 
 
 def test_process_pool_gives_the_serial_results(riveted, source, serial, tmp_path):
-    summary = run_batch(FasteningCase(riveted, method="active-set"), source, N,
+    summary = run_batch(FasteningCase(riveted), source, N,
                         tmp_path / "p.h5", workers=2, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(tmp_path / "p.h5"), serial)
@@ -97,14 +98,14 @@ def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path
     with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
                                   protocol="tcp", host="127.0.0.1",
                                   dashboard_address=None) as cluster:
-        summary = run_batch(FasteningCase(riveted, method="active-set"), source, N,
+        summary = run_batch(FasteningCase(riveted), source, N,
                             tmp_path / "d.h5", scheduler=cluster.scheduler_address, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(tmp_path / "d.h5"), serial)
 
 
 def test_interrupted_runs_resume_with_the_rest_only(riveted, source, serial, tmp_path):
-    case, path = FasteningCase(riveted, method="active-set"), tmp_path / "r.h5"
+    case, path = FasteningCase(riveted), tmp_path / "r.h5"
     first = run_batch(case, source, N, path, chunk_size=5, limit=7)  # stops inside a chunk
     assert (first.computed, first.reused, first.complete) == (7, 0, False)
 

@@ -68,7 +68,7 @@ def test_one_fastener_closing_a_uniform_gap_matches_the_direct_solve(small):
             for p in (small.assembly.lower, small.assembly.upper))
     assert np.all(np.delete(W[:, f], f) < W[f, f])  # the premise: no other pair closes
     closure = FastenerClosure(small.problem(np.full(k, g)), [f])
-    for method in ("nnls", "active-set"):
+    for method in ("lawson-hanson", "nnls", "active-set"):
         state = closure.solve(method=method)
         assert state.success
         np.testing.assert_allclose(state.fastener_forces, [g / W[f, f]], rtol=1e-9)
@@ -99,14 +99,18 @@ def test_sequence_order_changes_the_path_not_the_end_without_friction(small, rou
     assert np.all(final.status[small.fasteners] == 2)
 
 
-def test_routes_agree_on_a_rough_gap_field(small, rough_gaps):
+def test_three_routes_agree_on_a_rough_gap_field(small, rough_gaps):
     closure = FastenerClosure(small.problem(rough_gaps), small.fasteners)
-    a, b = closure.solve(method="nnls"), closure.solve(method="active-set")
-    assert a.success and b.success
-    assert np.count_nonzero(a.contact.closed) > 0
-    np.testing.assert_allclose(a.multipliers, b.multipliers, rtol=1e-6,
-                               atol=1e-8 * np.max(np.abs(a.multipliers)))
-    np.testing.assert_array_equal(a.status, b.status)
+    reference = closure.solve(method="nnls")  # scipy's NNLS on the factor: independent
+    assert reference.success and np.count_nonzero(reference.contact.closed) > 0
+    warm = reference.multipliers * (1 + 0.3 * np.cos(np.arange(small.n_pairs)))  # a nearby start
+    for method, start in [("lawson-hanson", None), ("lawson-hanson", warm),
+                          ("active-set", None), ("active-set", warm)]:
+        state = closure.solve(method=method, forces0=start)
+        assert state.success, (method, state.contact.message)
+        np.testing.assert_allclose(state.multipliers, reference.multipliers, rtol=1e-6,
+                                   atol=1e-8 * np.max(np.abs(reference.multipliers)))
+        np.testing.assert_array_equal(state.status, reference.status)
 
 
 def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):

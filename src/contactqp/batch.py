@@ -102,7 +102,8 @@ class GapVariation:
 
     def __init__(self, problem: ContactProblem, **options):
         if not isinstance(problem, ContactProblem):
-            raise InvalidInputError(f"problem must be a ContactProblem, got {type(problem).__name__}")
+            raise InvalidInputError(
+                f"problem must be a ContactProblem, got {type(problem).__name__}")
         self.problem = problem
         self.options = {"tol": 1e-10, **options}
         problem.dual()
@@ -194,8 +195,9 @@ class GaussianGapField:
     def realisations(self, indices) -> np.ndarray:
         """Gap fields of the samples ``indices`` (m), shape (len(indices), m)."""
         factor = self._square_root()
-        normal = np.array([np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(int(k),)))
-                           .standard_normal(len(self.mean)) for k in indices])
+        streams = (np.random.SeedSequence(self.seed, spawn_key=(int(k),)) for k in indices)
+        normal = np.array([np.random.default_rng(stream).standard_normal(len(self.mean))
+                           for stream in streams])
         return self.mean + normal.reshape(len(indices), -1) @ factor.T
 
     def describe(self) -> dict:
@@ -285,7 +287,8 @@ def _h5py():
     try:
         import h5py
     except ImportError:
-        raise MissingDependencyError("batch stores need h5py: pip install 'contactqp[hdf5]'") from None
+        raise MissingDependencyError(
+            "batch stores need h5py: pip install 'contactqp[hdf5]'") from None
     return h5py
 
 

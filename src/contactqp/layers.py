@@ -17,10 +17,11 @@ reported, to be compared with the weight).
 
 Both layers are condensed (:func:`~contactqp.compliance.condensation.condense`) to the interface
 nodes and the nodes of the upper layer's left side; gravity enters through the loads that give,
-on these nodes, the displacements of the full model under gravity alone. The history ``d = 0 .. d_max`` (gravity
-first) is solved by :func:`~contactqp.loading.solve_history`, the friction state carried over.
+on these nodes, the displacements of the full model under gravity alone. The history
+``d = 0 .. d_max`` (gravity first) is solved by :func:`~contactqp.loading.solve_history`, the
+friction state carried over.
 
-The analytic limit of the sliding block: when every contact slips, the interface carries
+The analytic limit of the sliding block: when no contact sticks, the interface carries
 ``H = sum_i (mu r_N,i + c_i) = c A + mu N`` with ``A`` the interface area and ``N`` the normal
 force, here the weight of the upper layer. Sliding starts when the load reaches it.
 """

@@ -56,7 +56,8 @@ from .result import ContactResult
 from .solvers import solve_box_qp
 
 __all__ = ["Plate", "Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
-           "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened", "STATUS_LABELS",
+           "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened",
+           "STATUS_LABELS",
            "write_vtu", "plot_status"]
 
 #: Pair status codes of :attr:`FastenedResult.status`, by index.
@@ -111,7 +112,8 @@ def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -
 
     bad = [s for s in supports if s not in _EDGES]
     if bad or not supports:
-        raise InvalidInputError(f"supports must be edges among {', '.join(_EDGES)}, got {supports!r}")
+        raise InvalidInputError(f"supports must be edges among {', '.join(_EDGES)}, got "
+                                f"{supports!r}")
     mesh = plate_mesh(plate.length, plate.width, *cells, cell="tri")
     basis = skfem.Basis(mesh, skfem.ElementTriMorley())
     scale = plate.young * plate.thickness ** 3 / (12.0 * (1.0 + plate.poisson))
@@ -189,7 +191,8 @@ class Assembly:
             raise InvalidInputError("lower and upper plates must have the same length and width")
         nx, ny = (int(n) for n in self.grid)
         if nx < 1 or ny < 1 or int(self.refine) < 1:
-            raise InvalidInputError(f"grid and refine must be positive, got {self.grid}, {self.refine}")
+            raise InvalidInputError(f"grid and refine must be positive, got {self.grid}, "
+                                    f"{self.refine}")
         held = set(self.supports)
         xs, cx = _axis(nx, self.lower.length, "left" in held, "right" in held, self.refine)
         ys, cy = _axis(ny, self.lower.width, "bottom" in held, "top" in held, self.refine)
@@ -245,7 +248,7 @@ class RivetingModel:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return variant(self.base_problem, gaps=gaps)
 
-    def fasten(self, gaps, order=None, *, method: str = "nnls",
+    def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
                tol: float = 1e-10) -> "FasteningSequence":
         """Install the fasteners one after another on the gap field ``gaps`` (m, shape (k,)).
 
@@ -257,7 +260,7 @@ class RivetingModel:
             Positions in :attr:`fasteners` in installation order (default: as listed).
         method, tol
             See :meth:`FastenerClosure.solve`; each step is warm started from the previous one
-            with ``method="active-set"``.
+            (except with ``method="nnls"``).
 
         Returns
         -------
@@ -331,6 +334,64 @@ class FasteningSequence:
         return all(step.success for step in self.steps)
 
 
+def _lawson_hanson(S, q, x0, tol: float, max_iter: int):
+    """``min 1/2 x^T S x - q^T x, x >= 0`` by Lawson and Hanson's active-set method.
+
+    The passive set ``P`` (``x_P > 0``) grows by the contact of largest ``q - S x`` (the most
+    interpenetrating one) at each outer step; ``x_P = S_PP^-1 q_P`` with a Cholesky factor of
+    ``S_PP`` bordered at each addition (refactored after a removal, which the inner loop makes
+    when ``x_P`` would leave the orthant). Started from the support of ``x0`` when given.
+    Returns ``(x, converged, iterations, factorizations)``.
+
+    References: C. L. Lawson, R. J. Hanson, Solving Least Squares Problems, ch. 23 (1974).
+    """
+    x = np.zeros(len(q))
+    passive = [] if x0 is None else np.flatnonzero(x0 > 0).tolist()
+    x[passive] = 0 if x0 is None else x0[passive]
+    threshold = tol * max(float(np.max(np.abs(q))), np.finfo(float).tiny)
+    factorizations = 0
+
+    def factor(indices):
+        nonlocal factorizations
+        factorizations += 1
+        return np.linalg.cholesky(S[np.ix_(indices, indices)]) if indices else np.zeros((0, 0))
+
+    def solve(L, rhs):
+        y = scipy.linalg.solve_triangular(L, rhs, lower=True, check_finite=False)
+        return scipy.linalg.solve_triangular(L, y, lower=True, trans=1, check_finite=False)
+
+    L = factor(passive)
+    for iteration in range(1, max_iter + 1):
+        while passive:  # x_P = argmin on P, keeping x_P > 0
+            z = solve(L, q[passive])
+            if np.all(z > 0):
+                x[passive] = z
+                break
+            current = x[passive]
+            blocked = np.flatnonzero(z <= 0)
+            ratios = current[blocked] / (current[blocked] - z[blocked])
+            step = current + float(np.min(ratios)) * (z - current)
+            step[blocked[np.argmin(ratios)]] = 0.0
+            x[passive] = np.maximum(step, 0.0)
+            passive = [i for i in passive if x[i] > 0]
+            L = factor(passive)
+        gradient = q - S[:, passive] @ x[passive]
+        gradient[passive] = -np.inf
+        j = int(np.argmax(gradient))
+        if gradient[j] <= threshold:
+            return x, True, iteration, factorizations
+        border = scipy.linalg.solve_triangular(L, S[passive, j], lower=True, check_finite=False)
+        pivot = S[j, j] - border @ border
+        if not pivot > 0:
+            return x, False, iteration, factorizations
+        k = len(passive)
+        grown = np.zeros((k + 1, k + 1))
+        grown[:k, :k], grown[k, :k], grown[k, k] = L, border, np.sqrt(pivot)
+        L = grown
+        passive.append(j)
+    return x, False, max_iter, factorizations
+
+
 class FastenerClosure:
     r"""The dual of a contact problem with some rows closed by fasteners, reduced once.
 
@@ -384,23 +445,25 @@ class FastenerClosure:
             return np.zeros(len(q)), False, f"nnls: {exc}", 0, 1
         return forces, True, "nnls converged (iterations not reported)", 0, 1
 
-    def solve(self, gaps=None, *, method: str = "nnls", forces0=None,
+    def solve(self, gaps=None, *, method: str = "lawson-hanson", forces0=None,
               tol: float = 1e-10) -> "FastenedResult":
         """Solve for the initial ``gaps`` (m, shape (m,); default: the problem's).
 
         Parameters
         ----------
         gaps : array_like, shape (m,), optional
-        method : {"nnls", "active-set"}
-            ``"nnls"``: Lawson and Hanson's active-set method for non-negative least squares
-            (:func:`scipy.optimize.nnls`) on ``min ||L^T lambda_c - L^-1 q||`` with
-            ``S = L L^T``; no warm start, it adds one contact at a time from none. ``"active-set"``:
-            the project's box-QP solver (:func:`~contactqp.solvers.solve_box_qp`) on ``S``,
-            warm started from ``forces0``.
+        method : {"lawson-hanson", "active-set", "nnls"}
+            ``"lawson-hanson"`` (default): Lawson and Hanson's active-set method on ``S``
+            directly, adding one contact at a time, warm started from the support of
+            ``forces0``. ``"active-set"``: the project's primal-dual box-QP solver
+            (:func:`~contactqp.solvers.solve_box_qp`) on ``S``, warm started from ``forces0``.
+            ``"nnls"``: :func:`scipy.optimize.nnls` (Lawson and Hanson too, cold) on
+            ``min ||L^T lambda_c - L^-1 q||`` with ``S = L L^T``: an independent route.
         forces0 : array_like, shape (m,), optional
-            Warm start of ``"active-set"``, e.g. :attr:`FastenedResult.multipliers`.
+            Warm start, e.g. :attr:`FastenedResult.multipliers`.
         tol : float
-            Tolerance of ``"active-set"``.
+            Relative tolerance of ``"lawson-hanson"`` (on ``q - S lambda``, relative to
+            ``max|q|``) and of ``"active-set"`` (its natural residual).
         """
         start = time.perf_counter()
         problem = self.problem if gaps is None else variant(self.problem, gaps=gaps)
@@ -408,15 +471,20 @@ class FastenerClosure:
         rows, contacts = self.fasteners, self.contacts
         q_rows = dual.b[rows]
         q = dual.b[contacts] - self._eliminated.T @ q_rows
-        if method == "nnls":
+        x0 = None if forces0 is None else np.maximum(np.asarray(forces0, float)[contacts], 0)
+        if method == "lawson-hanson":
+            forces, converged, nit, factorizations = _lawson_hanson(
+                self.schur, q, x0, tol, max_iter=3 * len(q))
+            message = f"Lawson-Hanson {'converged' if converged else 'did not converge'}"
+        elif method == "nnls":
             forces, converged, message, nit, factorizations = self._nnls(q)
         elif method == "active-set":
-            x0 = None if forces0 is None else np.maximum(np.asarray(forces0, float)[contacts], 0)
             solution = solve_box_qp(self.schur, -q, lower=0.0, x0=x0, tol=tol, check_finite=False)
             forces, converged, message = solution.x, solution.converged, solution.message
             nit, factorizations = solution.iterations, solution.factorizations
         else:
-            raise InvalidInputError(f"method must be 'nnls' or 'active-set', got {method!r}")
+            raise InvalidInputError(f"method must be 'lawson-hanson', 'active-set' or 'nnls', "
+                                    f"got {method!r}")
         multipliers = np.empty(problem.n_constraints)
         multipliers[contacts] = forces
         multipliers[rows] = scipy.linalg.cho_solve(self._factor, q_rows - self._coupling @ forces)
@@ -436,7 +504,7 @@ class FastenerClosure:
                               multipliers)
 
 
-def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "nnls", forces0=None,
+def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson", forces0=None,
                    tol: float = 1e-10) -> FastenedResult:
     """Solve a frictionless contact problem whose ``fasteners`` rows are closed (bilateral).
 
@@ -446,15 +514,15 @@ def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "nnls", 
 
 
 class FasteningCase(GapVariation):
-    """A riveted assembly with every fastener installed, as a case of :func:`~contactqp.batch.run_batch`.
+    """A riveted assembly, every fastener installed: a case of :func:`~contactqp.batch.run_batch`.
 
     Each sample is solved by :meth:`FastenerClosure.solve` (``method``, ``tol``) with all the
     fasteners at once (without friction the final state does not depend on the order), warm
-    started from the previous sample for ``method="active-set"``. Records add ``fastener_force``
+    started from the previous sample (except with ``method="nnls"``). Records add ``fastener_force``
     (tension per fastener, N) to those of :class:`~contactqp.batch.GapVariation`.
     """
 
-    def __init__(self, model: RivetingModel, method: str = "nnls", tol: float = 1e-10):
+    def __init__(self, model: RivetingModel, method: str = "lawson-hanson", tol: float = 1e-10):
         super().__init__(model.base_problem, method=method, tol=tol)
         self.fasteners = model.fasteners
         self.closure = FastenerClosure(model.base_problem, model.fasteners)

@@ -29,8 +29,9 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
               help="Standard deviation of the gap field (m).")
 @click.option("--correlation-length", type=click.FloatRange(min=0, min_open=True), default=0.04,
               show_default=True, help="Correlation length of the gap field (m).")
-@click.option("--method", type=click.Choice(["nnls", "active-set"]), default="nnls",
-              show_default=True, help="Solver of each sample (active-set: warm started).")
+@click.option("--method", type=click.Choice(["lawson-hanson", "active-set", "nnls"]),
+              default="lawson-hanson", show_default=True,
+              help="Solver of each sample (nnls: scipy's, not warm started).")
 @click.option("--json", "as_json", is_flag=True,
               help="End with one JSON line: samples, computed, reused, failed, seconds, "
                    "residual_gap_mean.")

@@ -32,7 +32,8 @@ def write_vtu(path, points, cells, point_data) -> Path:
     try:
         import meshio
     except ImportError:
-        raise MissingDependencyError("VTU output needs meshio: pip install 'contactqp[fem]'") from None
+        raise MissingDependencyError(
+            "VTU output needs meshio: pip install 'contactqp[fem]'") from None
     xyz = np.asarray(points, dtype=float)
     if xyz.ndim != 2 or xyz.shape[1] not in (2, 3):
         raise InvalidInputError(f"points must have shape (n, 2) or (n, 3), got {xyz.shape}")
