@@ -93,7 +93,8 @@ def test_process_pool_gives_the_serial_results(riveted, source, serial, tmp_path
 
 
 def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path):
-    distributed = pytest.importorskip("distributed")
+    import distributed
+
     # threads in this process, reached over TCP like a remote scheduler
     with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
                                   protocol="tcp", host="127.0.0.1",

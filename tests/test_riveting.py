@@ -114,7 +114,8 @@ def test_three_routes_agree_on_a_rough_gap_field(small, rough_gaps):
 
 
 def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
-    meshio = pytest.importorskip("meshio")
+    import meshio
+
     final = small.fasten(rough_gaps).final
     path = write_vtu(small, final, tmp_path / "r.vtu", rough_gaps)
     mesh = meshio.read(path)
@@ -181,3 +182,15 @@ def test_cli_bad_gap_file(tmp_path, capsys):
     np.save(tmp_path / "g.npy", np.zeros((3, 10)))
     assert main(["riveting", "--gaps", str(tmp_path / "g.npy"), "--out", str(tmp_path)]) == 2
     assert "525 columns" in capsys.readouterr().err
+
+
+def test_csv_export_round_trips_and_refuses_ragged_columns(tmp_path):
+    from contactqp.io.export import write_csv
+
+    values = np.array([1 / 3, -2.5e-19, 7e8])
+    path = write_csv(tmp_path / "t.csv", {"a": values, "b": ["x", "y", "z"]})
+    table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding=None)
+    np.testing.assert_array_equal(table["a"], values)  # full precision
+    assert table["b"].tolist() == ["x", "y", "z"]
+    with pytest.raises(InvalidInputError, match="one length"):
+        write_csv(tmp_path / "u.csv", {"a": [1.0, 2.0], "b": [1.0]})

@@ -493,7 +493,7 @@ class FastenerClosure:
         A = problem.constraints.matrix
         pulled = variant(problem, loads=problem.loads + A[rows].T @ tension)
         contact = pulled.make_result(
-            dual.displacements(multipliers), compression, solver="active-set (fastened)",
+            dual.displacements(multipliers), compression, solver=f"{method} (fastened)",
             converged=converged, message=message, nit=nit, wall_time=time.perf_counter() - start,
             info={"factorizations": factorizations, "method": method})
         closure = float(np.max(np.abs(contact.gaps[rows])))
