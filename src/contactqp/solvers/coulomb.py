@@ -53,6 +53,7 @@ import scipy.sparse as sp
 
 from ..errors import InvalidInputError
 from ..local import LocalProblem, check_positive_semidefinite, natural_map_error
+from ..model import finite_array
 from .local import finish
 from .pgs import GaussSeidel
 
@@ -261,11 +262,9 @@ def _check_options(problem, r0, tol, max_iter):
     m = problem.q.shape[0]
     if r0 is None:
         return np.zeros(m)
-    r = np.asarray(r0, dtype=float)
+    r = finite_array(r0, "r0", 1)
     if r.shape != (m,):
         raise InvalidInputError(f"r0 must have shape ({m},), got {r.shape}")
-    if not np.all(np.isfinite(r)):
-        raise InvalidInputError("r0 contains NaN or inf")
     return r
 
 
