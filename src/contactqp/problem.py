@@ -43,7 +43,7 @@ from .model import ReducedModel
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
                      scales)
 
-__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "LocalForm"]
+__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "LocalForm", "friction_route"]
 
 #: A contact is reported closed when its force exceeds this fraction of the problem's force scale.
 CLOSED_RTOL = 1e-10
@@ -412,7 +412,7 @@ class FrictionalProblem:
         **options
             Passed to the solver.
         """
-        name, method = _friction_route(self.law, solver)
+        name, method = friction_route(self.law, solver)
         start = time.perf_counter()
         problem, shift, unit = self.fclib(self._previous_tangential(previous))
         r0 = None if previous is None else (previous.forces.reshape(-1) + shift) / unit
@@ -428,7 +428,7 @@ class FrictionalProblem:
                 f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})")
 
 
-def _friction_route(law: FrictionLaw, solver: str | None):
+def friction_route(law: FrictionLaw, solver: str | None):
     """``(name, function)`` of the local solver for ``law``; imported where used."""
     name = solver or ("coulomb" if law.facets is None else "polygonal")
     if law.facets is not None and name != "polygonal":

@@ -7,14 +7,19 @@ halfspace
     Cerruti tangential and coupling terms).
 condensation
     Flexibility of chosen freedoms of a sparse stiffness matrix by static condensation.
+importers
+    ANSYS ``.full``, NASTRAN OP4/DMIG, MatrixMarket and unit-load CSV files to reduced models
+    (the ``importers`` extra for ANSYS and NASTRAN).
+beam
+    A 2-D Euler-Bernoulli frame (rods and beams), condensed to computational nodes.
 fem
     Embedded finite elements (scikit-fem): elastic bodies reduced to computational nodes;
     imported on its own (``contactqp.compliance.fem``) because it needs the ``fem`` extra.
 """
 
+from .condensation import RigidBodyModeError, condense, factorize
 from .halfspace import grid, influence_matrix, normal_influence
 from .importers import load_compliance
-from .condensation import RigidBodyModeError, condense, factorize
 
-__all__ = ["grid", "normal_influence", "influence_matrix"]
-__all__ += ["condense", "factorize", "RigidBodyModeError"]
+__all__ = ["grid", "normal_influence", "influence_matrix", "condense", "factorize",
+           "RigidBodyModeError", "load_compliance"]

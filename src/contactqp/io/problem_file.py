@@ -251,7 +251,7 @@ from ..errors import FileFormatError, InvalidInputError
 from ..friction import STATUS_LABELS, FrictionLaw
 from ..loading import HistoryResult, linear_path, solve_history
 from ..model import ReducedModel
-from ..problem import ContactProblem, FrictionalProblem, _friction_route
+from ..problem import ContactProblem, FrictionalProblem, friction_route
 from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
 
@@ -965,7 +965,7 @@ def _friction(where: _Where, table, model: ReducedModel, loads: np.ndarray, obst
     if route is not None and not isinstance(route, str):
         raise where.error("[friction].solver", f"must be a string, got {_describe(route)}")
     try:
-        route, method = _friction_route(law, route)
+        route, method = friction_route(law, route)
     except InvalidInputError as exc:
         raise where.rewrap("[friction].solver", exc) from None
     named, extra = _solver_parameters(method)

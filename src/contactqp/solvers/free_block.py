@@ -10,8 +10,9 @@ block ``W_BB = L L^T`` is factored and a nearby ``F = (B \\ D) ∪ A`` is solved
   ``V = \\mathcal{L}^{-1} E_D`` and ``y = \\mathcal{L}^{-1} r``, ``s = -(V^T V)^{-1} V^T y`` and
   ``x = \\mathcal{L}^{-T} (y + V s)``.
 
-That costs about ``|B|^2 (|A| + |D|)``; when that is more than a sixth of a new factorisation, the
-block ``W_FF`` is factored and becomes the base. A block that is not numerically positive
+That costs about ``|B|^2 (|A| + |D|) + |B| (|A|^2 + |D|^2) + (|A|^3 + |D|^3) / 3``. Once the updates made since the base was factored would
+cost more in all than factoring ``W_FF`` (``|F|^3 / 3``), ``W_FF`` is factored and becomes the
+base: a free set that drifts far from the base cannot make every step expensive. A block that is not numerically positive
 definite (``W`` only semidefinite) is factored with a tiny diagonal shift.
 """
 
@@ -92,6 +93,7 @@ class FreeBlockSolver:
         self.base_factor: np.ndarray | None = None
         self.base_shifted = False
         self.plans: OrderedDict[bytes, _Plan] = OrderedDict()
+        self.update_cost = 0  # flops spent on updates since the base was factored
         self.factorizations = 0
         self.updates = 0
 
@@ -113,9 +115,12 @@ class FreeBlockSolver:
             added = np.flatnonzero(free & ~self.base)
             dropped = np.flatnonzero(self.base[self.base_index] & ~free[self.base_index])
             n_free, n_base = int(np.count_nonzero(free)), self.base_index.size
-            if n_base ** 2 * (added.size + dropped.size) <= n_free ** 3 / 6:
+            a, d = added.size, dropped.size
+            cost = n_base ** 2 * (a + d) + n_base * (a * a + d * d) + (a ** 3 + d ** 3) / 3
+            if self.update_cost + cost <= n_free ** 3 / 3:
                 plan = self._updated_plan(free, added, dropped)
                 if plan is not None:
+                    self.update_cost += cost
                     return plan
         return self._refactored_plan(free)
 
@@ -130,6 +135,7 @@ class FreeBlockSolver:
         self.factorizations += 1
         self.base, self.base_index = free.copy(), index
         self.base_factor, self.base_shifted = factor, shifted
+        self.update_cost = 0
         self.plans.clear()
         return _Plan(factor, np.arange(index.size))
 
