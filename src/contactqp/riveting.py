@@ -46,6 +46,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
 from .batch import GapVariation, variant
 from .contact import NodePairs
@@ -356,9 +357,8 @@ def _lawson_hanson(S, q, x0, tol: float, max_iter: int):
         factorizations += 1
         return np.linalg.cholesky(S[np.ix_(indices, indices)]) if indices else np.zeros((0, 0))
 
-    def solve(L, rhs):
-        y = scipy.linalg.solve_triangular(L, rhs, lower=True, check_finite=False)
-        return scipy.linalg.solve_triangular(L, y, lower=True, trans=1, check_finite=False)
+    def solve(L, rhs):  # LAPACK directly: scipy's wrappers cost more than these small solves
+        return scipy.linalg.lapack.dpotrs(L, rhs, lower=1)[0]
 
     L = factor(passive)
     for iteration in range(1, max_iter + 1):
@@ -375,12 +375,13 @@ def _lawson_hanson(S, q, x0, tol: float, max_iter: int):
             x[passive] = np.maximum(step, 0.0)
             passive = [i for i in passive if x[i] > 0]
             L = factor(passive)
-        gradient = q - S[:, passive] @ x[passive]
+        gradient = q - x[passive] @ S[passive] if passive else q.copy()  # S symmetric: rows
         gradient[passive] = -np.inf
         j = int(np.argmax(gradient))
         if gradient[j] <= threshold:
             return x, True, iteration, factorizations
-        border = scipy.linalg.solve_triangular(L, S[passive, j], lower=True, check_finite=False)
+        border = (scipy.linalg.lapack.dtrtrs(L, S[passive, j], lower=1)[0] if passive
+                  else np.zeros(0))
         pivot = S[j, j] - border @ border
         if not pivot > 0:
             return x, False, iteration, factorizations
