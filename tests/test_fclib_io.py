@@ -21,6 +21,7 @@ from contactqp.errors import (
     InvalidInputError,
     MissingDependencyError,
     NotPositiveDefiniteError,
+    UnsupportedProblemError,
 )
 from contactqp.io import read_problem, write_problem, write_solution
 from contactqp.io.fclib import read_global_problem
@@ -479,3 +480,10 @@ def test_dense_is_column_major_and_global_dense():
     p = g.condense()
     np.testing.assert_allclose(p.W, 0.5 * np.eye(2))
     np.testing.assert_allclose(p.q, [1.0, 1.0])
+
+
+def test_writing_a_cohesive_problem_is_refused_not_lossy(tmp_path):
+    problem = LocalProblem(np.eye(2), np.array([-1.0, 0.5]), [0.3], 2, cohesion=[1.0])
+    with pytest.raises(UnsupportedProblemError, match="no field for cohesion"):
+        write_problem(tmp_path / "c.hdf5", problem)
+    assert not (tmp_path / "c.hdf5").exists()

@@ -418,6 +418,8 @@ class FrictionalProblem:
         r0 = None if previous is None else (previous.forces.reshape(-1) + shift) / unit
         if name == "polygonal":
             options = {"facets": self.law.facets, **options}
+        elif name == "coulomb":  # W = H R H^T is semidefinite: R was validated
+            options = {"check_psd": False, **options}
         solution = method(problem, tol=tol, r0=r0, **options)
         return self.make_result(unit * solution.r - shift, previous, solver=name,
                                 converged=solution.converged, message=solution.message,

@@ -29,6 +29,7 @@ from contactqp.errors import (
     FileFormatError,
     InvalidInputError,
     MissingDependencyError,
+    UnsupportedProblemError,
 )
 from contactqp.io.siconos import read_dat
 from contactqp.local import GlobalProblem, LocalProblem
@@ -273,9 +274,15 @@ def write_problem(path, problem: LocalProblem) -> None:
         If h5py is not installed.
     FileFormatError
         If the file cannot be written.
+    UnsupportedProblemError
+        If the problem has cohesion, which FCLIB cannot store.
     """
     if not isinstance(problem, LocalProblem):
         raise TypeError(f"problem must be a LocalProblem, got {type(problem).__name__}")
+    if np.any(problem.cohesion > 0):
+        raise UnsupportedProblemError(
+            f"{path}: FCLIB has no field for cohesion; the problem's Mohr-Coulomb cohesion "
+            f"would be lost")
     h5py = _h5py()
     W = sp.csr_matrix(problem.W, copy=True)
     W.sort_indices()

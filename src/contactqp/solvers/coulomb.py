@@ -268,7 +268,8 @@ def _check_options(problem, r0, tol, max_iter):
     return r
 
 
-def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = 100):
+def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = 100, *,
+                  check_psd: bool = True):
     """Solve a local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
 
     Semismooth Newton on the Alart-Curnier formulation with a non-monotone line search, and
@@ -284,6 +285,9 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
         Target of :func:`~contactqp.local.natural_map_error` (relative, dimensionless).
     max_iter : int
         Newton iterations per run; at most 3 runs alternate with 200 Gauss-Seidel sweeps each.
+    check_psd : bool
+        Check that ``W`` is positive semidefinite (one factorisation). Callers whose ``W`` is
+        ``H R H^T`` of a validated model may skip it.
 
     Returns
     -------
@@ -303,7 +307,8 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
-    check_positive_semidefinite(problem.W)
+    if check_psd:
+        check_positive_semidefinite(problem.W)
     W, d, mu = problem.W, problem.dim, problem.mu
     shift = problem.apex_shift
     q = problem.q - W @ shift if np.any(shift) else problem.q
