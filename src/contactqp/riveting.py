@@ -341,14 +341,14 @@ def _lawson_hanson(S, q, x0, tol: float, max_iter: int):
     The passive set ``P`` (``x_P > 0``) grows by the contact of largest ``q - S x`` (the most
     interpenetrating one) at each outer step; ``x_P = S_PP^-1 q_P`` with a Cholesky factor of
     ``S_PP`` bordered at each addition (refactored after a removal, which the inner loop makes
-    when ``x_P`` would leave the orthant). Started from the support of ``x0`` when given.
-    Returns ``(x, converged, iterations, factorizations)``.
+    when ``x_P`` would leave the orthant). A warm start keeps the support of ``x0`` less the
+    contacts whose ``x_P`` comes out non-positive, dropped all at once until none does (any
+    passive set with ``x_P > 0`` optimal on it is a valid start of the outer loop). Returns ``(x, converged, iterations, factorizations)``.
 
     References: C. L. Lawson, R. J. Hanson, Solving Least Squares Problems, ch. 23 (1974).
     """
     x = np.zeros(len(q))
     passive = [] if x0 is None else np.flatnonzero(x0 > 0).tolist()
-    x[passive] = 0 if x0 is None else x0[passive]
     threshold = tol * max(float(np.max(np.abs(q))), np.finfo(float).tiny)
     factorizations = 0
 
@@ -361,6 +361,15 @@ def _lawson_hanson(S, q, x0, tol: float, max_iter: int):
         return scipy.linalg.lapack.dpotrs(L, rhs, lower=1)[0]
 
     L = factor(passive)
+    while passive:  # warm start: keep the part of the support the solution on it keeps positive
+        z = solve(L, q[passive])
+        if np.all(z > 0):
+            break
+        passive = [i for i, value in zip(passive, z) if value > 0]
+        L = factor(passive)
+    x[:] = 0.0
+    if passive:
+        x[passive] = z
     for iteration in range(1, max_iter + 1):
         while passive:  # x_P = argmin on P, keeping x_P > 0
             z = solve(L, q[passive])
