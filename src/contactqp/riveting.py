@@ -29,7 +29,9 @@ A fastener imposes closure: at its pair the gap is brought to zero and held ther
 constraint). Its multiplier ``lambda_f`` is free in sign: ``lambda_f >= 0`` is a contact
 compression at the fastener, ``lambda_f < 0`` a tension ``-lambda_f`` carried by the fastener.
 The dual QP is the frictionless one (:class:`~contactqp.problem.DualForm`) with the lower bound
-of the fastener rows lifted to ``-inf``, solved by the project's box-QP solver. The answer is
+of the fastener rows lifted to ``-inf``; :class:`FastenerClosure` eliminates the fastener
+multipliers (a Schur complement) and solves the remaining non-negative QP by Lawson and
+Hanson's active-set method (or the project's box-QP solver, or scipy's NNLS). The answer is
 returned as a certified :class:`~contactqp.result.ContactResult` of the contact problem in which
 the fastener tensions are external loads, and the closure of each fastener is checked
 separately. Fasteners are installed one after another (:meth:`RivetingModel.fasten`), each an
@@ -343,7 +345,8 @@ def _lawson_hanson(S, q, x0, tol: float, max_iter: int):
     ``S_PP`` bordered at each addition (refactored after a removal, which the inner loop makes
     when ``x_P`` would leave the orthant). A warm start keeps the support of ``x0`` less the
     contacts whose ``x_P`` comes out non-positive, dropped all at once until none does (any
-    passive set with ``x_P > 0`` optimal on it is a valid start of the outer loop). Returns ``(x, converged, iterations, factorizations)``.
+    passive set with ``x_P > 0`` optimal on it is a valid start of the outer loop).
+    Returns ``(x, converged, iterations, factorizations)``.
 
     References: C. L. Lawson, R. J. Hanson, Solving Least Squares Problems, ch. 23 (1974).
     """
@@ -514,8 +517,8 @@ class FastenerClosure:
                               multipliers)
 
 
-def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson", forces0=None,
-                   tol: float = 1e-10) -> FastenedResult:
+def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson",
+                   forces0=None, tol: float = 1e-10) -> FastenedResult:
     """Solve a frictionless contact problem whose ``fasteners`` rows are closed (bilateral).
 
     One call of :class:`FastenerClosure`; see there for the parameters.
