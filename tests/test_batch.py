@@ -165,3 +165,48 @@ def test_bad_sources(tmp_path):
         load_gap_samples(tmp_path / "g.txt")
     with pytest.raises(InvalidInputError, match="correlation_length"):
         GaussianGapField(np.zeros((3, 2)), 1e-4, 0.0)
+
+
+CHILD = """
+import sys, time
+import numpy as np
+from contactqp.batch import GaussianGapField, run_batch
+from contactqp.riveting import Assembly, FasteningCase
+
+class SlowField(GaussianGapField):  # the same study, 50 ms per sample: time to stop it
+    def realisations(self, indices):
+        time.sleep(0.05 * len(indices))
+        return super().realisations(indices)
+
+model = Assembly(grid=(11, 7), refine=1, fasteners=((1, 3), (5, 3), (9, 3))).build()
+field = SlowField(model.points, 1e-4, 0.03, mean=1.5e-4, seed=11)
+print("started", flush=True)
+run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], chunk_size=5)
+"""
+
+
+@pytest.mark.parametrize("how", ["SIGINT", "SIGKILL"])
+def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path, how):
+    # Ctrl-C (SIGINT to the process group, as a terminal sends it) or kill -9 of a running
+    # study; the rerun computes the samples not stored and gives the uninterrupted results
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = tmp_path / "k.h5"
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(path), str(N)], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert child.stdout.readline().strip() == b"started"
+    time.sleep(0.6)  # about 2 of the 5 chunks (each 5 x 50 ms)
+    os.killpg(child.pid, getattr(signal, how))
+    _, err = child.communicate(timeout=30)
+    assert child.returncode != 0, err.decode()
+    stored = load_batch(path).indices
+    assert 0 < len(stored) < N and stored.tolist() == list(range(len(stored)))
+    rest = run_batch(FasteningCase(riveted), source, N, path)
+    assert (rest.reused, rest.computed) == (len(stored), N - len(stored))
+    assert_same(load_batch(path), serial)
