@@ -8,7 +8,7 @@ import pytest
 
 from contactqp import ContactProblem, NodePairs, solve
 from contactqp.batch import (GapSamples, GapVariation, GaussianGapField, load_batch,
-                             load_gap_samples, plot_statistics, run_batch, variant)
+                             load_gap_samples, plot_statistics, run_batch)
 from contactqp.errors import FileFormatError, InvalidInputError
 from contactqp.riveting import Assembly, FasteningCase
 
@@ -63,7 +63,7 @@ def test_shared_dual_gives_the_fresh_problem_answer(riveted, source):
         assert record["success"] and fresh.success and np.any(fresh.closed)
         np.testing.assert_allclose(record["force"], fresh.forces, rtol=1e-8, atol=1e-10)
         np.testing.assert_allclose(record["gap"], fresh.gaps, rtol=1e-8, atol=1e-14)
-    twin = variant(base, gaps=np.ones(k))
+    twin = base.variant(gaps=np.ones(k))
     assert twin.dual().W is base.dual().W and np.all(base.constraints.gaps == 0)
 
 

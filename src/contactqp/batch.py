@@ -22,8 +22,6 @@ Gaussian gap fields (:class:`GaussianGapField`) have the squared-exponential cov
 from __future__ import annotations
 
 import contextlib
-import copy
-import dataclasses
 import hashlib
 import json
 import time
@@ -37,45 +35,12 @@ from .model import finite_array
 from .problem import ContactProblem
 from .solvers import solve
 
-__all__ = ["variant", "GapVariation", "GaussianGapField", "GapSamples", "load_gap_samples",
+__all__ = ["GapVariation", "GaussianGapField", "GapSamples", "load_gap_samples",
            "run_batch", "BatchSummary", "load_batch", "BatchData", "GapStatistics",
            "plot_statistics"]
 
 FORMAT = "contactqp-batch/1"
 DEFAULT_CHUNK = 50
-
-
-def variant(problem: ContactProblem, *, loads=None, gaps=None) -> ContactProblem:
-    """The same model and constraints with other loads and/or gaps, nothing assembled again.
-
-    The dual's ``W`` and influence are shared with ``problem`` (assembled on first use); only
-    ``b = A R P - Delta`` (and ``R P`` for new loads) is recomputed.
-
-    Parameters
-    ----------
-    problem : ContactProblem
-    loads : array_like, shape (n_freedoms,), optional
-        External forces (N).
-    gaps : array_like, shape (m,), optional
-        Initial gaps of the constraints, in their order (m).
-    """
-    twin = copy.copy(problem)
-    dual = copy.copy(problem.dual())
-    if loads is not None:
-        twin.loads = finite_array(loads, "loads", 1)
-        if twin.loads.shape != problem.loads.shape:
-            raise InvalidInputError(f"loads must have shape {problem.loads.shape}, got "
-                                    f"{twin.loads.shape}")
-        dual.free_displacements = problem.model.displacements(twin.loads)
-    if gaps is not None:
-        values = finite_array(gaps, "gaps", 1)
-        if values.shape != (problem.n_constraints,):
-            raise InvalidInputError(f"gaps must have shape ({problem.n_constraints},), got "
-                                    f"{values.shape}")
-        twin.constraints = dataclasses.replace(problem.constraints, gaps=values)
-    dual.b = twin.constraints.matrix @ dual.free_displacements - twin.constraints.gaps
-    twin._dual = dual  # ContactProblem has no public way to share its dual (see the report)
-    return twin
 
 
 def _digest(*arrays) -> str:
@@ -126,7 +91,7 @@ class GapVariation:
 
     def solve_sample(self, gaps, warm):
         """Solve one sample: ``(record, warm start of the next sample)``."""
-        result = solve(variant(self.problem, gaps=gaps), "active-set", forces0=warm,
+        result = solve(self.problem.variant(gaps=gaps), "active-set", forces0=warm,
                        **self.options)
         return self._record(result), result.forces
 
@@ -540,9 +505,9 @@ def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
 
     ``coordinates``: shape (m, 2), the position of each contact (m); drawn in mm.
     """
-    from .plot import _pyplot
+    from .plot import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     xy = np.asarray(coordinates, dtype=float) * 1e3
     panels = [(statistics.mean * 1e3, "mean final gap (mm)"),
               (statistics.quantiles[-1] * 1e3,
@@ -557,8 +522,4 @@ def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
         ax.set_aspect("equal")
     axes[-1].set_xlabel("x (mm)")
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return save_figure(figure, path)

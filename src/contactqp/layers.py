@@ -241,9 +241,9 @@ class LayersResult:
 
 def plot_layers(result: LayersResult, path) -> Path:
     """Lateral load against relative displacement, with the analytic limit, as a PNG."""
-    from .plot import _pyplot
+    from .plot import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     figure, axes = plt.subplots(figsize=(7, 4.5))
     axes.plot(result.relative * 1e3, result.load / 1e3, "o-", ms=3, label="reduced model")
     axes.axhline(result.layers.limit / 1e3, color="C3", ls="--",
@@ -257,8 +257,4 @@ def plot_layers(result: LayersResult, path) -> Path:
     axes.grid(True, alpha=0.3)
     axes.legend()
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return save_figure(figure, path)

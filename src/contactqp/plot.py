@@ -6,10 +6,11 @@ from pathlib import Path
 
 from .errors import MissingDependencyError
 
-__all__ = ["plot_spring_chain", "plot_rod"]
+__all__ = ["plot_spring_chain", "plot_rod", "pyplot", "save_figure"]
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib.pyplot on the non-interactive Agg backend (figures are written, not shown)."""
     try:
         import matplotlib
 
@@ -22,6 +23,15 @@ def _pyplot():
     return plt
 
 
+def save_figure(figure, path) -> Path:
+    """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders; close it."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    pyplot().close(figure)
+    return path
+
+
 def plot_spring_chain(results, path) -> Path:
     """Displacement of each body for each pulling force, as a PNG.
 
@@ -31,7 +41,7 @@ def plot_spring_chain(results, path) -> Path:
     path : str or Path
         Output file; its suffix chooses the format.
     """
-    plt = _pyplot()
+    plt = pyplot()
     figure, axes = plt.subplots(figsize=(7, 4.5))
     for result in results:
         bodies = range(1, len(result.x) + 1)
@@ -44,11 +54,7 @@ def plot_spring_chain(results, path) -> Path:
     axes.grid(True, alpha=0.3)
     axes.legend()
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return save_figure(figure, path)
 
 
 def plot_rod(rod, comparisons, path) -> Path:
@@ -66,7 +72,7 @@ def plot_rod(rod, comparisons, path) -> Path:
     """
     import numpy as np
 
-    plt = _pyplot()
+    plt = pyplot()
     x = rod.frame.coordinates[:, 0] * 1e3
     nodes = rod.node_indices
     figure, panels = plt.subplots(len(comparisons), 1, figsize=(8, 3.2 * len(comparisons)),
@@ -102,8 +108,4 @@ def plot_rod(rod, comparisons, path) -> Path:
     panels[0, 0].legend(loc="upper left", fontsize="small")
     panels[-1, 0].set_xlabel("x (mm), clamped at the right end")
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return save_figure(figure, path)

@@ -29,6 +29,8 @@ is the frictionless ``A R A^T`` and ``q_N = -b``.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import time
 import warnings
 
@@ -39,7 +41,7 @@ from .contact import Constraints, LocalFrames, assemble_constraints, local_frame
 from .errors import ContactWarning, InvalidInputError
 from .friction import FrictionLaw
 from .local import LocalProblem
-from .model import ReducedModel
+from .model import ReducedModel, finite_array
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
                      scales)
 
@@ -135,6 +137,34 @@ class ContactProblem:
         if self._dual is None:
             self._dual = DualForm(self.model, self.constraints, self.loads)
         return self._dual
+
+    def variant(self, *, loads=None, gaps=None) -> "ContactProblem":
+        """The same model and constraints under other loads and/or initial gaps.
+
+        The dual's ``W`` and influence are shared (assembled once, on first use); only
+        ``b = A R P - Delta`` (and ``R P`` for new loads) is computed again.
+
+        Parameters
+        ----------
+        loads : array_like, shape (n_freedoms,), optional
+            External forces (N).
+        gaps : array_like, shape (n_constraints,), optional
+            Initial gaps of the constraints, in their order (m).
+        """
+        twin = copy.copy(self)
+        dual = copy.copy(self.dual())
+        if loads is not None:
+            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
+            dual.free_displacements = self.model.displacements(twin.loads)
+        if gaps is not None:
+            values = finite_array(gaps, "gaps", 1)
+            if values.shape != (self.n_constraints,):
+                raise InvalidInputError(f"gaps must have shape ({self.n_constraints},), got "
+                                        f"{values.shape}")
+            twin.constraints = dataclasses.replace(self.constraints, gaps=values)
+        dual.b = twin.constraints.matrix @ dual.free_displacements - twin.constraints.gaps
+        twin._dual = dual
+        return twin
 
     def energy(self, displacements: np.ndarray, forces: np.ndarray) -> float:
         """Potential energy ``1/2 U^T K U - P^T U`` (J) at equilibrium.

@@ -50,7 +50,7 @@ import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
 
-from .batch import GapVariation, variant
+from .batch import GapVariation
 from .contact import NodePairs
 from .errors import InvalidInputError
 from .model import ReducedModel, finite_array
@@ -249,7 +249,7 @@ class RivetingModel:
 
     def problem(self, gaps) -> ContactProblem:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
-        return variant(self.base_problem, gaps=gaps)
+        return self.base_problem.variant(gaps=gaps)
 
     def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
                tol: float = 1e-10) -> "FasteningSequence":
@@ -479,7 +479,7 @@ class FastenerClosure:
             ``max|q|``) and of ``"active-set"`` (its natural residual).
         """
         start = time.perf_counter()
-        problem = self.problem if gaps is None else variant(self.problem, gaps=gaps)
+        problem = self.problem if gaps is None else self.problem.variant(gaps=gaps)
         dual = problem.dual()
         rows, contacts = self.fasteners, self.contacts
         q_rows = dual.b[rows]
@@ -504,7 +504,7 @@ class FastenerClosure:
         tension = np.maximum(-multipliers[rows], 0.0)
         compression = np.maximum(multipliers, 0.0)
         A = problem.constraints.matrix
-        pulled = variant(problem, loads=problem.loads + A[rows].T @ tension)
+        pulled = problem.variant(loads=problem.loads + A[rows].T @ tension)
         contact = pulled.make_result(
             dual.displacements(multipliers), compression, solver=f"{method} (fastened)",
             converged=converged, message=message, nit=nit, wall_time=time.perf_counter() - start,
@@ -597,9 +597,9 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
     """Maps of the initial and residual gaps (mm) and of the pair status, as a PNG."""
-    from .plot import _pyplot
+    from .plot import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     xy = model.points * 1e3
     figure, axes = plt.subplots(3, 1, figsize=(7, 9.5), sharex=True)
     panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
@@ -615,8 +615,4 @@ def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path)
     axes[0].legend(loc="upper right", fontsize="small")
     axes[-1].set_xlabel("x (mm)")
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return save_figure(figure, path)

@@ -44,6 +44,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .compliance.beam import Frame2D
+from .io import export
 from .contact import GapObstacle
 from .errors import ContactError, InvalidInputError, MissingDependencyError
 from .model import ReducedModel
@@ -471,10 +472,6 @@ def write_vtu(rod: Rod, comparisons, path) -> Path:
     ``<case>_displacement_reduced`` (the reduced contact forces applied to the full mesh, m),
     ``<case>_contact_force`` and ``<case>_contact_force_reduced`` (force on the rod, N).
     """
-    try:
-        import meshio
-    except ImportError:
-        raise MissingDependencyError("VTU output needs meshio: pip install 'contactqp[fem]'") from None
     frame = rod.frame
     n = frame.n_nodes
     data = {"gap": rod.gap(frame.coordinates[:, 0])}
@@ -491,9 +488,4 @@ def write_vtu(rod: Rod, comparisons, path) -> Path:
         data[f"{slug}_displacement_reduced"] = np.column_stack([c.recovered[:, :2], np.zeros(n)])
         data[f"{slug}_contact_force"] = vectors(c.reference.contact_nodes, c.reference.forces)
         data[f"{slug}_contact_force_reduced"] = vectors(rod.node_indices, c.reduced.forces)
-    points = np.column_stack([frame.coordinates, np.zeros(n)])
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    meshio.write(str(path), meshio.Mesh(points, [("line", frame.elements)], point_data=data),
-                 file_format="vtu")
-    return path
+    return export.write_vtu(path, frame.coordinates, [("line", frame.elements)], data)
