@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import qpsolvers
 from hypothesis import given, settings, strategies as st
 
 import contactqp as cq
@@ -112,3 +113,21 @@ def test_node_pairs_and_plane_obstacle():
 def test_unknown_solver_is_a_clear_error():
     with pytest.raises(cq.InvalidInputError, match="unknown solver 'nope'"):
         cq.solve(random_problem(3, 0), "nope")
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_lawson_hanson_agrees_with_quadprog(seed):
+    from contactqp.solvers.lawson_hanson import solve_nonnegative_qp
+
+    rng = np.random.default_rng(seed)
+    n = 60
+    B = rng.standard_normal((n, n))
+    S = B @ B.T + 0.1 * n * np.eye(n)
+    q = rng.standard_normal(n) * 5
+    x, converged, _, _ = solve_nonnegative_qp(S, q)
+    expected = qpsolvers.solve_qp(S, -q, lb=np.zeros(n), solver="quadprog")
+    assert converged
+    np.testing.assert_allclose(x, expected, atol=1e-9 * np.max(np.abs(expected)))
+    warm, converged, _, _ = solve_nonnegative_qp(S, q, x0=expected + 0.1)
+    assert converged
+    np.testing.assert_allclose(warm, expected, atol=1e-9 * np.max(np.abs(expected)))
