@@ -12,7 +12,8 @@ and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
 ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
 contact, built for all contacts at once with numpy; ``rho_i`` = 1 / mean diagonal of ``W_ii``).
 Each Newton step factors it with LAPACK (``scipy.linalg.lu_factor``: dense ``W``, or sparse
-with ``m <= 150`` or 20 % fill) or SuperLU (``scipy.sparse.linalg.splu``; the matrix is assembled
+with ``m <= 150`` or 20 % fill; on dense ``W`` only the rows of contacts that are not released,
+whose step is not simply ``-Phi``) or SuperLU (``scipy.sparse.linalg.splu``; the matrix is assembled
 on ``W``'s stored blocks, straight into CSC storage).
 
 Safeguards, for the singular ``W`` of rigid multibody problems (more contact unknowns than body
@@ -186,12 +187,37 @@ class _Newton:
                 except RuntimeError:  # exactly singular
                     return None
             else:
-                J = np.einsum("cij,cjm->cim", B, self.W.reshape(nc, d, m)).reshape(m, m)
-                idx = np.arange(nc)
-                J.reshape(nc, d, nc, d)[idx, :, idx, :] += A
-                step = scipy.linalg.lu_solve(scipy.linalg.lu_factor(J, check_finite=False), rhs,
-                                             check_finite=False)
+                step = self._dense_step(A, B, rhs)
         return step if np.all(np.isfinite(step)) else None
+
+    def _dense_step(self, A, B, rhs):
+        """The Newton step on dense ``W``, solving only for the contacts that are not released.
+
+        A released contact (``r_N - rho u_N <= 0`` with a nonzero tangential trial) has
+        ``A_c = I`` and ``B_c = 0``: its step is ``-Phi_c`` outright, and only the other
+        contacts' block of ``A + B W`` is factored (most contacts are open in a typical problem).
+        """
+        nc, d = self.nc, self.d
+        released = np.all(B == 0.0, axis=(1, 2)) & np.all(A == np.eye(d), axis=(1, 2))
+        step = rhs.copy()  # released contacts: dr = -Phi
+        kept = np.flatnonzero(~released)
+        if kept.size == 0:
+            return step
+        rows = (kept[:, None] * d + np.arange(d)).reshape(-1)
+        n_kept = kept.size
+        J = np.einsum("cij,cjm->cim", B[kept],
+                      self.W[np.ix_(rows, rows)].reshape(n_kept, d, n_kept * d))
+        J = J.reshape(n_kept * d, n_kept * d)
+        idx = np.arange(n_kept)
+        J.reshape(n_kept, d, n_kept, d)[idx, :, idx, :] += A[kept]
+        reduced = rhs[rows]
+        if kept.size < nc:
+            others = np.setdiff1d(np.arange(nc * d), rows, assume_unique=True)
+            coupling = (self.W[np.ix_(rows, others)] @ step[others]).reshape(n_kept, d)
+            reduced -= np.einsum("cij,cj->ci", B[kept], coupling).reshape(-1)
+        step[rows] = scipy.linalg.lu_solve(scipy.linalg.lu_factor(J, check_finite=False),
+                                           reduced, check_finite=False)
+        return step
 
     def line_search(self, r, step, reference, merit, tries=MAX_HALVINGS):
         """Backtrack from a full step to the non-monotone Armijo condition; None if it fails."""
