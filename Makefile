@@ -24,7 +24,8 @@ demo: $(STAMP_DEMO)
 	$(BIN)/contactqp rod --json > out/demo/rod.json
 	$(BIN)/contactqp springs --n 3 --stiffness 1 --mu 0.2 --mass 2 --g 10 --force 3,6,9,14 --plot out/demo/springs.png
 	$(BIN)/contactqp solve examples/problems/two_springs.toml --out out/demo/two_springs
-	@echo "demo outputs in out/demo/: rod.png, rod.vtu (ParaView), rod.json, springs.png, two_springs/"
+	$(BIN)/contactqp solve examples/problems/block_on_floor.toml --out out/demo/block_on_floor
+	@echo "demo outputs in out/demo/: rod.png, rod.vtu (ParaView), rod.json, springs.png, two_springs/, block_on_floor/"
 
 test: $(STAMP_TEST)
 	$(BIN)/python -m pytest -q
