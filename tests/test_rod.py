@@ -220,3 +220,12 @@ def test_cli_bad_input_is_one_line_and_exit_2(args):
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("contactqp: error:"), proc.stderr
+
+
+def test_displacements_of_a_frame_free_to_move_raise_instead_of_returning_garbage():
+    """Only x and y held at one end: the rod can turn about it; no finite answer exists."""
+    frame = Frame2D([[0, 0], [L, 0]], [[0, 1]], E, A, I, fixed={0: "xy"})
+    with pytest.raises(RigidBodyModeError, match="rigid-body modes"):
+        frame.displacements(frame.load_vector([(1, 0.0, 1.0)]))
+    with pytest.raises(InvalidInputError, match="load_vector must be 4 finite values"):
+        frame.displacements([1.0, 2.0])

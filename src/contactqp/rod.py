@@ -252,9 +252,8 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     Notes
     -----
     The QP is scaled by the stiffness diagonal (``u = l D v``, ``D = diag(K)^{-1/2}``, ``l`` the
-    largest gap, :meth:`~contactqp.compliance.beam.Frame2D.scaled_stiffness`) because the rod's
-    freedoms differ by ten orders of magnitude in stiffness. The
-    interior-point answer is then polished: the KKT system on its active set is solved exactly
+    largest gap) because the rod's freedoms differ by ten orders of magnitude in stiffness and an
+    interior-point method's tolerances are absolute. The interior-point answer is then polished: the KKT system on its active set is solved exactly
     (sparse LU), and the result is verified (forces >= 0, no penetration) to 1e-9.
 
     Raises
@@ -273,7 +272,9 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     if contact not in ("mesh", "nodes"):
         raise InvalidInputError(f"contact must be 'mesh' or 'nodes', got {contact!r}")
     frame = rod.frame
-    d, Ks = frame.scaled_stiffness()
+    K = frame.stiffness()
+    d = 1.0 / np.sqrt(K.diagonal())
+    Ks = (sp.diags(d) @ K @ sp.diags(d)).tocsc()
     f = rod.mesh_loads(case)
     nodes = rod.mesh_contact_nodes if contact == "mesh" else rod.node_indices
     start = time.perf_counter()

@@ -17,11 +17,10 @@ from typing import Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import InvalidInputError
 from ..model import finite_array
-from .condensation import condense
+from .condensation import condense, factorize
 
 __all__ = ["Frame2D", "frame_element_stiffness", "COMPONENTS"]
 
@@ -184,22 +183,6 @@ class Frame2D:
         """Stiffness of the free freedoms, shape (n_free, n_free), in the order of :attr:`free`."""
         return self.full_stiffness()[self.free][:, self.free].tocsc()
 
-    def scaled_stiffness(self) -> tuple[np.ndarray, sp.csc_matrix]:
-        """:meth:`stiffness` scaled to a unit diagonal, for accurate factorisations.
-
-        Returns
-        -------
-        d : ndarray, shape (n_free,)
-            ``diag(K)^{-1/2}``; with ``D = diag(d)``, ``K^{-1} = D (D K D)^{-1} D``.
-        scaled : scipy.sparse.csc_matrix, shape (n_free, n_free)
-            ``D K D``. Translations and rotations of a slender rod differ in stiffness by ten
-            decades or more; the scaled matrix has them all at one.
-        """
-        K = self.stiffness()
-        d = 1.0 / np.sqrt(K.diagonal())
-        D = sp.diags(d)
-        return d, (D @ K @ D).tocsc()
-
     def load_vector(self, loads: Sequence[Sequence[float]]) -> np.ndarray:
         """Free-freedom load vector from ``[(node, fx, fy), ...]`` or ``(node, fx, fy, mz)`` rows.
 
@@ -221,10 +204,21 @@ class Frame2D:
         """Nodal displacements ``(ux, uy, rz)`` under a free-freedom load vector, shape (n_nodes, 3).
 
         Fixed freedoms are zero.
+
+        Raises
+        ------
+        InvalidInputError
+            ``load_vector`` is not ``n_free`` finite values.
+        RigidBodyModeError
+            The fixations leave the frame free to move (see
+            :func:`~contactqp.compliance.condensation.factorize`).
         """
-        d, scaled = self.scaled_stiffness()
+        loads = np.asarray(load_vector, dtype=float)
+        if loads.shape != (self.free.size,) or not np.all(np.isfinite(loads)):
+            raise InvalidInputError(f"load_vector must be {self.free.size} finite values (one per "
+                                    f"free freedom), got shape {loads.shape}")
         full = np.zeros(3 * self.n_nodes)
-        full[self.free] = d * spla.spsolve(scaled, d * np.asarray(load_vector, dtype=float))
+        full[self.free] = factorize(self.stiffness(), labels=self.labels).solve(loads)
         return full.reshape(-1, 3)
 
     def compliance(self, nodes: Sequence[int], components: str = "xy") -> np.ndarray:
@@ -234,16 +228,21 @@ class Frame2D:
         -------
         ndarray, shape (len(nodes) * len(components), same)
             In m/N, rad/(N m) and their mixed units, from static condensation of
-            :meth:`stiffness` scaled to a unit diagonal (``K^{-1} = D (D K D)^{-1} D``).
+            :meth:`stiffness` (:func:`~contactqp.compliance.condensation.condense`, whose pivot
+            test is relative to each freedom's own diagonal, so the ten decades between the
+            stiffness of translations and rotations need no scaling).
+
+        Raises
+        ------
+        RigidBodyModeError
+            The fixations leave the frame free to move.
         """
         if not components or set(components) - set(_LETTERS):
             raise InvalidInputError(f"components must be letters among 'x', 'y', 'r', got "
                                     f"{components!r}")
         freedoms = np.array([self.index(int(k), COMPONENTS[_LETTERS[c]])
                              for k in nodes for c in components], dtype=int)
-        d, scaled = self.scaled_stiffness()
-        # the outer product keeps R exactly symmetric
-        return np.outer(d[freedoms], d[freedoms]) * condense(scaled, freedoms, labels=self.labels)
+        return condense(self.stiffness(), freedoms, labels=self.labels)
 
     def __repr__(self) -> str:
         return (f"Frame2D({self.n_nodes} nodes, {len(self.elements)} elements, "
