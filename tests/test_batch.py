@@ -157,6 +157,28 @@ def test_statistics_from_file_samples_match_direct_solves(riveted, source, tmp_p
         run_batch(case, GapSamples(gaps), 7, tmp_path / "g.h5")
 
 
+def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path):
+    import dask
+
+    case = FasteningCase(riveted)
+    with pytest.raises(InvalidInputError, match="Dask scheduler 'no-port'"):
+        run_batch(case, source, 2, tmp_path / "a.h5", scheduler="no-port")
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        with pytest.raises(InvalidInputError, match="cannot reach the Dask scheduler"):
+            run_batch(case, source, 2, tmp_path / "b.h5", scheduler="tcp://127.0.0.1:1")
+    (tmp_path / "junk.h5").write_text("not hdf5")
+    with pytest.raises(FileFormatError, match="junk.h5: not a contactqp batch store"):
+        run_batch(case, source, 2, tmp_path / "junk.h5")
+
+
+def test_load_batch_reads_the_first_samples_only(riveted, source, tmp_path):
+    path = tmp_path / "n.h5"
+    run_batch(FasteningCase(riveted), source, 6, path, chunk_size=4)
+    data = load_batch(path, 3)
+    assert data.indices.tolist() == [0, 1, 2]
+    np.testing.assert_array_equal(data.fields["gap"], load_batch(path).fields["gap"][:3])
+
+
 def test_bad_sources(tmp_path):
     with pytest.raises(FileFormatError, match="not found"):
         load_gap_samples(tmp_path / "none.npy")

@@ -171,9 +171,24 @@ def test_cli_json_resume_and_outputs(tmp_path, capsys):
     np.testing.assert_allclose(table["mean_gap"], second["residual_gap_mean"], rtol=1e-12)
     sequence = np.genfromtxt(out / "nominal_sequence.csv", delimiter=",", names=True)
     assert len(sequence) == len(Assembly().fastener_cells()) and np.all(sequence["tension"] >= 0)
+    # fewer samples than the store holds: the statistics are those of the samples asked for
+    assert main(["riveting", "--samples", "12", "--seed", "4", "--out", str(out), "--json"]) == 0
+    third = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert (third["samples"], third["computed"], third["reused"]) == (12, 0, 12)
+    np.testing.assert_allclose(third["residual_gap_mean"], first["residual_gap_mean"],
+                               rtol=1e-12, atol=1e-18)
     # another seed in the same directory is another study: refused, exit 2
     assert main(["riveting", "--samples", "16", "--seed", "5", "--out", str(out)]) == 2
     assert "another study" in capsys.readouterr().err
+
+
+def test_cli_bad_scheduler_is_one_line_exit_2(tmp_path, capsys):
+    from contactqp.cli import main
+
+    args = ["riveting", "--samples", "2", "--out", str(tmp_path), "--scheduler", "no-port"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Dask scheduler" in err and "Traceback" not in err
 
 
 def test_cli_bad_gap_file(tmp_path, capsys):

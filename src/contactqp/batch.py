@@ -262,7 +262,12 @@ def _open_store(path: Path, case, source, n_samples: int, chunk: int):
     h5py = _h5py()
     identity = json.dumps({"case": case.describe(), "source": source.describe()}, sort_keys=True)
     fields = {"initial_gap": ((case.n_contacts,), "f8"), **case.fields()}
-    store = h5py.File(path, "a")
+    try:
+        store = h5py.File(path, "a")
+    except OSError as exc:
+        if exc.errno is not None:  # permission, missing directory: the system's own words
+            raise
+        raise FileFormatError(f"{path}: not a contactqp batch store ({exc})") from None
     try:
         if "done" not in store:
             store.attrs.update({"format": FORMAT, "identity": identity, "chunk": chunk})
@@ -346,7 +351,11 @@ def _dask(state, tasks, scheduler):
     except ImportError:
         raise MissingDependencyError("a Dask scheduler needs distributed: pip install "
                                      "'contactqp[cluster]'") from None
-    with Client(scheduler) as client:
+    try:
+        client = Client(scheduler)
+    except (OSError, ValueError, TypeError) as exc:  # unreachable or malformed address
+        raise InvalidInputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
+    with client:
         shared = client.scatter(state, broadcast=True)
         futures = [client.submit(_solve_chunk, shared, indices, warm, pure=False)
                    for indices, warm in tasks]
@@ -486,8 +495,12 @@ class BatchData:
                              np.quantile(gaps, levels, axis=0), closed.mean(axis=0))
 
 
-def load_batch(path) -> BatchData:
-    """Read the done samples of a store written by :func:`run_batch`."""
+def load_batch(path, n_samples: int | None = None) -> BatchData:
+    """Read the done samples of a store written by :func:`run_batch`.
+
+    ``n_samples``: read only samples ``0 .. n_samples-1`` (a store may hold more, from an
+    earlier, longer study); default all.
+    """
     h5py = _h5py()
     path = Path(path)
     if not path.is_file():
@@ -495,7 +508,7 @@ def load_batch(path) -> BatchData:
     with h5py.File(path, "r") as store:
         if store.attrs.get("format") != FORMAT:
             raise FileFormatError(f"{path} is not a contactqp batch store")
-        done = np.flatnonzero(store["done"][:])
+        done = np.flatnonzero(store["done"][:n_samples])
         fields = {name: store[name][:][done] for name in store if name != "done"}
     return BatchData(done, fields)
 

@@ -76,7 +76,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
 
     summary = _run(FasteningCase(model, method=method), source, samples, out / "samples.h5",
                    workers, scheduler)
-    stats = load_batch(out / "samples.h5").statistics()
+    stats = load_batch(out / "samples.h5", samples).statistics()  # not a longer past study
     write_csv(out / "statistics.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "mean_gap": stats.mean,
         **{f"gap_q{level * 100:g}": q for level, q in zip(stats.levels, stats.quantiles)},
@@ -102,13 +102,17 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
 
 
 def _run(case, source, samples, path, workers, scheduler):
-    """run_batch with a progress bar on stderr."""
+    """run_batch with a progress bar on stderr when it is a terminal (else stderr stays for
+    the one error line)."""
     from rich.console import Console
     from rich.progress import Progress
 
     from ..batch import run_batch
 
-    with Progress(console=Console(stderr=True), transient=True) as bar:
+    terminal = Console(stderr=True)
+    if not terminal.is_terminal:
+        return run_batch(case, source, samples, path, workers=workers, scheduler=scheduler)
+    with Progress(console=terminal, transient=True) as bar:
         task = bar.add_task("samples", total=samples)
         return run_batch(case, source, samples, path, workers=workers, scheduler=scheduler,
                          progress=lambda done, total: bar.update(task, completed=done))
