@@ -282,6 +282,37 @@ def test_certificate_rejects_wrong_answers():
     assert not wrong.certificate.passed  # ...but the law is violated
 
 
+def stiff_contact_beside_a_soft_node(dim, facets=None):
+    """A stiff contact node (1e-6 m/N) and a soft node (1 m/N) away from the contact.
+
+    Sheared by 310 N under 1000 N with mu = 0.3, the contact slips by 10 N * 1e-6 m/N = 1e-5 m
+    (across side 0 of a polygon, by (310 - 300 cos(pi / F)) * 1e-6 m).
+    """
+    R = np.diag([1e-6] * dim + [1.0] * dim)
+    model = cq.ReducedModel(flexibility=R, dofs_per_node=dim,
+                            coordinates=[[0.0] * dim, [5.0] + [1.0] * (dim - 1)])
+    P = np.zeros(2 * dim)
+    P[0], P[dim - 1] = 310.0, -1000.0
+    floor_ = cq.PlaneObstacle([0.0] * dim, [0.0] * (dim - 1) + [-1.0], nodes=[0])
+    return cq.FrictionalProblem(model, P, [floor_], mu=0.3, facets=facets)
+
+
+@pytest.mark.parametrize("dim, facets", [(2, None), (3, None), (3, 8)])
+def test_a_soft_node_away_from_the_contacts_does_not_blunt_status_or_certificate(dim, facets):
+    # the contact's scales are its own (gaps, local displacements, contact forces), not the
+    # softest compliance times the largest force (1 m/N * 1000 N = 1000 m, which made a 1e-5 m
+    # slip "stick" and accepted a 1e-5 m interpenetration)
+    problem = stiff_contact_beside_a_soft_node(dim, facets)
+    good = problem.solve()
+    assert good.success, good.message
+    assert good.status_labels == ["slip"] and good.slip[0, 0] > 9e-6
+    wrong = good.forces * 0.99  # 1 % short of the normal force: 1e-5 m interpenetration
+    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
+                              wall_time=0.0)
+    assert bad.gaps[0] == pytest.approx(-1e-5, rel=1e-6)
+    assert not bad.success and bad.certificate.penetration > 1e-3
+
+
 # --------------------------------------------------------------------------------- bad input
 
 

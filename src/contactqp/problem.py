@@ -43,7 +43,7 @@ from .friction import FrictionLaw
 from .local import LocalProblem
 from .model import ReducedModel, finite_array
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
-                     scales)
+                     contact_scales)
 
 __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "LocalForm", "friction_route"]
 
@@ -358,6 +358,20 @@ class FrictionalProblem:
         return LocalProblem(self.local().W, q.reshape(-1), self.law.mu, self.dim,
                             cohesion=self.law.cohesion)
 
+    def apex_step(self, tangential: np.ndarray) -> tuple[LocalProblem, np.ndarray, np.ndarray]:
+        """``(step, q~, apex_shift)``: the step's local problem (model units) and its ``q``
+        seen from the cones' apices, ``q~ = q - W apex_shift`` (m), the local displacements
+        the loads cause with the apex forces applied.
+
+        Parameters
+        ----------
+        tangential : ndarray, shape (k, d - 1)
+            ``(H U_prev)_T`` (m).
+        """
+        step = self._step(tangential)
+        shift = step.apex_shift
+        return step, step.q - step.W @ shift, shift
+
     def fclib(self, tangential: np.ndarray) -> tuple[LocalProblem, np.ndarray, float]:
         """The step as a dimensionless FCLIB problem: ``(problem, apex_shift, force_unit)``.
 
@@ -371,10 +385,8 @@ class FrictionalProblem:
         tangential : ndarray, shape (k, d - 1)
             ``(H U_prev)_T`` (m).
         """
-        step = self._step(tangential)
-        shift = step.apex_shift
+        step, q, shift = self.apex_step(tangential)
         W = step.W
-        q = step.q - W @ shift
         w = float(np.max(np.diag(W)))
         length = float(np.max(np.abs(q))) or 1.0
         scaled = LocalProblem(W / w, q / length, step.mu, step.dim)
@@ -400,7 +412,7 @@ class FrictionalProblem:
         R = r.reshape(k, d)
         HU = (local.operator @ U).reshape(k, d)
         slip = HU[:, 1:] - tangential
-        force, length = scales(self.model, self.loads, U, r, self.constraints.gaps)
+        force, length = contact_scales(self, HU, r, tangential)
         gaps = self.constraints.gaps + HU[:, 0]
         pulling = np.flatnonzero((self.law.cohesion > 0) & (gaps > self.certificate_tol * length))
         if pulling.size:

@@ -14,7 +14,7 @@ from .friction import STATUS_LABELS
 from .local import natural_map_error
 
 __all__ = ["Certificate", "ContactResult", "certify", "FrictionCertificate", "FrictionalResult",
-           "certify_friction", "scales"]
+           "certify_friction", "scales", "contact_scales"]
 
 #: Default largest accepted relative residual of a certificate.
 CERTIFICATE_TOL = 1e-7
@@ -108,6 +108,38 @@ def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
     return float(force), float(length)
 
 
+def contact_scales(problem, local_displacements, forces, previous_tangential
+                   ) -> tuple[float, float]:
+    """``(force, length)``: the scales (N, m) of a frictional step's contact residuals.
+
+    Measured on the contacts only, so that a soft or heavily loaded freedom away from them
+    does not loosen the contact checks (nor turn real slips into "stick"): the force scale is
+    the largest load, local contact force or tensile strength ``c / mu``; the length scale the
+    largest local displacement ``H U``, initial gap, or local displacement the loads cause with
+    the apex forces applied (``q~`` of :meth:`~contactqp.FrictionalProblem.apex_step`: the
+    length the solver's own tolerance is relative to). Never ``max diag(R)`` times a force,
+    which mixes the softest freedom with the largest load.
+
+    Parameters
+    ----------
+    problem : FrictionalProblem
+    local_displacements : ndarray, shape (k, d)
+        ``H U`` (m).
+    forces : ndarray, shape (d k,) or (k, d)
+        Local forces ``r`` (N).
+    previous_tangential : ndarray, shape (k, d - 1)
+        ``(H U_prev)_T`` (m).
+    """
+    tiny = np.finfo(float).tiny
+    _, free, shift = problem.apex_step(previous_tangential)
+    force = max(np.max(np.abs(problem.loads), initial=0.0),
+                np.max(np.abs(forces), initial=0.0), np.max(shift, initial=0.0), tiny)
+    length = max(np.max(np.abs(free), initial=0.0),
+                 np.max(np.abs(local_displacements), initial=0.0),
+                 np.max(np.abs(problem.constraints.gaps), initial=0.0), tiny)
+    return float(force), float(length)
+
+
 def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
     """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model)."""
     if model.given == "flexibility":
@@ -194,7 +226,9 @@ class FrictionCertificate:
     """Residuals of the frictional contact conditions, each relative to the problem's scale.
 
     Computed from the model's own matrix, the local frames and the returned displacements and
-    forces (see :func:`certify_friction`), never from the solver's internal quantities.
+    forces (see :func:`certify_friction`), never from the solver's internal quantities. The
+    contact residuals are relative to the contacts' scales (:func:`contact_scales`), the
+    equilibrium to the model's (:func:`scales`).
 
     Attributes
     ----------
@@ -278,7 +312,9 @@ def certify_friction(problem, displacements, forces, previous_tangential,
     final_gaps = gaps + HU[:, 0]
     slip = HU[:, 1:] - previous_tangential
     apex = law.apex_forces(R)
-    force, length = scales(problem.model, P, U, r, gaps)
+    force, length = contact_scales(problem, HU, r, previous_tangential)
+    # the equilibrium of every freedom is measured on the model's own scales
+    global_force, global_length = scales(problem.model, P, U, r, gaps)
     fclib, shift, unit = problem.fclib(previous_tangential)
     return FrictionCertificate(
         penetration=float(max(0.0, -np.min(final_gaps)) / length),
@@ -287,7 +323,7 @@ def certify_friction(problem, displacements, forces, previous_tangential,
         complementarity=float(np.max(np.linalg.norm(apex, axis=1) * np.abs(final_gaps))
                               / (force * length)),
         dissipation=float(np.max(np.abs(law.dissipation_gap(R, slip))) / (force * length)),
-        equilibrium=_equilibrium(problem.model, U, P + H.T @ r, force, length),
+        equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
         natural_map=natural_map_error(fclib, (r + shift) / unit),
         exact_cone=law.facets is None,
         tol=tol,
