@@ -151,3 +151,26 @@ def test_both_routes_give_the_closed_form_and_the_cheaper_one_is_taken():
     np.testing.assert_allclose(_by_solves(lu, chosen), expected, rtol=1e-12)
     np.testing.assert_allclose(_by_schur_complement(K, lu, chosen), expected, rtol=1e-12)
     assert not _schur_pays(lu, 1) and _schur_pays(lu, n)
+
+
+def test_an_unsymmetric_stiffness_is_refused_not_symmetrised():
+    """The factorisation reads one triangle; an unsymmetric K would give another matrix's R.
+
+    The asymmetry is measured against ``sqrt(K_ii K_jj)``, so scaling the freedoms (units)
+    changes neither the verdict nor the freedoms named.
+    """
+    K = bar_stiffness(4).toarray()
+    K[2, 1] *= 1.01
+    labels = ["a", "b", "c", "d"]
+    with pytest.raises(InvalidInputError, match=r"not symmetric: .* = 0\.005 > 1e-06 between "
+                                                r"[bc] and [bc]"):
+        condense(K, [0], labels=labels)
+    D = np.diag([1e-6, 1e3, 1.0, 1e6])
+    with pytest.raises(InvalidInputError, match=r"not symmetric: .* = 0\.005 > 1e-06"):
+        factorize(D @ K @ D, labels=labels)
+    assert condense(K, [0], symmetry_rtol=0.02).shape == (1, 1)
+    # round-off asymmetry of a symmetric matrix in very different units is accepted
+    S = bar_stiffness(4).toarray()
+    S[2, 1] *= 1 + 1e-12
+    np.testing.assert_allclose(condense(D @ S @ D, np.arange(4)),
+                               np.linalg.inv(D @ S @ D), rtol=1e-9)

@@ -31,6 +31,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError
+from ..model import SYMMETRY_RTOL
 
 __all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
 
@@ -66,7 +67,8 @@ def _checked_freedoms(freedoms, n: int) -> np.ndarray:
     return idx
 
 
-def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL):
+def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+              symmetry_rtol: float = SYMMETRY_RTOL):
     """Factorise a symmetric positive definite sparse stiffness, refusing singular ones.
 
     Parameters
@@ -77,6 +79,10 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
         Names of the ``n`` freedoms, used in the error messages.
     pivot_rtol : float
         A pivot below ``pivot_rtol`` times its diagonal entry is taken for a rigid-body mode.
+    symmetry_rtol : float
+        Largest accepted ``|K_ij - K_ji| / sqrt(K_ii K_jj)`` (independent of the units of each
+        freedom); the factorisation uses one triangle only, so an unsymmetric ``K`` would give
+        the flexibility of another matrix.
 
     Returns
     -------
@@ -89,6 +95,8 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
         A vanishing pivot: not enough fixations (the message names the freedom).
     NotPositiveDefiniteError
         A negative pivot: the stiffness is indefinite.
+    InvalidInputError
+        The stiffness is not symmetric.
     """
     K = _checked_stiffness(stiffness)
     diagonal = K.diagonal()
@@ -103,6 +111,14 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
                                      "stiffness (unconnected), fix or remove it")
         raise NotPositiveDefiniteError(f"stiffness is not positive definite: negative diagonal "
                                        f"{diagonal[freedom]:.3g} at {label(freedom)}")
+    scale = sp.diags(1.0 / np.sqrt(diagonal))
+    asymmetry = (scale @ abs(K - K.T) @ scale).tocoo()
+    if asymmetry.nnz and asymmetry.data.max() > symmetry_rtol:
+        worst = int(np.argmax(asymmetry.data))
+        i, j = int(asymmetry.row[worst]), int(asymmetry.col[worst])
+        raise InvalidInputError(
+            f"the stiffness is not symmetric: |K_ij - K_ji| / sqrt(K_ii K_jj) = "
+            f"{asymmetry.data[worst]:.3g} > {symmetry_rtol:g} between {label(i)} and {label(j)}")
     try:
         lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
@@ -132,8 +148,8 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
     return lu
 
 
-def condense(stiffness, freedoms, *, labels=None,
-             pivot_rtol: float = SINGULAR_PIVOT_RTOL) -> np.ndarray:
+def condense(stiffness, freedoms, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+             symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
     """Flexibility matrix of ``freedoms`` for the (fixed, non-singular) sparse ``stiffness``.
 
     Parameters
@@ -144,7 +160,7 @@ def condense(stiffness, freedoms, *, labels=None,
         Indices of the computational freedoms in ``stiffness``.
     labels : sequence of str, optional
         Names of the ``n`` freedoms, used in the error raised for a singular model.
-    pivot_rtol : float
+    pivot_rtol, symmetry_rtol : float
         See :func:`factorize`.
 
     Returns
@@ -159,10 +175,12 @@ def condense(stiffness, freedoms, *, labels=None,
         When a pivot of the factorisation vanishes: not enough fixations.
     NotPositiveDefiniteError
         When a pivot is negative.
+    InvalidInputError
+        Bad freedoms, or a stiffness that is not symmetric.
     """
     K = _checked_stiffness(stiffness)
     idx = _checked_freedoms(freedoms, K.shape[0])
-    lu = factorize(K, labels=labels, pivot_rtol=pivot_rtol)
+    lu = factorize(K, labels=labels, pivot_rtol=pivot_rtol, symmetry_rtol=symmetry_rtol)
     R = _by_schur_complement(K, lu, idx) if _schur_pays(lu, idx.size) else None
     if R is None:
         R = _by_solves(lu, idx)
