@@ -47,6 +47,27 @@ def test_sample_k_does_not_depend_on_who_draws_it(source):
     assert not np.allclose(other.realisations([5]), source.realisations([5]))
 
 
+def test_sample_k_does_not_depend_on_blas_threads_or_pickling(source):
+    # eigh's eigenvectors of clustered eigenvalues move with the BLAS thread count; workers
+    # get the parent's factor with the field
+    import pickle
+
+    from threadpoolctl import threadpool_limits
+
+    xs, ys = np.meshgrid(np.arange(1, 26) * 0.2 / 26, np.arange(21) * 0.1 / 20)
+    grid = np.column_stack([xs.ravel(), ys.ravel()])  # the default riveting grid
+    fields = [GaussianGapField(grid, 1e-4, 0.04, seed=11) for _ in range(2)]
+    with threadpool_limits(1):
+        single = fields[0].realisations(range(8))
+    with threadpool_limits(None):
+        many = fields[1].realisations(range(8))
+    np.testing.assert_allclose(many, single, rtol=0, atol=1e-14 * 1e-4)
+    fresh = GaussianGapField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=11)
+    shipped = pickle.loads(pickle.dumps(fresh))
+    assert shipped._factor is not None and fresh._factor is not None
+    np.testing.assert_array_equal(shipped._factor, fresh._factor)
+
+
 def test_shared_dual_gives_the_fresh_problem_answer(riveted, source):
     # GapVariation re-uses one assembled dual; a fresh ContactProblem assembles everything
     k = riveted.n_pairs
@@ -155,6 +176,26 @@ def test_statistics_from_file_samples_match_direct_solves(riveted, source, tmp_p
     assert png.read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(InvalidInputError, match="has 6"):
         run_batch(case, GapSamples(gaps), 7, tmp_path / "g.h5")
+
+
+def test_a_store_refuses_the_same_delassus_operator_with_another_free_deformation(tmp_path):
+    # contact on node 0 only, a load on node 1: W = R_00 and the loads are the same, but the
+    # coupling R_01 (so A R P, so every answer) differs; resuming would reuse wrong samples
+    from contactqp import GapObstacle, ReducedModel
+
+    loads = np.array([0.0, 5.0])
+    cases = [GapVariation(ContactProblem(ReducedModel(flexibility=[[1.0, c], [c, 2.0]],
+                                                      dofs_per_node=1),
+                                         loads, [GapObstacle([0], [1.0])]))
+             for c in (0.1, 0.5)]
+    samples = GapSamples(np.linspace(0.0, 3.0, 4)[:, None])
+    run_batch(cases[0], samples, 4, tmp_path / "c.h5")
+    with pytest.raises(InvalidInputError, match="another study"):
+        run_batch(cases[1], samples, 4, tmp_path / "c.h5")
+    strict = ContactProblem(cases[0].problem.model, loads, [GapObstacle([0], [1.0])],
+                            certificate_tol=1e-12)
+    with pytest.raises(InvalidInputError, match="another study"):
+        run_batch(GapVariation(strict), samples, 4, tmp_path / "c.h5")
 
 
 def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path):

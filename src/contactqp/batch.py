@@ -100,9 +100,14 @@ class GapVariation:
         return np.asarray(record["force"], dtype=float)
 
     def describe(self) -> dict:
-        """What identifies the case in a store (a digest of ``W``, the loads, the options)."""
+        """What identifies the case in a store: a digest of ``W``, the loads and ``A R P`` (the
+        answer depends on all three), the certificate's tolerance and the options."""
+        problem = self.problem
+        dual = problem.dual()
         return {"type": type(self).__name__, "contacts": self.n_contacts,
-                "digest": _digest(self.problem.dual().W, self.problem.loads),
+                "digest": _digest(dual.W, problem.loads,
+                                  problem.constraints.matrix @ dual.free_displacements),
+                "certificate_tol": repr(problem.certificate_tol),
                 "options": {k: repr(v) for k, v in sorted(self.options.items())}}
 
 
@@ -151,11 +156,21 @@ class GaussianGapField:
         return self.amplitude ** 2 * np.exp(-squared / (2.0 * self.correlation_length ** 2))
 
     def _square_root(self) -> np.ndarray:
-        """``L`` with ``L L^T = C``, from the eigenvectors (``C`` is often numerically singular)."""
+        """``L`` with ``L L^T = C``, from the eigenvectors (``C`` is often numerically singular).
+
+        The eigenvectors of clustered eigenvalues change with the BLAS threads (measured: 1e-6
+        of sigma on the riveting grid), so ``L`` is computed on one thread, and once: pickling
+        (to workers, a Dask cluster) carries it, so every worker draws the same fields.
+        """
         if self._factor is None:
-            values, vectors = np.linalg.eigh(self.covariance)
+            with _single_threaded_blas():
+                values, vectors = np.linalg.eigh(self.covariance)
             self._factor = vectors * np.sqrt(np.clip(values, 0.0, None))
         return self._factor
+
+    def __getstate__(self):
+        self._square_root()
+        return self.__dict__
 
     def realisations(self, indices) -> np.ndarray:
         """Gap fields of the samples ``indices`` (m), shape (len(indices), m)."""
