@@ -229,3 +229,29 @@ def test_displacements_of_a_frame_free_to_move_raise_instead_of_returning_garbag
         frame.displacements(frame.load_vector([(1, 0.0, 1.0)]))
     with pytest.raises(InvalidInputError, match="load_vector must be 4 finite values"):
         frame.displacements([1.0, 2.0])
+
+
+def test_a_fractional_node_is_refused_not_truncated():
+    """Node 1.5 used to load (and condense) node 1 without a word."""
+    frame = cantilever(4)
+    with pytest.raises(InvalidInputError, match="whole node index, got 1.5"):
+        frame.load_vector([(1.5, 0.0, -1.0)])
+    with pytest.raises(InvalidInputError, match="whole node index, got 1.5"):
+        frame.compliance([1.5])
+    np.testing.assert_array_equal(frame.load_vector(np.array([[1.0, 0.0, -1.0]])),
+                                  frame.load_vector([(1, 0.0, -1.0)]))
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: Rod(length="40 mm"), "length must be finite and > 0"),
+    (lambda: Rod(n_elements=None), "n_elements must be a whole number"),
+    (lambda: Rod(nodes=("a",)), "nodes must be a non-empty list"),
+    (lambda: Frame2D.straight("1 m", 4, E, A, I), "length must be > 0"),
+    (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={"a": "xy"}), "fixed node"),
+    (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={0: 1}), "letters among"),
+    (lambda: cantilever(2).load_vector([5]), "a load must be"),
+    (lambda: cantilever(2).index(-1, "ux"), "outside 0..2"),
+])
+def test_bad_rod_and_frame_arguments_raise_invalid_input(make, message):
+    with pytest.raises(InvalidInputError, match=message):
+        make()

@@ -34,6 +34,7 @@ loads. The default loads close the free end and leave every other node open;
 
 from __future__ import annotations
 
+import numbers
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -121,7 +122,8 @@ class Rod:
     def __post_init__(self):
         for name in ("length", "young", "area", "gap_free", "gap_clamped"):
             value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                    or not (np.isfinite(value) and value > 0):
                 raise InvalidInputError(f"{name} must be finite and > 0, got {value}")
         self.node_indices  # noqa: B018  (validates nodes and n_elements)
 
@@ -139,9 +141,13 @@ class Rod:
     @cached_property
     def node_indices(self) -> np.ndarray:
         """Mesh indices of the computational nodes."""
-        if int(self.n_elements) != self.n_elements or self.n_elements < 1:
-            raise InvalidInputError(f"n_elements must be a whole number >= 1, got {self.n_elements}")
-        x = np.asarray(self.nodes, dtype=float)
+        if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, numbers.Real) \
+                or int(self.n_elements) != self.n_elements or self.n_elements < 1:
+            raise InvalidInputError(f"n_elements must be a whole number >= 1, got {self.n_elements!r}")
+        try:
+            x = np.asarray(self.nodes, dtype=float)
+        except (TypeError, ValueError):
+            x = np.array([np.nan])
         if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)):
             raise InvalidInputError(f"nodes must be a non-empty list of x values, got {self.nodes}")
         step = self.length / self.n_elements

@@ -13,6 +13,7 @@ J. S. Przemieniecki, *Theory of Matrix Structural Analysis*, McGraw-Hill, 1968, 
 
 from __future__ import annotations
 
+import numbers
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -81,6 +82,16 @@ def _positive(value, name: str, count: int) -> np.ndarray:
     return array
 
 
+def _node_number(node, n_nodes: int, what: str = "node") -> int:
+    """``node`` as an index in ``-n_nodes..n_nodes - 1`` (a whole number), else InvalidInputError."""
+    if isinstance(node, (bool, np.bool_)) or not isinstance(node, numbers.Real) \
+            or not float(node).is_integer():
+        raise InvalidInputError(f"{what} must be a whole node index, got {node!r}")
+    if not -n_nodes <= int(node) < n_nodes:
+        raise InvalidInputError(f"{what} {node} outside the {n_nodes} nodes")
+    return int(node)
+
+
 class Frame2D:
     """A plane frame of Euler-Bernoulli elements with fixations.
 
@@ -124,9 +135,8 @@ class Frame2D:
         self.inertia = _positive(inertia, "inertia", len(conn))
         held = []
         for node, letters in dict(fixed or {}).items():
-            if not -len(coords) <= int(node) < len(coords):
-                raise InvalidInputError(f"fixed node {node} outside the {len(coords)} nodes")
-            if not letters or set(letters) - set(_LETTERS):
+            _node_number(node, len(coords), "fixed node")
+            if not isinstance(letters, str) or not letters or set(letters) - set(_LETTERS):
                 raise InvalidInputError(
                     f"fixed[{node}] must be letters among 'x', 'y', 'r', got {letters!r}")
             held += [3 * (int(node) % len(coords)) + _LETTERS[c] for c in letters]
@@ -139,7 +149,8 @@ class Frame2D:
     def straight(cls, length: float, n_elements: int, young, area, inertia,
                  fixed: Mapping[int, str] | None = None) -> "Frame2D":
         """A straight rod along ``x`` from 0 to ``length`` (m), in equal elements."""
-        if not (np.isfinite(length) and length > 0) or int(n_elements) != n_elements \
+        if not isinstance(length, numbers.Real) or not isinstance(n_elements, numbers.Real) \
+                or not (np.isfinite(length) and length > 0) or int(n_elements) != n_elements \
                 or n_elements < 1:
             raise InvalidInputError(
                 f"length must be > 0 and n_elements a whole number >= 1, got {length}, {n_elements}")
@@ -162,7 +173,8 @@ class Frame2D:
         """Position of a freedom (``"ux"``, ``"uy"`` or ``"rz"``) in the free vectors."""
         if component not in COMPONENTS:
             raise InvalidInputError(f"component must be one of {COMPONENTS}, got {component!r}")
-        if not 0 <= node < self.n_nodes:
+        node = _node_number(node, self.n_nodes)
+        if node < 0:
             raise InvalidInputError(f"node {node} outside 0..{self.n_nodes - 1}")
         position = int(self._position[3 * node + COMPONENTS.index(component)])
         if position < 0:
@@ -190,14 +202,18 @@ class Frame2D:
         """
         vector = np.zeros(self.free.size)
         for row in loads:
-            node, *values = row
-            if len(values) not in (2, 3) or not np.all(np.isfinite(values)):
+            try:
+                node, *values = row
+                finite = np.all(np.isfinite(np.asarray(values, dtype=float)))
+            except (TypeError, ValueError):
+                node, values, finite = None, (), False
+            if len(values) not in (2, 3) or not finite:
                 raise InvalidInputError(
                     f"a load must be (node, fx, fy) or (node, fx, fy, mz) with finite values, "
-                    f"got {tuple(row)}")
+                    f"got {row!r}")
             for component, value in zip(COMPONENTS, values):
                 if value != 0.0:
-                    vector[self.index(int(node), component)] += value
+                    vector[self.index(node, component)] += value
         return vector
 
     def displacements(self, load_vector) -> np.ndarray:
@@ -240,7 +256,7 @@ class Frame2D:
         if not components or set(components) - set(_LETTERS):
             raise InvalidInputError(f"components must be letters among 'x', 'y', 'r', got "
                                     f"{components!r}")
-        freedoms = np.array([self.index(int(k), COMPONENTS[_LETTERS[c]])
+        freedoms = np.array([self.index(k, COMPONENTS[_LETTERS[c]])
                              for k in nodes for c in components], dtype=int)
         return condense(self.stiffness(), freedoms, labels=self.labels)
 
