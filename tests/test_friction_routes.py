@@ -167,6 +167,19 @@ def test_unsymmetric_w_and_cohesion():
     assert np.allclose(solution.r, reference.r, rtol=0, atol=1e-6 * np.abs(reference.r).max())
 
 
+def test_a_slowly_contracting_fixed_point_is_not_called_stalled():
+    """One contact with a strong normal-tangential coupling (W_NT / W_NN = 2.2, mu = 0.25): the
+    Tresca fixed point contracts at a rate of about 0.55 per iteration, so the error halves
+    every two iterations but never in one; it must run on to tol (it was stopped as stalled
+    at 3e-3)."""
+    W = np.array([[0.15121387, 0.33389275], [0.33389275, 1.0]])
+    problem = LocalProblem(W, [-0.36260698, -1.0], [0.25], 2)
+    solution = solve_tresca_fixed_point(problem, tol=TOL)
+    assert solution.converged, solution.message
+    reference = solve_coulomb(problem, tol=1e-12)
+    assert np.allclose(solution.r, reference.r, rtol=0, atol=1e-7)
+
+
 def test_warm_start_at_the_solution_needs_one_iteration():
     problem = random_problem(6, 3, 8)
     first = solve_tresca_fixed_point(problem, tol=TOL)

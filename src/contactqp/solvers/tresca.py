@@ -143,6 +143,7 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
     r = np.zeros(problem.q.shape[0]) if r0 is None else r0 + data.shift
     best = (np.inf, r)
     message, converged, stalled = "", False, 0
+    reference = np.inf  # the error at the last halving
     iteration = 0
     for iteration in range(1, max_iter + 1):
         s = problem.mu * np.maximum(r[::d], 0.0)
@@ -150,7 +151,12 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
         previous, r = r, tresca(q, s)
         error = natural_map_error(problem, r - data.shift)
         if exact:
-            stalled = 0 if error < 0.5 * best[0] else stalled + 1
+            # stalled: no halving of the error since `reference` for _PATIENCE iterations (a
+            # fixed point contracting at a rate in (0.5, 1) halves it every few iterations)
+            if error < 0.5 * reference:
+                reference, stalled = error, 0
+            else:
+                stalled += 1
             if error < best[0]:
                 best = (error, r)
             if error <= tol:
