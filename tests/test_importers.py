@@ -526,3 +526,26 @@ def test_missing_backend_names_the_pip_install(tmp_path, monkeypatch, module, re
     monkeypatch.setitem(sys.modules, module, None)  # import of it raises ImportError
     with pytest.raises(MissingDependencyError, match=r"pip install 'contactqp\[importers\]'"):
         reader(path, **args)
+
+
+def test_non_numeric_nodes_and_components_are_invalid_input(tmp_path):
+    """``int('x')`` used to escape as a bare ValueError (outside the exception tree)."""
+    path = tmp_path / "k.bdf"
+    model = BDF(debug=None)
+    model.add_dmig("K", 6, 2, 2, 0, None, [(1, 1), (1, 1), (2, 1)], [(1, 1), (2, 1), (2, 1)],
+                   [2.0, -1.0, 2.0])
+    model.write_bdf(str(path))
+    expected = np.linalg.inv([[2.0, -1.0], [-1.0, 2.0]])
+    np.testing.assert_allclose(read_dmig(path, "K", components=[1], kind="stiffness").flexibility,
+                               expected, rtol=1e-14)
+    for kwargs, message in [(dict(components=["x"]), "components must be a list of whole"),
+                            (dict(nodes=["a"], components=[1]), "nodes must be a list of whole"),
+                            (dict(components=[1.5]), "components must be a list of whole"),
+                            (dict(components=[1], fixed=[(1,)]), r"\(grid, component\) pairs"),
+                            (dict(components=[1], fixed=[1]), "fixed must be a list")]:
+        with pytest.raises(InvalidInputError, match=message):
+            read_dmig(path, "K", kind="stiffness", **kwargs)
+    rows = tmp_path / "rows.csv"
+    write_rows(rows, chain_flexibility(np.arange(2)), ["1:UX", "2:UX"])
+    with pytest.raises(InvalidInputError, match="nodes must be a list of whole numbers"):
+        read_unit_load_csv(rows, nodes=["a"])

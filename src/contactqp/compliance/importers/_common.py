@@ -15,7 +15,7 @@ from ...model import SYMMETRY_RTOL, ReducedModel
 from ..condensation import condense
 
 __all__ = ["KINDS", "existing_file", "about", "one_line", "backend", "node_major",
-           "freedom_indices", "index_list", "reduced_model"]
+           "freedom_indices", "index_list", "whole_numbers", "reduced_model"]
 
 #: What a matrix read from a file may be.
 KINDS = ("stiffness", "flexibility")
@@ -110,6 +110,19 @@ def freedom_indices(available: Sequence[tuple[Hashable, Hashable]], pairs, noun:
                 f"{describe(node, component)} is not in the file ({noun} {node} has {has})")
         indices.append(where[node, component])
     return np.asarray(indices, dtype=int)
+
+
+def whole_numbers(values, name: str) -> list[int]:
+    """``values`` (node or component numbers) as a list of ints; InvalidInputError otherwise."""
+    try:
+        items = list(values)
+        numbers = [int(item) for item in items]
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be a list of whole numbers, got {values!r}") from None
+    if any(isinstance(item, (bool, np.bool_)) or number != item
+           for item, number in zip(items, numbers)):
+        raise InvalidInputError(f"{name} must be a list of whole numbers, got {values!r}")
+    return numbers
 
 
 def index_list(values, n: int, name: str) -> np.ndarray:

@@ -19,7 +19,8 @@ import numpy as np
 
 from ...errors import FileFormatError, InvalidInputError
 from ...model import SYMMETRY_RTOL, ReducedModel
-from ._common import about, existing_file, freedom_indices, node_major, one_line, reduced_model
+from ._common import (about, existing_file, freedom_indices, node_major, one_line, reduced_model,
+                      whole_numbers)
 
 __all__ = ["read_unit_load_csv"]
 
@@ -140,7 +141,7 @@ def read_unit_load_csv(path, nodes: Sequence[int] | None = None,
             return reduced_model(table.T, "flexibility", dofs_per_node=counts,
                                  symmetry_rtol=symmetry_rtol)
         order = list(dict.fromkeys(node for node, _ in labels))
-        nodes = order if nodes is None else [int(node) for node in nodes]
+        nodes = order if nodes is None else whole_numbers(nodes, "nodes")
         if components is None:
             components = [c for node, c in labels if node == order[0]]
         components = [str(c).upper() for c in components]

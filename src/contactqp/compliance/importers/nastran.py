@@ -14,7 +14,7 @@ import scipy.sparse as sp
 from ...errors import ContactError, FileFormatError, InvalidInputError
 from ...model import SYMMETRY_RTOL, ReducedModel
 from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
-                      reduced_model)
+                      reduced_model, whole_numbers)
 
 __all__ = ["read_op4", "op4_matrix", "read_dmig", "dmig_matrix"]
 
@@ -240,10 +240,19 @@ def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
         pyNastran is not installed.
     """
     path = existing_file(path)
+    components = whole_numbers(components, "components")
+    if nodes is not None:
+        nodes = whole_numbers(nodes, "nodes")
+    if fixed is not None:
+        try:
+            fixed = [tuple(whole_numbers(pair, "fixed")) for pair in fixed]
+        except TypeError:
+            fixed = [()]
+        if any(len(pair) != 2 for pair in fixed):
+            raise InvalidInputError("fixed must be a list of (grid, component) pairs")
     model, matrix, labels = _load_dmig(path, name)
     if nodes is None:
         nodes = sorted({grid for grid, _ in labels})
-    nodes = [int(node) for node in nodes]
     grids = [model.nodes.get(node) for node in nodes]
     coordinates = None
     if all(grid is not None and grid.cp == 0 for grid in grids):
@@ -252,12 +261,10 @@ def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
         return f"grid {grid} component {component}"
 
     with about(path):
-        keep = freedom_indices(labels, node_major(nodes, [int(c) for c in components]), "grid",
-                               describe)
+        keep = freedom_indices(labels, node_major(nodes, components), "grid", describe)
         fixed_index = None
         if fixed is not None:
-            fixed_index = freedom_indices(labels, [(int(g), int(c)) for g, c in fixed], "grid",
-                                          describe)
+            fixed_index = freedom_indices(labels, fixed, "grid", describe)
         names = [describe(g, c) for g, c in labels]
         return reduced_model(matrix, kind, keep, fixed_index, names,
                              dofs_per_node=len(components), coordinates=coordinates,
