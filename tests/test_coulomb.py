@@ -272,6 +272,22 @@ def test_every_fclib_file_is_solved(name):
     assert np.array_equal(contact_status(problem, solution.r), solution.status)
 
 
+@pytest.mark.parametrize("cohesion", [0.0, 0.4])
+def test_contact_status_does_not_depend_on_units(cohesion):
+    # the same problem in newtons and metres with W ~ 1e-6 m/N (stiff contacts): reactions of
+    # ~1e3 N, slips of ~1e-5 m. The status used to call "zero" any velocity below 1e-6 times
+    # the largest of ||q||, ||r||, ||u||, i.e. 1e-3 m here: every slip was labelled stick
+    base = random_problem(12, 3, seed=3)
+    c = np.full(12, cohesion)
+    reference = solve_coulomb(LocalProblem(base.W, base.q, base.mu, 3, cohesion=c), tol=1e-13)
+    assert reference.converged and {"stick", "slip"} <= set(reference.status)
+    force, length = 1e3, 1e-5  # N and m per unit of the dimensionless problem
+    si = LocalProblem(base.W * (length / force), base.q * length, base.mu, 3,
+                      cohesion=c * force)
+    status = contact_status(si, reference.r * force, reference.u * length)
+    np.testing.assert_array_equal(status, reference.status)
+
+
 def test_frictionless_problems_stay_on_the_box_qp():
     problem = random_problem(8, 3, seed=3, mu=0.0)
     solution = solve_local(problem)

@@ -405,6 +405,14 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
     FCLIB measure). The numerator is zero exactly when ``(r, u)`` satisfies the law of
     :class:`LocalProblem`. The denominator is replaced by 1 when all three norms are 0.
 
+    Units: the measure adds reactions and velocities (FCLIB's, with ``rho = 1``), so it weighs
+    them alike only when ``W`` is O(1), as in FCLIB files. On a problem in newtons and metres
+    with a stiff ``W`` (say 1e-6 m/N) the reactions dominate and a displacement error hardly
+    shows: a reaction 1 % short, 1e-5 m of interpenetration, measures 2e-8. Solve such a
+    problem made dimensionless, as :meth:`~contactqp.FrictionalProblem.solve` does
+    (:meth:`~contactqp.FrictionalProblem.fclib`), whose certificate also checks the gaps
+    in metres.
+
     Parameters
     ----------
     problem : LocalProblem
@@ -438,8 +446,12 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
 
     A contact is open when its reaction, measured from the cone apex
     (``r + apex_shift``), is zero; otherwise it slips when its tangential velocity is nonzero,
-    else it sticks. "Zero" means at most ``rtol * max(||q||, ||r||, ||u||)`` in Euclidean norm,
-    the scale of :func:`natural_map_error`.
+    else it sticks (the rule of :meth:`~contactqp.friction.FrictionLaw.status`). "Zero" is
+    relative and in the units of each quantity: a reaction is zero below ``rtol * F`` and a
+    velocity below ``rtol * w F``, with ``w`` the largest diagonal entry of ``W`` and
+    ``F = max(||r||, ||r + apex_shift||, ||q|| / w, ||u|| / w)``, so that the labels do not
+    change with the units of ``r`` and ``u`` (a problem in newtons and metres, with ``W`` of
+    1e-6 m/N, labels its slips as the same problem made dimensionless does).
 
     Parameters
     ----------
@@ -454,15 +466,20 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     -------
     numpy.ndarray of str, shape (n_contacts,)
     """
+    from .friction import STATUS_LABELS, FrictionLaw
+
     d = problem.dim
     nc = problem.n_contacts
     rv, uv = _candidate(problem, r, u)
-    scale = max(np.linalg.norm(problem.q), np.linalg.norm(rv), np.linalg.norm(uv))
-    zero = rtol * (scale if scale > 0 else 1.0)
-    apex = (rv + problem.apex_shift).reshape(nc, d)
-    open_ = np.linalg.norm(apex, axis=1) <= zero
-    slip = np.linalg.norm(uv.reshape(nc, d)[:, 1:], axis=1) > zero
-    return np.where(open_, "open", np.where(slip, "slip", "stick"))
+    diagonal = np.abs(np.asarray(problem.W.diagonal(), dtype=float))
+    w = float(diagonal.max(initial=0.0)) or 1.0
+    force = max(np.linalg.norm(rv), np.linalg.norm(rv + problem.apex_shift),
+                np.linalg.norm(problem.q) / w, np.linalg.norm(uv) / w)
+    force = force if force > 0 else 1.0
+    law = FrictionLaw(problem.mu, problem.cohesion, n_contacts=nc)
+    codes = law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
+                       rtol * w * force)
+    return np.array(STATUS_LABELS)[codes]
 
 
 #: Diagonal shift, relative to the unit diagonal of the Jacobi-scaled matrix, accepted by

@@ -348,7 +348,10 @@ class FrictionalProblem:
         """The step's :class:`~contactqp.local.LocalProblem` from ``previous`` (None: rest).
 
         In the model's units (m, N), with the cohesion of the law; FCLIB's problem when there
-        is none.
+        is none. To solve it, prefer :meth:`solve` (or :meth:`fclib`): in these units the
+        natural-map error that the local solvers stop on weighs newtons against metres and,
+        for a stiff ``W``, barely sees displacement errors
+        (:func:`~contactqp.local.natural_map_error`).
         """
         return self._step(self._previous_tangential(previous))
 

@@ -308,9 +308,12 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     r0 : array_like, shape (m,), optional
         Warm start (reactions); zero when not given.
     tol : float
-        Target of :func:`~contactqp.local.natural_map_error` (relative, dimensionless).
+        Target of :func:`~contactqp.local.natural_map_error` (relative; it adds reactions and
+        velocities, so give a problem whose ``W`` is O(1), e.g.
+        :meth:`~contactqp.FrictionalProblem.fclib`, not one in newtons and metres).
     max_iter : int
-        Newton iterations per run; at most 3 runs alternate with 200 Gauss-Seidel sweeps each.
+        Newton iterations per run. A round is a Newton run then a Levenberg-Marquardt run; at
+        most 3 rounds, the later two each after up to 100 Gauss-Seidel sweeps.
     check_psd : bool
         Check that ``W`` is positive semidefinite (one factorisation). Callers whose ``W`` is
         ``H R H^T`` of a validated model may skip it.
