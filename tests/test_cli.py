@@ -48,6 +48,10 @@ def test_springs_plot_and_table(tmp_path):
 @pytest.mark.parametrize("args", [
     ("springs", "--mu", "-1"), ("springs", "--force", "x"), ("springs", "--n", "0"),
     ("solve", "missing.toml"), ("fclib", "missing.hdf5"), ("nonsense",),
+    ("springs", "--plot", "/tmp/contactqp-never-written.xyz"),  # no such figure format
+    ("springs", "--plot", "/proc/none/chain.png"),  # unwritable
+    ("solve", "examples/problems/two_springs.toml", "--out", "/proc/none"),
+    ("layers", "--steps", "1"), ("riveting", "--samples", "-3", "--out", "/proc/none"),
 ])
 def test_bad_input_is_one_line_and_exit_2(args):
     assert_one_line_error(run(*args), 2)

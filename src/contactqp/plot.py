@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import MissingDependencyError
+from .errors import InvalidInputError, MissingDependencyError
 
 __all__ = ["plot_spring_chain", "plot_rod", "pyplot", "save_figure"]
 
@@ -24,11 +24,23 @@ def pyplot():
 
 
 def save_figure(figure, path) -> Path:
-    """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders; close it."""
+    """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders; close it.
+
+    Raises
+    ------
+    InvalidInputError
+        The suffix is not a format matplotlib writes (png, pdf, svg, ...).
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    pyplot().close(figure)
+    try:
+        formats = figure.canvas.get_supported_filetypes()
+        if path.suffix.lstrip(".").lower() not in formats:
+            raise InvalidInputError(f"{path}: a figure file needs a suffix among "
+                                    f"{', '.join(sorted(formats))}")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        figure.savefig(path, dpi=120)
+    finally:
+        pyplot().close(figure)
     return path
 
 
