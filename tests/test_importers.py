@@ -393,8 +393,26 @@ def test_dmig_errors(tmp_path, plate10):
     bad = tmp_path / "bad.bdf"
     bad.write_text("BEGIN BULK\nDMIG    K       0       6       2       0\n"
                    "DMIG    K       1       1               x       1       2.0\nENDDATA\n")
-    with pytest.raises(FileFormatError, match=r"bad\.bdf: not a readable NASTRAN bulk-data"):
+    with pytest.raises(FileFormatError, match=r"bad\.bdf: not a readable NASTRAN bulk-data "
+                                              r"file \(SyntaxError: Gi = 'x'"):
         dmig_matrix(bad, "K")
+
+
+def test_dmig_file_starting_at_begin_bulk(tmp_path):
+    """Bulk data opened by BEGIN BULK without executive and case control (a common hand-made
+    file) is read; it used to fail for lack of the control decks."""
+    path = tmp_path / "k.bdf"
+    path.write_text("$ stiffness\nBEGIN BULK\nDMIG    K       0       6       1       0\n"
+                    "DMIG    K       1       1               1       1       2.0\n"
+                    "DMIG    K       2       1               1       1       -1.0\n"
+                    "        2       1       2.0\nENDDATA\n")
+    matrix, labels = dmig_matrix(path, "K")
+    assert labels == [(1, 1), (2, 1)]
+    np.testing.assert_array_equal(matrix.toarray(), [[2.0, -1.0], [-1.0, 2.0]])
+    (tmp_path / "inc.bdf").write_text("")
+    path.write_text("BEGIN BULK\nINCLUDE 'inc.bdf'\nENDDATA\n")
+    with pytest.raises(FileFormatError, match="cannot have INCLUDE statements"):
+        dmig_matrix(path, "K")
 
 
 # --------------------------------------------------------------------------------------------

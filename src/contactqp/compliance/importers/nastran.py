@@ -124,15 +124,40 @@ def read_op4(path, name: str | None = None, *, kind: str, freedoms=None, fixed=N
                              symmetry_rtol=symmetry_rtol)
 
 
+def _bulk_only(path: Path, lines: list[str]):
+    """The lines after ``BEGIN BULK`` of a file with no executive and case control, or None.
+
+    pyNastran reads a file with ``BEGIN BULK`` as a whole deck (it then wants executive and
+    case control) and a file without it as bulk data only; a file that starts at ``BEGIN BULK``
+    is neither, so its bulk data is read on its own.
+    """
+    start = next(i for i, line in enumerate(lines)
+                 if line.upper().lstrip().startswith(_BULK_START))
+    if any(line.upper().lstrip().startswith("CEND") for line in lines[:start]):
+        return None
+    bulk = lines[start + 1:]
+    if any(line.upper().lstrip().startswith("INCLUDE") for line in bulk):
+        raise FileFormatError(f"{path}: bulk data starting at BEGIN BULK, without executive and "
+                              "case control (CEND), cannot have INCLUDE statements here; remove "
+                              "the BEGIN BULK line or add the control decks")
+    return bulk
+
+
 def _bulk(path: Path):
     """The BDF model of a bulk-data file, with or without executive and case control."""
     bdf = backend("pyNastran.bdf.bdf", "pyNastran", "NASTRAN bulk-data files")
     try:
         with open(path, encoding="utf-8", errors="replace") as handle:
-            punch = not any(line.upper().lstrip().startswith(_BULK_START) for line in handle)
+            lines = handle.readlines()
+        has_bulk_start = any(line.upper().lstrip().startswith(_BULK_START) for line in lines)
+        bulk = _bulk_only(path, lines) if has_bulk_start else None
         model = bdf.BDF(log=_log())
         with contextlib.redirect_stdout(io.StringIO()):  # pyNastran prints the failing card
-            model.read_bdf(str(path), xref=False, punch=punch, validate=False)
+            if bulk is not None:
+                model.read_bdf(io.StringIO("".join(bulk) or "\n"), xref=False, punch=True,
+                               validate=False)
+            else:
+                model.read_bdf(str(path), xref=False, punch=not has_bulk_start, validate=False)
     except ContactError:
         raise
     except Exception as exc:  # pyNastran's errors on malformed cards or foreign files
@@ -171,7 +196,9 @@ def dmig_matrix(path, name: str):
     Parameters
     ----------
     path : str or os.PathLike
-        A bulk-data file (``BEGIN BULK`` optional, ``INCLUDE`` followed).
+        A bulk-data file, with or without executive and case control; ``BEGIN BULK`` is
+        optional, and ``INCLUDE`` is followed (except in bulk data opened by ``BEGIN BULK``
+        without control decks, which is read on its own).
     name : str
         The DMIG's name (e.g. ``"KAAX"``).
 
