@@ -347,3 +347,11 @@ def test_psd_check_accepts_singular_and_rounded_matrices():
 def test_invalid_options(kwargs, match):
     with pytest.raises(InvalidInputError, match=match):
         solve_coulomb(LocalProblem(np.eye(3), [-1.0, 0.0, 0.0], [0.3], 3), **kwargs)
+
+
+def test_numpy_scalars_are_valid_options():
+    # as for the Tresca and polygonal routes (numbers.Real / numbers.Integral)
+    problem = LocalProblem(np.eye(3), [-1.0, 0.0, 0.0], [0.3], 3)
+    solution = solve_coulomb(problem, tol=np.float32(1e-8), max_iter=np.int64(5))
+    assert solution.converged
+    np.testing.assert_allclose(solution.r, [1.0, 0.0, 0.0], atol=1e-12)

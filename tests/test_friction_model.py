@@ -352,6 +352,12 @@ def test_bad_models_and_solvers_are_clear_errors():
         coupled_problem(0).solve(solver="magic")
     with pytest.raises(cq.InvalidInputError, match="previous"):
         coupled_problem(0).solve(previous="rest")
+    # these raised ValueError from numpy (string loads, forces of the wrong length)
+    with pytest.raises(cq.InvalidInputError, match="loads"):
+        coupled_problem(0).with_loads(["a"] * 6)
+    with pytest.raises(cq.InvalidInputError, match="forces must hold 2 local components"):
+        coupled_problem(0).make_result(np.zeros(5), solver="test", converged=True, message="",
+                                       nit=0, wall_time=0.0)
 
 
 def test_cohesion_on_a_gapped_contact_is_refused():

@@ -151,5 +151,7 @@ def test_bad_histories_are_clear_errors(example):
         frictionless = cq.ContactProblem(problem.model, np.zeros(4),
                                          [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0])])
         cq.solve_history(frictionless, np.zeros((1, 4)))
-    with pytest.raises(cq.InvalidInputError, match="steps"):
-        cq.linear_path(np.zeros((2, 4)), 0)
+    for steps in (0, None, 2.0, [2]):  # None and [2] used to raise TypeError from int()
+        with pytest.raises(cq.InvalidInputError, match="steps"):
+            cq.linear_path(np.zeros((2, 4)), steps)
+    assert cq.linear_path(np.zeros((2, 4)), np.int64(3)).shape == (4, 4)

@@ -24,6 +24,7 @@ started from :math:`r_{k-1}`. The energy dissipated in step ``k`` is :math:`-r_{
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +53,7 @@ def linear_path(points, steps: int) -> np.ndarray:
         ``points[0]``, then ``steps`` equal increments towards each next point.
     """
     P = finite_array(points, "points", 2)
-    if isinstance(steps, bool) or int(steps) != steps or steps < 1:
+    if isinstance(steps, bool) or not isinstance(steps, numbers.Integral) or steps < 1:
         raise InvalidInputError(f"steps must be an integer >= 1, got {steps!r}")
     fractions = np.arange(1, int(steps) + 1) / int(steps)
     segments = [P[:1]] + [a + fractions[:, None] * (b - a) for a, b in zip(P[:-1], P[1:])]

@@ -64,7 +64,10 @@ def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.nda
     """Validate the model, the loads ``(n_freedoms,)`` and the tolerance; return the loads."""
     if not isinstance(model, ReducedModel):
         raise InvalidInputError(f"model must be a ReducedModel, got {type(model).__name__}")
-    P = np.asarray(loads, dtype=float).reshape(-1)
+    try:
+        P = np.asarray(loads, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"loads must be an array of real numbers: {exc}") from None
     if P.shape != (model.n_freedoms,):
         raise InvalidInputError(
             f"loads must have shape ({model.n_freedoms},) to match the model, got "
@@ -398,7 +401,11 @@ class FrictionalProblem:
     def make_result(self, forces, previous=None, *, solver: str, converged: bool, message: str,
                     nit: int, wall_time: float, info: dict | None = None) -> FrictionalResult:
         """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`."""
-        r = np.asarray(forces, dtype=float).reshape(-1)
+        r = finite_array(np.ravel(forces), "forces", 1)
+        if r.shape != (self.n_contacts * self.dim,):
+            raise InvalidInputError(
+                f"forces must hold {self.dim} local components per contact "
+                f"({self.n_contacts * self.dim} values), got shape {np.shape(forces)}")
         local = self.local()
         U = local.displacements(self.loads, r)
         tangential = self._previous_tangential(previous)

@@ -45,6 +45,7 @@ with Coulomb friction: formulations and numerical comparisons", INRIA RR-9118 (2
 from __future__ import annotations
 
 import math
+import numbers
 import time
 import warnings
 
@@ -281,9 +282,11 @@ class _Newton:
 def _check_options(problem, r0, tol, max_iter):
     if not isinstance(problem, LocalProblem):
         raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if not (isinstance(tol, int | float) and math.isfinite(tol) and tol > 0):
+    if not (isinstance(tol, numbers.Real) and not isinstance(tol, bool) and math.isfinite(tol)
+            and tol > 0):
         raise InvalidInputError(f"tol must be a positive number, got {tol!r}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+    if (isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral)
+            or max_iter < 1):
         raise InvalidInputError(f"max_iter must be a positive int, got {max_iter!r}")
     m = problem.q.shape[0]
     if r0 is None:
