@@ -567,3 +567,27 @@ def test_non_numeric_nodes_and_components_are_invalid_input(tmp_path):
     write_rows(rows, chain_flexibility(np.arange(2)), ["1:UX", "2:UX"])
     with pytest.raises(InvalidInputError, match="nodes must be a list of whole numbers"):
         read_unit_load_csv(rows, nodes=["a"])
+
+
+def test_ansys_full_file_written_by_mapdl():
+    """The example full file shipped with ansys-mapdl-reader (written by MAPDL, not by the
+    test writer): the flexibility of free nodes equals the dense inverse of the stiffness that
+    the reader's ``load_km`` returns, with its constrained DOFs (``const``) removed and the
+    freedoms located through its own ``dof_ref`` (0, 1, 2 = UX, UY, UZ)."""
+    from ansys.mapdl.reader import examples
+    from ansys.mapdl.reader.full import FullFile
+
+    full = FullFile(examples.fullfile)
+    dof_ref, upper, _ = full.load_km(sort=True)
+    upper = sp.csc_matrix(upper)
+    K = (upper + sp.triu(upper, 1).T).toarray()
+    constrained = {tuple(pair) for pair in full.const.tolist()}
+    free = np.array([tuple(pair) not in constrained for pair in dof_ref.tolist()])
+    nodes = [22, 23, 40]
+    assert not any((n, j) in constrained for n in nodes for j in range(3))
+    reference = dof_ref[free]
+    eq = [int(np.flatnonzero((reference[:, 0] == n) & (reference[:, 1] == j))[0])
+          for n in nodes for j in (2, 0)]
+    expected = np.linalg.inv(K[np.ix_(free, free)])[np.ix_(eq, eq)]
+    model = read_ansys_full(examples.fullfile, nodes, ("UZ", "UX"))
+    assert_flexibility(model.flexibility, 0.5 * (expected + expected.T))
