@@ -531,6 +531,14 @@ def test_load_compliance_knows_every_extension_and_names_the_unknown(tmp_path):
                                      read_unit_load_csv}
     with pytest.raises(FileFormatError, match=r"model\.h5: cannot tell the format .*\.full"):
         load_compliance(tmp_path / "model.h5")
+    # arguments the chosen reader does not take: InvalidInputError, not a bare TypeError
+    path = tmp_path / "K.mtx"
+    scipy.io.mmwrite(str(path), chain_stiffness(3))
+    with pytest.raises(InvalidInputError, match=r"K\.mtx: read_matrix_market: .*'nodes'"):
+        load_compliance(path, nodes=[1], kind="stiffness")
+    with pytest.raises(InvalidInputError, match=r"K\.mtx: read_matrix_market: .*'kind'"):
+        load_compliance(path)
+    assert load_compliance(path, kind="stiffness", freedoms=[2]).flexibility.shape == (1, 1)
 
 
 @pytest.mark.parametrize("module, reader, args", [

@@ -27,9 +27,10 @@ enough.
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 
-from ...errors import FileFormatError
+from ...errors import FileFormatError, InvalidInputError
 from .ansys import read_ansys_full
 from .csv_rows import read_unit_load_csv
 from .matrixmarket import read_matrix_market
@@ -66,10 +67,16 @@ def load_compliance(path, *args, **selection):
     ------
     FileFormatError
         An extension no reader knows; otherwise the reader's errors.
+    InvalidInputError
+        Arguments the chosen reader does not take (or a required one missing).
     """
     name = Path(path).name.lower()
     for endings, reader in READERS.items():
         if name.endswith(endings):
+            try:
+                inspect.signature(reader).bind(path, *args, **selection)
+            except TypeError as exc:
+                raise InvalidInputError(f"{path}: {reader.__name__}: {exc}") from None
             return reader(path, *args, **selection)
     known = ", ".join(ending for endings in READERS for ending in endings)
     raise FileFormatError(f"{path}: cannot tell the format from the extension (known: {known})")
