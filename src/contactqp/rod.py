@@ -259,8 +259,9 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     -----
     The QP is scaled by the stiffness diagonal (``u = l D v``, ``D = diag(K)^{-1/2}``, ``l`` the
     largest gap) because the rod's freedoms differ by ten orders of magnitude in stiffness and an
-    interior-point method's tolerances are absolute. The interior-point answer is then polished: the KKT system on its active set is solved exactly
-    (sparse LU), and the result is verified (forces >= 0, no penetration) to 1e-9.
+    interior-point method's tolerances are absolute. The interior-point answer is then polished:
+    the KKT system on its active set is solved exactly (sparse LU), and the result is verified
+    (forces >= 0, no penetration) to 1e-9.
 
     Raises
     ------

@@ -246,9 +246,10 @@ def _pairwise(xs, ys, dx, dy, evaluate, signs: bool = True):
     ``evaluate(X, Y)`` (X, Y >= 0, broadcast) returns a tuple of arrays. Yields
     ``(rows, values, sign_x, sign_y)``: a slice of rows ``i``, the tuple evaluated for those rows
     against every cell ``j`` (each array of shape (rows, n)), and the signs of ``x_i - x_j`` and
-    ``y_i - y_j`` (for the kernels odd in an offset; None when ``signs`` is False). Centres on a regular lattice of pitch
-    ``dx, dy`` evaluate each distinct offset once (a table gathered by a flat index, which keeps
-    ``value(i, j) == value(j, i)`` exactly); other arrangements evaluate every pair.
+    ``y_i - y_j`` (for the kernels odd in an offset; None when ``signs`` is False). Centres on a
+    regular lattice of pitch ``dx, dy`` evaluate each distinct offset once (a table gathered by
+    a flat index, which keeps ``value(i, j) == value(j, i)`` exactly); other arrangements
+    evaluate every pair.
 
     Raises
     ------

@@ -265,6 +265,12 @@ def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
         stiffness with rigid-body modes).
     MissingDependencyError
         pyNastran is not installed.
+
+    Notes
+    -----
+    A DMIG's components are those of each grid's displacement coordinate system (the ``CD``
+    field of its GRID card), as NASTRAN assembles them; the coordinates returned are in the
+    basic system. Normals and gaps of a contact must be given in the same displacement systems.
     """
     path = existing_file(path)
     components = whole_numbers(components, "components")
