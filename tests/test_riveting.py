@@ -199,6 +199,22 @@ def test_cli_bad_gap_file(tmp_path, capsys):
     assert "525 columns" in capsys.readouterr().err
 
 
+def test_cli_gap_file_runs_every_row_by_default(tmp_path, capsys):
+    import json
+
+    from contactqp.cli import main
+
+    gaps = 2e-4 + 5e-5 * np.cos(np.arange(3 * 525)).reshape(3, 525)
+    np.save(tmp_path / "g.npy", gaps)
+    out = tmp_path / "study"
+    assert main(["riveting", "--gaps", str(tmp_path / "g.npy"), "--out", str(out),
+                 "--json"]) == 0
+    record = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert (record["samples"], record["computed"]) == (3, 3)
+    nominal = np.genfromtxt(out / "nominal_contacts.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(nominal["initial_gap"], gaps.mean(axis=0), rtol=1e-15)
+
+
 def test_csv_export_round_trips_and_refuses_ragged_columns(tmp_path):
     from contactqp.io.export import write_csv
 

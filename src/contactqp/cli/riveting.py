@@ -13,8 +13,9 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
 
 
 @cli.command()
-@click.option("--samples", type=click.IntRange(min=1), default=1000, show_default=True,
-              help="Gap-field samples of the variation study.")
+@click.option("--samples", type=click.IntRange(min=1),
+              help="Gap-field samples of the variation study  [default: 1000, or every row "
+                   "of --gaps]")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Root seed: sample k is the same whatever the workers.")
 @click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
@@ -23,7 +24,8 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output directory; a study already there is resumed.")
 @click.option("--gaps", "gap_file", type=click.Path(dir_okay=False, path_type=Path),
-              help="Gap realisations (m), one per row (.npy or .csv), instead of random fields.")
+              help="Gap realisations (m), one per row (.npy or .csv), instead of random fields; "
+                   "the nominal gap is then their mean.")
 @click.option("--mean-gap", type=float, default=2e-4, show_default=True, help="Nominal gap (m).")
 @click.option("--amplitude", type=click.FloatRange(min=0), default=1e-4, show_default=True,
               help="Standard deviation of the gap field (m).")
@@ -52,10 +54,12 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     if gap_file is not None:
         source = load_gap_samples(gap_file)
         nominal_gaps = source.samples.mean(axis=0)
+        samples = source.n_available if samples is None else samples
     else:
         source = GaussianGapField(model.points, amplitude, correlation_length, mean=mean_gap,
                                   seed=seed)
         nominal_gaps = source.mean
+        samples = 1000 if samples is None else samples
     if nominal_gaps.shape != (model.n_pairs,):
         raise click.BadParameter(f"gap realisations must have {model.n_pairs} columns, got "
                                  f"{nominal_gaps.shape[0]}", param_hint="--gaps")
