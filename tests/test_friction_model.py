@@ -316,6 +316,24 @@ def test_a_soft_node_away_from_the_contacts_does_not_blunt_status_or_certificate
     assert not bad.success and bad.certificate.penetration > 1e-3
 
 
+def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
+    # the same soft node blunted the frictionless certificate too: 1e-5 m of interpenetration
+    # over 1 m/N * 1000 N passed as 1e-8
+    problem = stiff_contact_beside_a_soft_node(2)
+    frictionless = cq.ContactProblem(problem.model, problem.loads,
+                                     [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0], nodes=[0])])
+    forces = np.array([990.0])  # 1 % short of the 1000 N the contact carries
+    U = frictionless.dual().displacements(forces)
+    bad = frictionless.make_result(U, forces, solver="test", converged=True, message="", nit=0,
+                                   wall_time=0.0)
+    assert bad.gaps[0] == pytest.approx(-1e-5, rel=1e-6)
+    assert not bad.success and bad.certificate.penetration > 1e-3
+    good = frictionless.make_result(frictionless.dual().displacements([1000.0]), [1000.0],
+                                    solver="test", converged=True, message="", nit=0,
+                                    wall_time=0.0)
+    assert good.success, good.message
+
+
 # --------------------------------------------------------------------------------- bad input
 
 

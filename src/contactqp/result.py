@@ -30,11 +30,12 @@ class Certificate:
     Attributes
     ----------
     penetration : float
-        ``max(A U - Delta, 0)`` over the length scale.
+        ``max(A U - Delta, 0)`` over the contacts' length scale: the largest ``|A U|``,
+        ``|Delta|`` or ``|A R P|``.
     force_sign : float
         ``max(-lambda, 0)`` over the force scale (contact forces push, never pull).
     complementarity : float
-        ``max |lambda_i (Delta - A U)_i|`` over force scale times length scale.
+        ``max |lambda_i (Delta - A U)_i|`` over force scale times the contacts' length scale.
     equilibrium : float
         ``max |U - R (P - A^T lambda)|`` over the length scale (or ``K U`` against the forces over
         the force scale when the model was given by its stiffness).
@@ -81,11 +82,20 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     lam = np.asarray(forces, dtype=float)
     A, gaps, P = problem.constraints.matrix, problem.constraints.gaps, problem.loads
     force, length = scales(problem.model, P, U, lam, gaps)
-    final_gaps = gaps - A @ U
+    AU = A @ U
+    final_gaps = gaps - AU
+    # gaps are judged on the contacts' own length: their displacements, initial gaps and the
+    # interpenetration the loads alone would cause (not max diag(R) times the largest force,
+    # which a soft freedom away from the contacts makes metres long)
+    dual = getattr(problem, "_dual", None)
+    free = dual.free_displacements if dual is not None else problem.model.displacements(P)
+    contact_length = max(np.max(np.abs(AU), initial=0.0), np.max(np.abs(gaps), initial=0.0),
+                         np.max(np.abs(A @ free), initial=0.0), np.finfo(float).tiny)
     return Certificate(
-        penetration=float(max(0.0, -np.min(final_gaps, initial=0.0)) / length),
+        penetration=float(max(0.0, -np.min(final_gaps, initial=0.0)) / contact_length),
         force_sign=float(max(0.0, -np.min(lam, initial=0.0)) / force),
-        complementarity=float(np.max(np.abs(lam * final_gaps), initial=0.0) / (force * length)),
+        complementarity=float(np.max(np.abs(lam * final_gaps), initial=0.0)
+                              / (force * contact_length)),
         equilibrium=_equilibrium(problem.model, U, P - A.T @ lam, force, length),
         tol=tol,
     )
