@@ -174,3 +174,12 @@ def test_an_unsymmetric_stiffness_is_refused_not_symmetrised():
     S[2, 1] *= 1 + 1e-12
     np.testing.assert_allclose(condense(D @ S @ D, np.arange(4)),
                                np.linalg.inv(D @ S @ D), rtol=1e-9)
+
+
+def test_malformed_stiffness_and_labels_are_invalid_input():
+    with pytest.raises(InvalidInputError, match="square matrix of numbers"):
+        condense([["a", "b"], ["c", "d"]], [0])
+    with pytest.raises(InvalidInputError, match=r"non-empty square matrix, got shape \(\)"):
+        condense(None, [0])
+    with pytest.raises(InvalidInputError, match="labels must name the 2 freedoms, got 1"):
+        condense(np.diag([1.0, 0.0]), [0], labels=["a"])

@@ -273,6 +273,9 @@ def test_bar_picks_nearly_square_cells():
         [0]), "u_x of node 0 at \\(0, 0\\) is fixed"),
     (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").reduced_model([1, 1]),
      "nodes must be distinct"),
+    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left").solve(
+        tractions=[("top", (1.0, 2.0))]), "tractions must be a dict"),
+    (lambda: read_mesh(3), "a file path or a meshio.Mesh"),
 ])
 def test_bad_input_names_the_argument(call, message):
     with pytest.raises(InvalidInputError, match=message):

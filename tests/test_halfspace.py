@@ -430,3 +430,11 @@ def test_hertz_type_tangential_traction():
     assert np.max(np.abs(U[0::3][inside] - ux[inside])) < 5e-3 * scale
     assert np.max(np.abs(U[1::3][inside] - uy[inside])) < 5e-3 * scale
     assert np.max(np.abs(uy[inside])) > 2e-2 * scale  # the u_y check is not vacuous
+
+
+def test_text_centres_and_a_non_boolean_coupling_are_invalid_input():
+    """``coupling="no"`` used to be taken as true, keeping the coupling asked to be dropped."""
+    with pytest.raises(InvalidInputError, match="as numbers"):
+        normal_influence(["a"], ["b"], 1e-4, 1e-4, E, NU)
+    with pytest.raises(InvalidInputError, match="coupling must be True or False"):
+        influence_matrix([0.0], [0.0], 1e-4, 1e-4, E, NU, coupling="no")

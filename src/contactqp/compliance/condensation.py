@@ -47,7 +47,13 @@ class RigidBodyModeError(NotPositiveDefiniteError):
 
 def _checked_stiffness(stiffness) -> sp.csc_matrix:
     if not sp.issparse(stiffness):
-        stiffness = np.asarray(stiffness, dtype=float)
+        try:
+            stiffness = np.asarray(stiffness, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError("stiffness must be a square matrix of numbers") from None
+        if stiffness.ndim != 2:
+            raise InvalidInputError(f"stiffness must be a non-empty square matrix, got shape "
+                                    f"{stiffness.shape}")
     K = sp.csc_matrix(stiffness, dtype=float)
     if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] == 0:
         raise InvalidInputError(f"stiffness must be a non-empty square matrix, got shape {K.shape}")
@@ -99,6 +105,8 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
         The stiffness is not symmetric.
     """
     K = _checked_stiffness(stiffness)
+    if labels is not None and len(labels) != K.shape[0]:
+        raise InvalidInputError(f"labels must name the {K.shape[0]} freedoms, got {len(labels)}")
     diagonal = K.diagonal()
 
     def label(freedom: int) -> str:

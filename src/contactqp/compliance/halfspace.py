@@ -97,8 +97,12 @@ def _material(young, poisson) -> tuple[float, float]:
 
 
 def _centres(x, y) -> tuple[np.ndarray, np.ndarray]:
-    xs = np.asarray(x, dtype=float)
-    ys = np.asarray(y, dtype=float)
+    try:
+        xs = np.asarray(x, dtype=float)
+        ys = np.asarray(y, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError("x and y must be 1-D arrays of cell centres (m), "
+                                "as numbers") from None
     if xs.ndim != 1 or xs.size == 0:
         raise InvalidInputError(
             f"x must be a non-empty 1-D array of cell centres (m), got shape {xs.shape}")
@@ -400,6 +404,8 @@ def influence_matrix(x, y, dx, dy, young, poisson, coupling=True) -> np.ndarray:
     dx = _positive_length(dx, "dx")
     dy = _positive_length(dy, "dy")
     E, nu = _material(young, poisson)
+    if not isinstance(coupling, (bool, np.bool_)):
+        raise InvalidInputError(f"coupling must be True or False, got {coupling!r}")
     c = (1.0 + nu) / (np.pi * E * dx * dy)
     normal_scale = (1.0 - nu * nu) / (np.pi * E * dx * dy)  # c (1 - nu), as normal_influence
     coupling_scale = 0.5 * c * (1.0 - 2.0 * nu) if coupling else 0.0

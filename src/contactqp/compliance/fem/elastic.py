@@ -270,6 +270,9 @@ class ElasticModel:
                 raise InvalidInputError(f"loads must have shape ({self.n_nodes}, {self.dim}), "
                                         f"got {forces.shape}")
             vector[self.basis.nodal_dofs] = forces.T
+        if tractions is not None and not isinstance(tractions, dict):
+            raise InvalidInputError(f"tractions must be a dict {{boundary name: traction}}, got "
+                                    f"{type(tractions).__name__}")
         for name, traction in (tractions or {}).items():
             vector += self._traction_load(name, traction)
         free, K = self.free_stiffness()

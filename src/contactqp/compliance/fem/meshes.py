@@ -180,7 +180,11 @@ def read_mesh(source):
                                      "'contactqp[fem]'") from None
 
     if not isinstance(source, meshio.Mesh):
-        path = Path(source)
+        try:
+            path = Path(source)
+        except TypeError:
+            raise FileFormatError(f"a mesh must be a file path or a meshio.Mesh, got "
+                                  f"{type(source).__name__}") from None
         if not path.is_file():
             raise FileFormatError(f"mesh file {str(path)!r} does not exist")
         try:
