@@ -139,3 +139,7 @@ def test_fclib_bad_problems_exit_2(tmp_path):
         proc = run("fclib", str(path))
         assert_one_line_error(proc, 2)
         assert f"bad_{name}.hdf5" in proc.stderr and name in proc.stderr
+    missing = str(tmp_path / "missing.hdf5")
+    proc = run("fclib", missing)
+    assert_one_line_error(proc, 2)
+    assert proc.stderr.count(missing) == 1, proc.stderr  # the file named once

@@ -39,7 +39,8 @@ def fclib(files, tol, as_json, solution_dir):
             problem = read_problem(path)
             solution = solve_local(problem, tol=tol)
         except ContactError as exc:
-            fail(f"{path}: {exc}")
+            message = str(exc)  # the reader's messages may already name the file
+            fail(message if message.startswith(str(path)) else f"{path}: {message}")
             exit_code = EXIT_BAD_INPUT
             continue
         record = {"file": str(path), "dim": problem.dim, "contacts": problem.n_contacts,
