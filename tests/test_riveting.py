@@ -177,9 +177,15 @@ def test_cli_json_resume_and_outputs(tmp_path, capsys):
     assert (third["samples"], third["computed"], third["reused"]) == (12, 0, 12)
     np.testing.assert_allclose(third["residual_gap_mean"], first["residual_gap_mean"],
                                rtol=1e-12, atol=1e-18)
-    # another seed in the same directory is another study: refused, exit 2
+    # another seed in the same directory is another study: refused, exit 2, and the nominal
+    # files of the study there are left as they were
+    nominal = {name: (out / name).read_bytes() for name in ("nominal.vtu",
+                                                           "nominal_contacts.csv")}
     assert main(["riveting", "--samples", "16", "--seed", "5", "--out", str(out)]) == 2
     assert "another study" in capsys.readouterr().err
+    assert main(["riveting", "--samples", "16", "--mean-gap", "3e-4", "--out", str(out)]) == 2
+    assert "another study" in capsys.readouterr().err
+    assert nominal == {name: (out / name).read_bytes() for name in nominal}
 
 
 def test_cli_bad_scheduler_is_one_line_exit_2(tmp_path, capsys):

@@ -46,7 +46,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     gap, fasteners installed one by one), samples.h5 (one row per sample, resumable) and
     statistics.csv (mean, quantiles of the final gap and probability of contact per pair).
     """
-    from ..batch import GaussianGapField, load_batch, load_gap_samples
+    from ..batch import GaussianGapField, load_batch, load_gap_samples, run_batch
     from ..io.export import write_csv
     from ..riveting import Assembly, FasteningCase, STATUS_LABELS, write_vtu
 
@@ -64,6 +64,9 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
         raise click.BadParameter(f"gap realisations must have {model.n_pairs} columns, got "
                                  f"{nominal_gaps.shape[0]}", param_hint="--gaps")
     out.mkdir(parents=True, exist_ok=True)
+    case = FasteningCase(model, method=method)
+    # a store of another study in --out is refused before its nominal files are overwritten
+    run_batch(case, source, samples, out / "samples.h5", limit=0)
     sequence = model.fasten(nominal_gaps, method=method)
     final = sequence.final
     xy = model.points
@@ -78,8 +81,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
         "closed": [int(np.count_nonzero(step.contact.closed)) for step in sequence.steps],
         "max_gap": [float(step.contact.gaps.max()) for step in sequence.steps]})
 
-    summary = _run(FasteningCase(model, method=method), source, samples, out / "samples.h5",
-                   workers, scheduler)
+    summary = _run(case, source, samples, out / "samples.h5", workers, scheduler)
     stats = load_batch(out / "samples.h5", samples).statistics()  # not a longer past study
     write_csv(out / "statistics.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "mean_gap": stats.mean,
