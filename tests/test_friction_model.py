@@ -316,6 +316,25 @@ def test_a_soft_node_away_from_the_contacts_does_not_blunt_status_or_certificate
     assert not bad.success and bad.certificate.penetration > 1e-3
 
 
+def test_a_large_load_away_from_the_contacts_does_not_blunt_the_cone_check():
+    # 1e6 N on a node the contact does not feel, 10 N on the contact: the cone excess was
+    # measured against 1e6 N, so friction 1 % beyond a polygonal cone (where the natural map
+    # is not a checked residual) passed at 3e-8
+    R = np.diag([1e-6] * 3 + [1e-3] * 3)
+    model = cq.ReducedModel(flexibility=R, dofs_per_node=3,
+                            coordinates=[[0.0, 0.0, 0.0], [5.0, 1.0, 1.0]])
+    problem = cq.FrictionalProblem(model, [5.0, 0.0, -10.0, 1e6, 0.0, 0.0],
+                                   [cq.PlaneObstacle([0.0] * 3, [0.0, 0.0, -1.0], nodes=[0])],
+                                   mu=0.3, facets=8)
+    good = problem.solve()
+    assert good.success and good.status_labels == ["slip"], good.message
+    wrong = good.forces.copy()
+    wrong[0, 1:] *= 1.01
+    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
+                              wall_time=0.0)
+    assert not bad.success and bad.certificate.cone > 1e-3
+
+
 def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
     # the same soft node blunted the frictionless certificate too: 1e-5 m of interpenetration
     # over 1 m/N * 1000 N passed as 1e-8

@@ -123,12 +123,14 @@ def contact_scales(problem, local_displacements, forces, previous_tangential
     """``(force, length)``: the scales (N, m) of a frictional step's contact residuals.
 
     Measured on the contacts only, so that a soft or heavily loaded freedom away from them
-    does not loosen the contact checks (nor turn real slips into "stick"): the force scale is
-    the largest load, local contact force or tensile strength ``c / mu``; the length scale the
-    largest local displacement ``H U``, initial gap, or local displacement the loads cause with
-    the apex forces applied (``q~`` of :meth:`~contactqp.FrictionalProblem.apex_step`: the
-    length the solver's own tolerance is relative to). Never ``max diag(R)`` times a force,
-    which mixes the softest freedom with the largest load.
+    does not loosen the contact checks (nor turn real slips into "stick"): the length scale is
+    the largest local displacement ``H U``, initial gap, or local displacement the loads cause
+    with the apex forces applied (``q~`` of :meth:`~contactqp.FrictionalProblem.apex_step`:
+    the length the solver's own tolerance is relative to); the force scale the largest local
+    contact force, tensile strength ``c / mu`` or ``max |q~| / max diag(W)`` (the force that
+    takes up the largest free local displacement at the softest contact). Never
+    ``max diag(R)`` times a force, which mixes the softest freedom with the largest load, nor
+    the largest load, which may not reach the contacts.
 
     Parameters
     ----------
@@ -141,9 +143,11 @@ def contact_scales(problem, local_displacements, forces, previous_tangential
         ``(H U_prev)_T`` (m).
     """
     tiny = np.finfo(float).tiny
-    _, free, shift = problem.apex_step(previous_tangential)
-    force = max(np.max(np.abs(problem.loads), initial=0.0),
-                np.max(np.abs(forces), initial=0.0), np.max(shift, initial=0.0), tiny)
+    step, free, shift = problem.apex_step(previous_tangential)
+    compliance = float(np.max(np.abs(np.diag(step.W)), initial=0.0))
+    force = max(np.max(np.abs(forces), initial=0.0), np.max(shift, initial=0.0),
+                np.max(np.abs(free), initial=0.0) / compliance if compliance > 0 else 0.0,
+                tiny)
     length = max(np.max(np.abs(free), initial=0.0),
                  np.max(np.abs(local_displacements), initial=0.0),
                  np.max(np.abs(problem.constraints.gaps), initial=0.0), tiny)
