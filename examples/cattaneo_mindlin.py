@@ -101,7 +101,7 @@ def run(cells_per_radius: int = 12, ratio: float = 0.5, mu: float = 0.3,
         "ratio": float(measured_ratio), "ratio_target": float(ratio),
         "stick_radius": stick_radius,
         "stick_radius_theory": float(a * (1 - measured_ratio) ** (1 / 3)),
-        "stick_outside_theory": float(np.sqrt(x[stick] ** 2 + y[stick] ** 2).max()),
+        "stick_outside_theory": float(np.sqrt(x[stick] ** 2 + y[stick] ** 2).max(initial=0.0)),
         "transverse_force": float(r[:, 2].sum()),
     }
 
@@ -115,6 +115,8 @@ def main(argv=None) -> dict:
     parser.add_argument("--poisson", type=float, default=0.3)
     parser.add_argument("--solver", choices=sorted(SOLVERS), default="coulomb")
     args = parser.parse_args(argv)
+    if args.cells < 1 or not 0 < args.ratio <= 1 or not args.mu > 0:
+        parser.error("--cells must be >= 1, --ratio in (0, 1] and --mu > 0")
     out = run(args.cells, args.ratio, args.mu, poisson=args.poisson, solver=args.solver)
     print(f"{args.solver}: natural-map error {out['error']:.1e} in {out['seconds']:.2f} s "
           f"(converged: {out['converged']}); cell {out['cell']:g} m")

@@ -60,6 +60,8 @@ def main(argv=None) -> dict:
     parser.add_argument("--young", type=float, default=210e9, help="E of the half-space (Pa)")
     parser.add_argument("--poisson", type=float, default=0.3)
     args = parser.parse_args(argv)
+    if args.cells < 1 or not args.sphere_radius > 0:
+        parser.error("--cells must be >= 1 and --sphere-radius > 0")
     out = run(args.cells, args.sphere_radius, young=args.young, poisson=args.poisson)
     print(f"rigid sphere R_s = {args.sphere_radius:g} m on E = {args.young:g} Pa, "
           f"nu = {args.poisson:g}; {out['cells']} cells of {out['cell']:g} m, "

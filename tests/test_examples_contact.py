@@ -55,3 +55,15 @@ def test_cattaneo_mindlin_example(solver, ratio, capsys):
     assert out["stick_outside_theory"] < out["stick_radius_theory"] + h
     assert out["stick_radius"] < out["contact_radius"] - h  # a slipping annulus exists
     assert abs(out["transverse_force"]) < 1e-9 * out["load"]
+
+
+def test_cattaneo_mindlin_full_sliding_and_bad_arguments(capsys):
+    """At Q = mu P nothing sticks (the stick radius is 0, no crash on the empty stick set);
+    arguments outside the theory's range are a usage error, not a traceback."""
+    out = load_example("cattaneo_mindlin").main(["--cells", "4", "--ratio", "1"])
+    assert out["stick_radius"] == 0.0 and out["stick_outside_theory"] == 0.0
+    for name, args in [("cattaneo_mindlin", ["--ratio", "1.5"]), ("hertz", ["--cells", "0"])]:
+        with pytest.raises(SystemExit) as info:
+            load_example(name).main(args)
+        assert info.value.code == 2
+    capsys.readouterr()
