@@ -207,6 +207,20 @@ def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path):
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
         with pytest.raises(InvalidInputError, match="cannot reach the Dask scheduler"):
             run_batch(case, source, 2, tmp_path / "b.h5", scheduler="tcp://127.0.0.1:1")
+    import subprocess
+    import sys
+
+    holder = subprocess.Popen(  # another process holds the store open (HDF5 locks it)
+        [sys.executable, "-c", "import h5py, sys, time; f = h5py.File(sys.argv[1], 'w'); "
+         "print('open', flush=True); time.sleep(60)", str(tmp_path / "busy.h5")],
+        stdout=subprocess.PIPE)
+    try:
+        assert holder.stdout.readline().strip() == b"open"
+        with pytest.raises(FileFormatError, match="busy.h5: cannot open the batch store"):
+            run_batch(case, source, 2, tmp_path / "busy.h5")
+    finally:
+        holder.kill()
+        holder.wait()
     (tmp_path / "junk.h5").write_text("not hdf5")
     with pytest.raises(FileFormatError, match="junk.h5: not a contactqp batch store"):
         run_batch(case, source, 2, tmp_path / "junk.h5")

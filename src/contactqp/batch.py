@@ -22,6 +22,7 @@ Gaussian gap fields (:class:`GaussianGapField`) have the squared-exponential cov
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import time
@@ -279,10 +280,11 @@ def _open_store(path: Path, case, source, n_samples: int, chunk: int):
     fields = {"initial_gap": ((case.n_contacts,), "f8"), **case.fields()}
     try:
         store = h5py.File(path, "a")
-    except OSError as exc:
-        if exc.errno is not None:  # permission, missing directory: the system's own words
-            raise
-        raise FileFormatError(f"{path}: not a contactqp batch store ({exc})") from None
+    except OSError as exc:  # h5py's errors do not name the file
+        if exc.errno is None:
+            raise FileFormatError(f"{path}: not a contactqp batch store ({exc})") from None
+        busy = " (in use by another run?)" if exc.errno == errno.EAGAIN else ""
+        raise FileFormatError(f"{path}: cannot open the batch store{busy}: {exc}") from None
     try:
         if "done" not in store:
             store.attrs.update({"format": FORMAT, "identity": identity, "chunk": chunk})
