@@ -105,7 +105,8 @@ def _result_table(spec, result, title):
     residuals = ", ".join(f"{name} {getattr(cert, name):.1e}" for name in (
         "cone", "complementarity", "dissipation", "equilibrium", "natural_map"))
     out.print(f"dissipated {result.dissipated:.6g} J, elastic energy "
-              f"{result.elastic_energy:.6g} J, {result.nit} iterations, {result.wall_time * 1e3:.3g} ms; certificate worst "
+              f"{result.elastic_energy:.6g} J, {result.nit} iterations, "
+              f"{result.wall_time * 1e3:.3g} ms; certificate worst "
               f"residual {cert.worst:.2e} ({'passed' if cert.passed else 'FAILED'}; {residuals})")
 
 

@@ -14,10 +14,12 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail, float_list
 @cli.command()
 @click.option("--n", "n", type=click.IntRange(min=1), default=3, show_default=True,
               help="Number of bodies.")
-@click.option("--stiffness", type=float, default=1.0, show_default=True, help="Spring stiffness c (N/m).")
+@click.option("--stiffness", type=float, default=1.0, show_default=True,
+              help="Spring stiffness c (N/m).")
 @click.option("--mu", type=float, default=0.2, show_default=True, help="Friction coefficient.")
 @click.option("--mass", type=float, default=2.0, show_default=True, help="Mass of each body (kg).")
-@click.option("--g", "gravity", type=float, default=10.0, show_default=True, help="Gravity (m/s^2).")
+@click.option("--g", "gravity", type=float, default=10.0, show_default=True,
+              help="Gravity (m/s^2).")
 @click.option("--force", "forces", default="3,6,9,14", show_default=True,
               callback=float_list, help="Pulling force(s) on the last body (N), comma-separated.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per force and line.")
