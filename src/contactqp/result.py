@@ -144,7 +144,7 @@ def contact_scales(problem, local_displacements, forces, previous_tangential
     """
     tiny = np.finfo(float).tiny
     step, free, shift = problem.apex_step(previous_tangential)
-    compliance = float(np.max(np.abs(np.diag(step.W)), initial=0.0))
+    compliance = float(np.max(np.abs(step.W.diagonal()), initial=0.0))
     force = max(np.max(np.abs(forces), initial=0.0), np.max(shift, initial=0.0),
                 np.max(np.abs(free), initial=0.0) / compliance if compliance > 0 else 0.0,
                 tiny)
@@ -267,7 +267,8 @@ class FrictionCertificate:
         (:meth:`~contactqp.FrictionalProblem.fclib`, exact cones). For a polygonal law it
         measures the distance the linearisation puts between the answer and the Coulomb one.
     exact_cone : bool
-        True for the exact cone: ``natural_map`` is then one of the checked residuals.
+        True for the exact cone, or any cone in 2-D (where the polygonal law is exact):
+        ``natural_map`` is then one of the checked residuals.
     tol : float
     """
 
@@ -339,7 +340,7 @@ def certify_friction(problem, displacements, forces, previous_tangential,
         dissipation=float(np.max(np.abs(law.dissipation_gap(R, slip))) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
         natural_map=natural_map_error(fclib, (r + shift) / unit),
-        exact_cone=law.facets is None,
+        exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )
 
