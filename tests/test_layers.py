@@ -44,7 +44,7 @@ def test_load_curve_sticks_then_slips_then_plateaus(history):
     np.testing.assert_allclose(steps, np.diff(history.travel[onset:]), rtol=1e-6)
 
 
-def test_no_cohesion_no_friction_limit_scales_with_mu():
+def test_without_cohesion_the_onset_is_mu_times_the_normal_force():
     result = Layers(mu=0.3, cohesion=0.0, steps=20).solve()
     np.testing.assert_allclose(result.onset_force, 0.3 * result.normal_force[result.onset],
                                rtol=1e-9)

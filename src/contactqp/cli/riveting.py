@@ -19,7 +19,7 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Root seed: sample k is the same whatever the workers.")
 @click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Local worker processes.")
+              help="Local worker processes (ignored with --scheduler).")
 @click.option("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:port).")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output directory; a study already there is resumed.")
