@@ -183,3 +183,18 @@ def test_malformed_stiffness_and_labels_are_invalid_input():
         condense(None, [0])
     with pytest.raises(InvalidInputError, match="labels must name the 2 freedoms, got 1"):
         condense(np.diag([1.0, 0.0]), [0], labels=["a"])
+
+
+def test_too_ill_conditioned_for_the_schur_route_is_a_contact_error():
+    """A 16,000-element cantilever with the pivot test switched off: the condensed block loses
+    positive definiteness to round-off. That used to escape as numpy's LinAlgError."""
+    from contactqp.compliance.beam import Frame2D
+
+    E, A, L = 1e12, 0.2e-6, 0.04
+    frame = Frame2D.straight(L, 16000, E, A, A**2 / (4 * np.pi), fixed={-1: "xyr"})
+    freedoms = [frame.index(k, c) for k in range(0, 16000, 2000) for c in ("ux", "uy")]
+    with pytest.raises(NotPositiveDefiniteError):
+        condense(frame.stiffness(), freedoms, pivot_rtol=0.0)
+    # with the default pivot test the same model is refused at the factorisation already
+    with pytest.raises(RigidBodyModeError, match="pivot"):
+        condense(frame.stiffness(), freedoms)
