@@ -365,7 +365,10 @@ class FrictionalResult:
     tangential_displacements : ndarray, shape (k, d - 1)
         ``(H U)_T``, total tangential displacement (m): the origin of the next step's slips.
     contact_status : ndarray of int, shape (k,)
-        Index into :data:`~contactqp.friction.STATUS_LABELS` (open, stick, slip).
+        Index into :data:`~contactqp.friction.STATUS_LABELS` (open, stick, slip). "Open": the
+        force from the cone's apex is below ``1e-10`` times the contacts' force scale; "slip":
+        the slip exceeds ``certificate_tol`` times the contacts' length scale (both of
+        :func:`contact_scales`), below which the certificate could not tell a slip from none.
     dissipation : ndarray, shape (k,)
         Energy dissipated by friction during the step, ``-r_T . s_T`` per contact (J), with the
         end-of-step force (exact when the friction bound is constant during the slip).

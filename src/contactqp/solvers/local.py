@@ -74,10 +74,9 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
             x[active] = np.linalg.lstsq(W_nn[np.ix_(active, active)], -q_n[active], rcond=None)[0]
         x = np.maximum(x, 0.0)
         error = error_of(x)
-        if error < best_error:
-            best, best_error = x, error
-        elif error >= best_error:
+        if error >= best_error:
             break
+        best, best_error = x, error
     return best
 
 

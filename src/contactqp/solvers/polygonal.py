@@ -46,6 +46,7 @@ from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns,
 
 __all__ = ["solve_polygonal", "polygon_normals"]
 
+
 def polygon_normals(facets: int) -> np.ndarray:
     """Outward unit normals of the regular polygon of ``facets`` sides, shape (facets, 2).
 
