@@ -205,6 +205,23 @@ def test_cli_bad_gap_file(tmp_path, capsys):
     assert "525 columns" in capsys.readouterr().err
 
 
+def test_cli_every_sample_failing_exits_1(tmp_path, capsys, monkeypatch):
+    from contactqp.cli import main
+    from contactqp.riveting import FasteningCase
+
+    solve_sample = FasteningCase.solve_sample
+
+    def failing(self, gaps, warm):
+        record, warm = solve_sample(self, gaps, warm)
+        return {**record, "success": False}, warm
+
+    monkeypatch.setattr(FasteningCase, "solve_sample", failing)
+    assert main(["riveting", "--samples", "2", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "all 2 samples failed" in err
+    assert not (tmp_path / "statistics.csv").exists()
+
+
 def test_cli_gap_file_runs_every_row_by_default(tmp_path, capsys):
     import json
 

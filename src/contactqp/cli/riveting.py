@@ -82,7 +82,12 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
         "max_gap": [float(step.contact.gaps.max()) for step in sequence.steps]})
 
     summary = _run(case, source, samples, out / "samples.h5", workers, scheduler)
-    stats = load_batch(out / "samples.h5", samples).statistics()  # not a longer past study
+    data = load_batch(out / "samples.h5", samples)  # not the rest of a longer past study
+    if not data.fields["success"].any():  # a failed solve, not bad input: exit 1
+        fail(f"all {summary.samples} samples failed (see 'success' in {out / 'samples.h5'}); "
+             "no statistics written")
+        sys.exit(EXIT_NOT_SOLVED)
+    stats = data.statistics()
     write_csv(out / "statistics.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "mean_gap": stats.mean,
         **{f"gap_q{level * 100:g}": q for level, q in zip(stats.levels, stats.quantiles)},
