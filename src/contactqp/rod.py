@@ -143,7 +143,8 @@ class Rod:
         """Mesh indices of the computational nodes."""
         if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, numbers.Real) \
                 or int(self.n_elements) != self.n_elements or self.n_elements < 1:
-            raise InvalidInputError(f"n_elements must be a whole number >= 1, got {self.n_elements!r}")
+            raise InvalidInputError(
+                f"n_elements must be a whole number >= 1, got {self.n_elements!r}")
         try:
             x = np.asarray(self.nodes, dtype=float)
         except (TypeError, ValueError):

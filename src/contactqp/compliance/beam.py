@@ -83,7 +83,7 @@ def _positive(value, name: str, count: int) -> np.ndarray:
 
 
 def _node_number(node, n_nodes: int, what: str = "node") -> int:
-    """``node`` as an index in ``-n_nodes..n_nodes - 1`` (a whole number), else InvalidInputError."""
+    """``node`` as a whole index in ``-n_nodes..n_nodes - 1``; InvalidInputError otherwise."""
     if isinstance(node, (bool, np.bool_)) or not isinstance(node, numbers.Real) \
             or not float(node).is_integer():
         raise InvalidInputError(f"{what} must be a whole node index, got {node!r}")
