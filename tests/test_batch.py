@@ -287,3 +287,50 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
     rest = run_batch(FasteningCase(riveted), source, N, path)
     assert (rest.reused, rest.computed) == (len(stored), N - len(stored))
     assert_same(load_batch(path), serial)
+
+
+POOL_CHILD = """
+import sys, time
+from contactqp.batch import GaussianGapField, run_batch
+from contactqp.riveting import Assembly, FasteningCase
+
+class LoggedField(GaussianGapField):  # 50 ms per sample; logs each chunk a worker starts
+    def realisations(self, indices):
+        with open(sys.argv[3], "a") as log:
+            log.write(" ".join(str(int(k)) for k in indices) + "\\n")
+        time.sleep(0.05 * len(indices))
+        return super().realisations(indices)
+
+model = Assembly(grid=(11, 7), refine=1, fasteners=((1, 3), (5, 3), (9, 3))).build()
+field = LoggedField(model.points, 1e-4, 0.03, mean=1.5e-4, seed=11)
+print("started", flush=True)
+run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], workers=2, chunk_size=5)
+"""
+
+
+def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, source, serial,
+                                                                      tmp_path):
+    # Ctrl-C reaching the parent only (kill -INT of its pid): the chunks the workers had
+    # started still finish, and are stored rather than thrown away
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path, log = tmp_path / "p.h5", tmp_path / "started.txt"
+    child = subprocess.Popen(
+        [sys.executable, "-c", POOL_CHILD, str(path), str(4 * N), str(log)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert child.stdout.readline().strip() == b"started"
+    time.sleep(0.8)
+    os.kill(child.pid, signal.SIGINT)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode != 0 and b"KeyboardInterrupt" in err, err.decode()
+    started = sorted(int(k) for line in log.read_text().split("\n") for k in line.split())
+    stored = load_batch(path).indices.tolist()
+    assert 0 < len(stored) < 4 * N and set(started) <= set(stored), (started, stored)
+    rest = run_batch(FasteningCase(riveted), source, 4 * N, path)
+    assert (rest.reused, rest.computed) == (len(stored), 4 * N - len(stored))
+    assert_same(load_batch(path, N), serial)

@@ -356,8 +356,18 @@ def _process_pool(state, tasks, workers):
     executor = ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(state,))
     try:
         futures = [executor.submit(_pool_chunk, indices, warm) for indices, warm in tasks]
-        for future in as_completed(futures):
-            yield future.result()
+        waiting = set(futures)
+        try:
+            for future in as_completed(futures):
+                waiting.discard(future)
+                yield future.result()
+        except KeyboardInterrupt:  # Ctrl-C: start nothing new, store what the workers finish
+            for future in waiting:
+                future.cancel()
+            for future in waiting:
+                if not future.cancelled() and future.exception() is None:
+                    yield future.result()  # (a worker interrupted too has an exception)
+            raise
     finally:
         executor.shutdown(wait=True, cancel_futures=True)
 
