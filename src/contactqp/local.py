@@ -123,26 +123,18 @@ class LocalProblem:
             raise InvalidInputError(
                 f"W must be square of size dim*n_contacts = {m}, got shape {W.shape}"
             )
-        if np.any(mu < 0):
-            raise InvalidInputError(f"mu must be >= 0, got min(mu) = {mu.min():g}")
         if self.cohesion is None:
-            cohesion = np.zeros(nc)
+            cohesion = 0.0
         else:
             cohesion = finite_array(self.cohesion, "cohesion", 1)
             if cohesion.shape != (nc,):
                 raise InvalidInputError(
                     f"cohesion must have length n_contacts = {nc}, got shape {cohesion.shape}"
                 )
-            if np.any(cohesion < 0):
-                raise InvalidInputError(
-                    f"cohesion must be >= 0, got min(cohesion) = {cohesion.min():g}"
-                )
-            bad = np.flatnonzero((cohesion > 0) & (mu == 0))
-            if bad.size:
-                raise InvalidInputError(
-                    f"cohesion > 0 needs mu > 0 (the cone apex is at r_N = -c/mu): "
-                    f"contact {bad[0]} has mu = 0 and cohesion {cohesion[bad[0]]:g}"
-                )
+        from .friction import FrictionLaw  # the law's own checks (mu, cohesion >= 0, apex)
+
+        law = FrictionLaw(mu, cohesion, n_contacts=nc)
+        mu, cohesion = law.mu, law.cohesion
         if not isinstance(self.title, str):
             raise InvalidInputError(f"title must be a str, got {type(self.title).__name__}")
         object.__setattr__(self, "dim", dim)
