@@ -63,3 +63,26 @@ def test_cli_json_and_figure(tmp_path, capsys):
     assert curve.shape == (21, 2) and curve[:, 0].max() == pytest.approx(record["onset_force"])
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert main(["layers", "--mu", "-1"]) == 2
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"cohesion": float("inf")}, "cohesion must be finite"),
+    ({"mu": float("nan")}, "mu must be finite"),
+    ({"depth": 0.0}, "depth must be finite and > 0"),
+    ({"poisson": 0.5}, "poisson must be < 0.5"),
+    ({"cells": (20, 0, 4)}, "cells must be 3 integers"),
+    ({"steps": 2.5}, "steps an integer"),
+])
+def test_bad_layers_are_refused_by_name(kwargs, match):
+    from contactqp.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match=match):
+        Layers(**kwargs)
+
+
+def test_cli_infinite_cohesion_is_one_line(capsys):
+    from contactqp.cli import main
+
+    assert main(["layers", "--cohesion", "inf"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cohesion must be finite" in err

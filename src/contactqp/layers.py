@@ -28,6 +28,7 @@ force, here the weight of the upper layer. Sliding starts when the load reaches 
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,7 +37,7 @@ import scipy.linalg
 import scipy.sparse
 
 from .contact import NodePairs
-from .errors import ContactError
+from .errors import ContactError, InvalidInputError
 from .loading import solve_history
 from .model import ReducedModel
 from .problem import FrictionalProblem
@@ -70,6 +71,24 @@ class Layers:
     actuator_stiffness: float = 2e7
     support_stiffness: float = 1e3
     steps: int = 40
+
+    def __post_init__(self):
+        positive = ("length", "lower_height", "upper_height", "depth", "density", "young",
+                    "actuator_stiffness", "support_stiffness")
+        for name in (*positive, "poisson", "mu", "cohesion", "gravity"):
+            value = getattr(self, name)
+            low_open = name in positive
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                    or not np.isfinite(value) or value < 0 or (low_open and value == 0):
+                raise InvalidInputError(f"{name} must be finite and {'>' if low_open else '>='} "
+                                        f"0, got {value!r}")
+        if not self.poisson < 0.5:
+            raise InvalidInputError(f"poisson must be < 0.5, got {self.poisson!r}")
+        counts = (*tuple(self.cells), self.steps) if np.ndim(self.cells) == 1 else ()
+        if len(counts) != 4 or any(isinstance(n, bool) or not isinstance(n, numbers.Integral)
+                                   or n < 1 for n in counts):
+            raise InvalidInputError(f"cells must be 3 integers >= 1 and steps an integer >= 1, "
+                                    f"got {self.cells!r}, {self.steps!r}")
 
     @property
     def area(self) -> float:
