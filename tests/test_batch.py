@@ -226,6 +226,19 @@ def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path):
         run_batch(case, source, 2, tmp_path / "junk.h5")
 
 
+def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source, serial,
+                                                                  tmp_path):
+    import h5py
+
+    path = tmp_path / "half.h5"
+    with h5py.File(path, "w") as store:  # killed while creating the datasets
+        store.create_dataset("initial_gap", shape=(0, riveted.n_pairs),
+                             maxshape=(None, riveted.n_pairs), dtype="f8")
+    summary = run_batch(FasteningCase(riveted), source, N, path, chunk_size=5)
+    assert summary.computed == N
+    assert_same(load_batch(path), serial)
+
+
 def test_load_batch_reads_the_first_samples_only(riveted, source, tmp_path):
     path = tmp_path / "n.h5"
     run_batch(FasteningCase(riveted), source, 6, path, chunk_size=4)

@@ -286,12 +286,15 @@ def _open_store(path: Path, case, source, n_samples: int, chunk: int):
         busy = " (in use by another run?)" if exc.errno == errno.EAGAIN else ""
         raise FileFormatError(f"{path}: cannot open the batch store{busy}: {exc}") from None
     try:
-        if "done" not in store:
+        if "done" not in store:  # new, or its creation was interrupted: nothing stored yet
+            for name in list(store):
+                del store[name]
             store.attrs.update({"format": FORMAT, "identity": identity, "chunk": chunk})
-            store.create_dataset("done", shape=(0,), maxshape=(None,), dtype="?", chunks=(chunk,))
             for name, (shape, dtype) in fields.items():
                 store.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
                                      dtype=dtype, chunks=(chunk, *shape))
+            # last: its presence says the store is complete
+            store.create_dataset("done", shape=(0,), maxshape=(None,), dtype="?", chunks=(chunk,))
         elif store.attrs.get("format") != FORMAT or store.attrs.get("identity") != identity:
             raise InvalidInputError(f"{path} holds another study (other model, options or gap "
                                     "source): give another output")
