@@ -337,6 +337,22 @@ def test_a_large_load_away_from_the_contacts_does_not_blunt_the_cone_check():
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
+def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
+    # an open contact 1 m away from its obstacle on stiff springs (1e-6 m/N) is no force of
+    # 1e6 N: friction 1 % beyond the cone on the loaded contact must still fail
+    model = cq.ReducedModel(flexibility=1e-6 * np.eye(4), dofs_per_node=2,
+                            coordinates=[[0.0, 0.0], [5.0, 0.0]])
+    problem = cq.FrictionalProblem(model, [5.0, -10.0, 0.0, 0.0],
+                                   [cq.GapObstacle([0, 1], [0.0, 1.0], [0.0, -1.0])], mu=0.3)
+    good = problem.solve()
+    assert good.success and good.status_labels == ["slip", "open"], good.message
+    wrong = good.forces.copy()
+    wrong[0, 1] *= 1.01
+    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
+                              wall_time=0.0)
+    assert not bad.success and bad.certificate.cone > 1e-3
+
+
 def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
     # the same soft node blunted the frictionless certificate too: 1e-5 m of interpenetration
     # over 1 m/N * 1000 N passed as 1e-8

@@ -127,8 +127,9 @@ def contact_scales(problem, local_displacements, forces, previous_tangential
     the largest local displacement ``H U``, initial gap, or local displacement the loads cause
     with the apex forces applied (``q~`` of :meth:`~contactqp.FrictionalProblem.apex_step`:
     the length the solver's own tolerance is relative to); the force scale the largest local
-    contact force, tensile strength ``c / mu`` or ``max |q~| / max diag(W)`` (the force that
-    takes up the largest free local displacement at the softest contact). Never
+    contact force, tensile strength ``c / mu`` or ``max |q~ - w| / max diag(W)`` (the force
+    that takes up the largest local displacement the loads cause, initial gaps ``w`` left
+    out, at the softest contact). Never
     ``max diag(R)`` times a force, which mixes the softest freedom with the largest load, nor
     the largest load, which may not reach the contacts.
 
@@ -145,8 +146,11 @@ def contact_scales(problem, local_displacements, forces, previous_tangential
     tiny = np.finfo(float).tiny
     step, free, shift = problem.apex_step(previous_tangential)
     compliance = float(np.max(np.abs(step.W.diagonal()), initial=0.0))
+    # the floor left when no contact carries force: what the loads (and the previous state)
+    # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
+    loaded = free - problem.local().offset
     force = max(np.max(np.abs(forces), initial=0.0), np.max(shift, initial=0.0),
-                np.max(np.abs(free), initial=0.0) / compliance if compliance > 0 else 0.0,
+                np.max(np.abs(loaded), initial=0.0) / compliance if compliance > 0 else 0.0,
                 tiny)
     length = max(np.max(np.abs(free), initial=0.0),
                  np.max(np.abs(local_displacements), initial=0.0),
