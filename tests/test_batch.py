@@ -239,6 +239,19 @@ def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source
     assert_same(load_batch(path), serial)
 
 
+def test_a_store_whose_growth_was_interrupted_grows_on_resume(riveted, source, serial,
+                                                              tmp_path):
+    import h5py
+
+    path = tmp_path / "grow.h5"
+    run_batch(FasteningCase(riveted), source, 3, path, chunk_size=5)
+    with h5py.File(path, "a") as store:  # killed after growing 'done' only
+        store["done"].resize(N, axis=0)
+    summary = run_batch(FasteningCase(riveted), source, N, path)
+    assert (summary.reused, summary.computed) == (3, N - 3)
+    assert_same(load_batch(path), serial)
+
+
 def test_load_batch_reads_the_first_samples_only(riveted, source, tmp_path):
     path = tmp_path / "n.h5"
     run_batch(FasteningCase(riveted), source, 6, path, chunk_size=4)

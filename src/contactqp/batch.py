@@ -298,8 +298,8 @@ def _open_store(path: Path, case, source, n_samples: int, chunk: int):
         elif store.attrs.get("format") != FORMAT or store.attrs.get("identity") != identity:
             raise InvalidInputError(f"{path} holds another study (other model, options or gap "
                                     "source): give another output")
-        if store["done"].shape[0] < n_samples:
-            for name in ("done", *fields):
+        for name in (*fields, "done"):  # each, in case an earlier resize was interrupted
+            if store[name].shape[0] < n_samples:
                 store[name].resize(n_samples, axis=0)
     except BaseException:
         store.close()
