@@ -252,6 +252,15 @@ def test_a_store_whose_growth_was_interrupted_grows_on_resume(riveted, source, s
     assert_same(load_batch(path), serial)
 
 
+def test_gap_fields_of_the_wrong_width_are_refused_before_a_store_is_made(riveted, tmp_path):
+    path = tmp_path / "w.h5"
+    with pytest.raises(InvalidInputError, match="gap fields have 5 values, the case has 77"):
+        run_batch(FasteningCase(riveted), GapSamples(np.zeros((3, 5))), 3, path)
+    assert not path.exists()
+    summary = run_batch(FasteningCase(riveted), GapSamples(np.full((3, 77), 1e-4)), 3, path)
+    assert summary.complete
+
+
 def test_load_batch_reads_the_first_samples_only(riveted, source, tmp_path):
     path = tmp_path / "n.h5"
     run_batch(FasteningCase(riveted), source, 6, path, chunk_size=4)

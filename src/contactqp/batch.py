@@ -435,6 +435,10 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
                                 f"{source.n_available}")
     if int(workers) < 1 or int(chunk_size) < 1:
         raise InvalidInputError(f"workers and chunk_size must be >= 1, got {workers}, {chunk_size}")
+    width = np.shape(source.realisations([0]))[-1]
+    if width != case.n_contacts:  # before a store is made for a study that cannot run
+        raise InvalidInputError(f"gap fields have {width} values, the case has "
+                                f"{case.n_contacts} contacts")
     path = Path(path)
     store = _open_store(path, case, source, n_samples, int(chunk_size))
     with store:
