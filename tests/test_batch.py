@@ -272,6 +272,10 @@ def test_load_batch_reads_the_first_samples_only(riveted, source, tmp_path):
 def test_bad_sources(tmp_path):
     with pytest.raises(FileFormatError, match="not found"):
         load_gap_samples(tmp_path / "none.npy")
+    (tmp_path / "g.h5").write_text("1,2\n")
+    with pytest.raises(FileFormatError) as info:
+        load_gap_samples(tmp_path / "g.h5")
+    assert str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy or .csv (or .txt)"
     (tmp_path / "g.txt").write_text("1,2\n3,x\n")
     with pytest.raises(FileFormatError, match="unreadable"):
         load_gap_samples(tmp_path / "g.txt")

@@ -208,20 +208,21 @@ class GapSamples:
 
 
 def load_gap_samples(path) -> GapSamples:
-    """Realisations from a file: ``.npy``, or ``.csv`` (comma-separated, one row per sample).
+    """Realisations from a file: ``.npy``, or ``.csv`` / ``.txt`` (comma-separated, one row per
+    sample).
 
     Values in metres, shape (N, m).
     """
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: gap samples file not found")
+    if path.suffix not in (".npy", ".csv", ".txt"):
+        raise FileFormatError(f"{path}: gap samples must be .npy or .csv (or .txt)")
     try:
         if path.suffix == ".npy":
             data = np.load(path, allow_pickle=False)
-        elif path.suffix in (".csv", ".txt"):
-            data = np.loadtxt(path, delimiter=",", ndmin=2)
         else:
-            raise FileFormatError(f"{path}: gap samples must be .npy or .csv")
+            data = np.loadtxt(path, delimiter=",", ndmin=2)
     except ValueError as exc:
         raise FileFormatError(f"{path}: unreadable gap samples ({exc})") from None
     return GapSamples(data)
