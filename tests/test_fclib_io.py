@@ -487,3 +487,10 @@ def test_writing_a_cohesive_problem_is_refused_not_lossy(tmp_path):
     with pytest.raises(UnsupportedProblemError, match="no field for cohesion"):
         write_problem(tmp_path / "c.hdf5", problem)
     assert not (tmp_path / "c.hdf5").exists()
+
+
+def test_a_broken_file_named_hdf5_is_called_neither_hdf5_nor_text(tmp_path):
+    path = tmp_path / "broken.hdf5"
+    path.write_text("garbage\n")
+    with pytest.raises(FileFormatError, match="neither an HDF5 file .* nor a Siconos"):
+        read_problem(path)

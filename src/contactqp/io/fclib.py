@@ -190,6 +190,10 @@ def _group(parent, name):
     return obj
 
 
+#: Suffixes that promise an HDF5 file: a failure to read such a file as text says so.
+HDF5_SUFFIXES = (".hdf5", ".h5", ".hdf")
+
+
 def _read_any(path):
     p = Path(os.fspath(path))
     if not p.exists():
@@ -198,14 +202,20 @@ def _read_any(path):
         raise FileFormatError(f"{p}: not a regular file")
     if is_hdf5(p):
         return _read_hdf5(p)
-    return read_dat(p)
+    try:
+        return read_dat(p)
+    except FileFormatError as exc:
+        if p.suffix.lower() not in HDF5_SUFFIXES:
+            raise
+        raise FileFormatError(f"{p}: neither an HDF5 file (no HDF5 signature) nor a Siconos "
+                              f"text problem ({str(exc).removeprefix(f'{p}: ')})") from None
 
 
 def read_problem(path) -> LocalProblem:
     """Read a frictional-contact problem as a local problem.
 
-    The format is found from the content, not the suffix: a file with the HDF5 signature is
-    read as FCLIB (``/fclib_local``, or ``/fclib_global`` condensed with
+    The format is found from the content: a file with the HDF5 signature is read as FCLIB
+    (``/fclib_local``, or ``/fclib_global`` condensed with
     :func:`~contactqp.local.condense_global`), anything else as a Siconos ``.dat`` text file
     (see :mod:`contactqp.io.siconos`).
 
