@@ -186,14 +186,7 @@ class ContactProblem:
         lam = np.asarray(forces, dtype=float)
         certificate = certify(self, U, lam, self.certificate_tol)
         force_scale = max(np.max(np.abs(self.loads), initial=0.0), np.max(np.abs(lam), initial=0.0))
-        if not converged:
-            status, success = 1, False
-        elif not certificate.passed:
-            status, success = 2, False
-            message = (f"{message}; certificate failed (worst relative residual "
-                       f"{certificate.worst:.2e} > {certificate.tol:.0e})")
-        else:
-            status, success = 0, True
+        status, success, message = _verdict(converged, certificate, message)
         A = self.constraints.matrix
         return ContactResult(
             x=U, forces=lam, nodal_forces=-(A.T @ lam), gaps=self.constraints.gaps - A @ U,
@@ -410,14 +403,7 @@ class FrictionalProblem:
         U = local.displacements(self.loads, r)
         tangential = self._previous_tangential(previous)
         certificate = certify_friction(self, U, r, tangential, self.certificate_tol)
-        if not converged:
-            status, success = 1, False
-        elif not certificate.passed:
-            status, success = 2, False
-            message = (f"{message}; certificate failed (worst relative residual "
-                       f"{certificate.worst:.2e} > {certificate.tol:.0e})")
-        else:
-            status, success = 0, True
+        status, success, message = _verdict(converged, certificate, message)
         k, d = self.n_contacts, self.dim
         R = r.reshape(k, d)
         HU = (local.operator @ U).reshape(k, d)
@@ -480,6 +466,16 @@ class FrictionalProblem:
     def __repr__(self) -> str:
         return (f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
                 f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})")
+
+
+def _verdict(converged: bool, certificate, message: str) -> tuple[int, bool, str]:
+    """``(status, success, message)``: 0 solved, 1 not converged, 2 certificate failed."""
+    if not converged:
+        return 1, False, message
+    if not certificate.passed:
+        return 2, False, (f"{message}; certificate failed (worst relative residual "
+                          f"{certificate.worst:.2e} > {certificate.tol:.0e})")
+    return 0, True, message
 
 
 def friction_route(law: FrictionLaw, solver: str | None):
