@@ -21,7 +21,6 @@ Gaussian gap fields (:class:`GaussianGapField`) have the squared-exponential cov
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import hashlib
 import json
@@ -318,10 +317,8 @@ def _single_threaded_blas():
     """Limit BLAS to one thread: per-sample products are too small to gain from threads, and
     threads of several workers (or of other jobs) fighting for the cores slow them down many
     times (measured: 1.1 s against 42 ms per sample on the riveting case, 2 busy cores)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # BLAS threads are then as the environment sets them
-        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
     return threadpool_limits(1)
 
 
