@@ -402,7 +402,7 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
     with a stiff ``W`` (say 1e-6 m/N) the reactions dominate and a displacement error hardly
     shows: a reaction 1 % short, 1e-5 m of interpenetration, measures 2e-8. Solve such a
     problem made dimensionless, as :meth:`~contactqp.FrictionalProblem.solve` does
-    (:meth:`~contactqp.FrictionalProblem.fclib`), whose certificate also checks the gaps
+    (:attr:`~contactqp.problem.FrictionStep.fclib`), whose certificate also checks the gaps
     in metres.
 
     Parameters

@@ -45,7 +45,8 @@ from .model import ReducedModel, finite_array
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
                      contact_scales)
 
-__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "LocalForm", "friction_route"]
+__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "LocalForm",
+           "friction_route"]
 
 #: A contact is reported closed when its force exceeds this fraction of the problem's force scale.
 CLOSED_RTOL = 1e-10
@@ -237,6 +238,40 @@ class LocalForm:
         return self.free_displacements(loads) + self.influence @ forces
 
 
+class FrictionStep:
+    """One increment of a :class:`FrictionalProblem`: its local problem in three views.
+
+    Attributes
+    ----------
+    tangential : ndarray, shape (k, d - 1)
+        ``(H U_prev)_T`` (m), the origin of the step's slips.
+    local : LocalProblem
+        The step in the model's units (m, N), with the law's cohesion.
+    apex_shift : ndarray, shape (d k,)
+        Forces from the cones' apices: ``r~ = r + apex_shift`` (N).
+    q_apex : ndarray, shape (d k,)
+        ``q - W apex_shift`` (m): the local displacements the loads cause with the apex forces
+        applied.
+    fclib : LocalProblem
+        The dimensionless FCLIB problem the solvers receive: cones translated to their apices
+        (no cohesion left), ``W / w`` and ``q~ / L`` with ``w`` the largest diagonal of ``W`` and
+        ``L`` the largest ``|q~|``, so that a natural-map error weighs forces and displacements
+        alike.
+    force_unit : float
+        ``L / w`` (N): ``r = force_unit r_fclib - apex_shift``.
+    """
+
+    def __init__(self, tangential: np.ndarray, local: LocalProblem):
+        self.tangential, self.local = tangential, local
+        self.apex_shift = local.apex_shift
+        W = local.W
+        self.q_apex = local.q - W @ self.apex_shift
+        w = float(np.max(np.diag(W)))
+        length = float(np.max(np.abs(self.q_apex))) or 1.0
+        self.fclib = LocalProblem(W / w, self.q_apex / length, local.mu, local.dim)
+        self.force_unit = length / w
+
+
 class FrictionalProblem:
     r"""A contact problem with friction on a reduced model, solved from a given state.
 
@@ -344,56 +379,29 @@ class FrictionalProblem:
         """The step's :class:`~contactqp.local.LocalProblem` from ``previous`` (None: rest).
 
         In the model's units (m, N), with the cohesion of the law; FCLIB's problem when there
-        is none. To solve it, prefer :meth:`solve` (or :meth:`fclib`): in these units the
-        natural-map error that the local solvers stop on weighs newtons against metres and,
-        for a stiff ``W``, barely sees displacement errors
+        is none. To solve it, prefer :meth:`solve` (or :attr:`FrictionStep.fclib`): in these
+        units the natural-map error that the local solvers stop on weighs newtons against
+        metres and, for a stiff ``W``, barely sees displacement errors
         (:func:`~contactqp.local.natural_map_error`).
         """
-        return self._step(self._previous_tangential(previous))
+        return self.step(previous).local
 
-    def _step(self, tangential: np.ndarray) -> LocalProblem:
+    def step(self, previous=None) -> "FrictionStep":
+        """The increment from ``previous`` (None: rest), assembled once for solver and certificate."""
+        tangential = self._previous_tangential(previous)
         q = self.local().q(self.loads).reshape(self.n_contacts, self.dim)
         q[:, 1:] -= tangential
-        return LocalProblem(self.local().W, q.reshape(-1), self.law.mu, self.dim,
-                            cohesion=self.law.cohesion)
-
-    def apex_step(self, tangential: np.ndarray) -> tuple[LocalProblem, np.ndarray, np.ndarray]:
-        """``(step, q~, apex_shift)``: the step's local problem (model units) and its ``q``
-        seen from the cones' apices, ``q~ = q - W apex_shift`` (m), the local displacements
-        the loads cause with the apex forces applied.
-
-        Parameters
-        ----------
-        tangential : ndarray, shape (k, d - 1)
-            ``(H U_prev)_T`` (m).
-        """
-        step = self._step(tangential)
-        shift = step.apex_shift
-        return step, step.q - step.W @ shift, shift
-
-    def fclib(self, tangential: np.ndarray) -> tuple[LocalProblem, np.ndarray, float]:
-        """The step as a dimensionless FCLIB problem: ``(problem, apex_shift, force_unit)``.
-
-        The cones are translated to their apices (``r~ = r + apex_shift``, no cohesion left)
-        and scaled: ``W / w`` and ``q~ / L`` with ``w`` the largest diagonal of ``W`` and ``L``
-        the largest ``|q~|``, so that forces are in units of ``L / w`` (``force_unit``, N) and
-        a natural-map error weighs forces and displacements alike.
-
-        Parameters
-        ----------
-        tangential : ndarray, shape (k, d - 1)
-            ``(H U_prev)_T`` (m).
-        """
-        step, q, shift = self.apex_step(tangential)
-        W = step.W
-        w = float(np.max(np.diag(W)))
-        length = float(np.max(np.abs(q))) or 1.0
-        scaled = LocalProblem(W / w, q / length, step.mu, step.dim)
-        return scaled, shift, length / w
+        local = LocalProblem(self.local().W, q.reshape(-1), self.law.mu, self.dim,
+                             cohesion=self.law.cohesion)
+        return FrictionStep(tangential, local)
 
     def make_result(self, forces, previous=None, *, solver: str, converged: bool, message: str,
-                    nit: int, wall_time: float, info: dict | None = None) -> FrictionalResult:
-        """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`."""
+                    nit: int, wall_time: float, info: dict | None = None,
+                    step: "FrictionStep | None" = None) -> FrictionalResult:
+        """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`.
+
+        ``step`` is :meth:`step` of ``previous`` when the caller has it already.
+        """
         r = finite_array(np.ravel(forces), "forces", 1)
         if r.shape != (self.n_contacts * self.dim,):
             raise InvalidInputError(
@@ -401,14 +409,16 @@ class FrictionalProblem:
                 f"({self.n_contacts * self.dim} values), got shape {np.shape(forces)}")
         local = self.local()
         U = local.displacements(self.loads, r)
-        tangential = self._previous_tangential(previous)
-        certificate = certify_friction(self, U, r, tangential, self.certificate_tol)
+        if step is None:
+            step = self.step(previous)
+        tangential = step.tangential
+        certificate = certify_friction(self, U, r, step, self.certificate_tol)
         status, success, message = _verdict(converged, certificate, message)
         k, d = self.n_contacts, self.dim
         R = r.reshape(k, d)
         HU = (local.operator @ U).reshape(k, d)
         slip = HU[:, 1:] - tangential
-        force, length = contact_scales(self, HU, r, tangential)
+        force, length = contact_scales(self, HU, r, step)
         gaps = self.constraints.gaps + HU[:, 0]
         pulling = np.flatnonzero((self.law.cohesion > 0) & (gaps > self.certificate_tol * length))
         if pulling.size:
@@ -434,7 +444,7 @@ class FrictionalProblem:
               **options) -> FrictionalResult:
         """Solve the step from ``previous`` (a :class:`FrictionalResult`, None: rest).
 
-        The solver receives the dimensionless FCLIB problem of :meth:`fclib`.
+        The solver receives the dimensionless FCLIB problem :attr:`FrictionStep.fclib`.
 
         Parameters
         ----------
@@ -452,7 +462,8 @@ class FrictionalProblem:
         """
         name, method = friction_route(self.law, solver)
         start = time.perf_counter()
-        problem, shift, unit = self.fclib(self._previous_tangential(previous))
+        step = self.step(previous)
+        problem, shift, unit = step.fclib, step.apex_shift, step.force_unit
         r0 = None if previous is None else (previous.forces.reshape(-1) + shift) / unit
         if name == "polygonal":
             options = {"facets": self.law.facets, **options}
@@ -461,7 +472,8 @@ class FrictionalProblem:
         solution = method(problem, tol=tol, r0=r0, **options)
         return self.make_result(unit * solution.r - shift, previous, solver=name,
                                 converged=solution.converged, message=solution.message,
-                                nit=solution.iterations, wall_time=time.perf_counter() - start)
+                                nit=solution.iterations, wall_time=time.perf_counter() - start,
+                                step=step)
 
     def __repr__(self) -> str:
         return (f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "

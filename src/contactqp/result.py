@@ -118,14 +118,13 @@ def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
     return float(force), float(length)
 
 
-def contact_scales(problem, local_displacements, forces, previous_tangential
-                   ) -> tuple[float, float]:
+def contact_scales(problem, local_displacements, forces, step) -> tuple[float, float]:
     """``(force, length)``: the scales (N, m) of a frictional step's contact residuals.
 
     Measured on the contacts only, so that a soft or heavily loaded freedom away from them
     does not loosen the contact checks (nor turn real slips into "stick"): the length scale is
     the largest local displacement ``H U``, initial gap, or local displacement the loads cause
-    with the apex forces applied (``q~`` of :meth:`~contactqp.FrictionalProblem.apex_step`:
+    with the apex forces applied (``q~``, :attr:`~contactqp.problem.FrictionStep.q_apex`:
     the length the solver's own tolerance is relative to); the force scale the largest local
     contact force, tensile strength ``c / mu`` or ``max |q~ - w| / max diag(W)`` (the force
     that takes up the largest local displacement the loads cause, initial gaps ``w`` left
@@ -140,12 +139,12 @@ def contact_scales(problem, local_displacements, forces, previous_tangential
         ``H U`` (m).
     forces : ndarray, shape (d k,) or (k, d)
         Local forces ``r`` (N).
-    previous_tangential : ndarray, shape (k, d - 1)
-        ``(H U_prev)_T`` (m).
+    step : FrictionStep
+        The step (:meth:`~contactqp.FrictionalProblem.step`).
     """
     tiny = np.finfo(float).tiny
-    step, free, shift = problem.apex_step(previous_tangential)
-    compliance = float(np.max(np.abs(step.W.diagonal()), initial=0.0))
+    free, shift = step.q_apex, step.apex_shift
+    compliance = float(np.max(np.abs(step.local.W.diagonal()), initial=0.0))
     # the floor left when no contact carries force: what the loads (and the previous state)
     # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
     loaded = free - problem.local().offset
@@ -268,7 +267,7 @@ class FrictionCertificate:
         force scale for a stiffness model).
     natural_map : float
         :func:`~contactqp.local.natural_map_error` of the step's dimensionless FCLIB problem
-        (:meth:`~contactqp.FrictionalProblem.fclib`, exact cones). For a polygonal law it
+        (:attr:`~contactqp.problem.FrictionStep.fclib`, exact cones). For a polygonal law it
         measures the distance the linearisation puts between the answer and the Coulomb one.
     exact_cone : bool
         True for the exact cone, or any cone in 2-D (where the polygonal law is exact):
@@ -307,7 +306,7 @@ class FrictionCertificate:
                 "tol": self.tol, "passed": self.passed}
 
 
-def certify_friction(problem, displacements, forces, previous_tangential,
+def certify_friction(problem, displacements, forces, step,
                      tol: float = CERTIFICATE_TOL) -> FrictionCertificate:
     """Check displacements and local forces against a :class:`~contactqp.FrictionalProblem`.
 
@@ -318,8 +317,9 @@ def certify_friction(problem, displacements, forces, previous_tangential,
         ``U`` (m).
     forces : ndarray, shape (d k,)
         Local forces ``r`` (N), normal first per contact; the force on the body is ``H^T r``.
-    previous_tangential : ndarray, shape (k, d - 1)
-        ``(H U_prev)_T`` (m), the origin of the slip increments.
+    step : FrictionStep
+        The step (:meth:`~contactqp.FrictionalProblem.step`); its tangential displacements are
+        the origin of the slip increments.
     tol : float
     """
     U = np.asarray(displacements, dtype=float)
@@ -329,12 +329,11 @@ def certify_friction(problem, displacements, forces, previous_tangential,
     H, gaps, P, law = problem.frames.operator, problem.constraints.gaps, problem.loads, problem.law
     HU = (H @ U).reshape(k, d)
     final_gaps = gaps + HU[:, 0]
-    slip = HU[:, 1:] - previous_tangential
+    slip = HU[:, 1:] - step.tangential
     apex = law.apex_forces(R)
-    force, length = contact_scales(problem, HU, r, previous_tangential)
+    force, length = contact_scales(problem, HU, r, step)
     # the equilibrium of every freedom is measured on the model's own scales
     global_force, global_length = scales(problem.model, P, U, r, gaps)
-    fclib, shift, unit = problem.fclib(previous_tangential)
     return FrictionCertificate(
         penetration=float(max(0.0, -np.min(final_gaps)) / length),
         force_sign=float(max(0.0, -np.min(apex[:, 0])) / force),
@@ -343,7 +342,7 @@ def certify_friction(problem, displacements, forces, previous_tangential,
                               / (force * length)),
         dissipation=float(np.max(np.abs(law.dissipation_gap(R, slip))) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
-        natural_map=natural_map_error(fclib, (r + shift) / unit),
+        natural_map=natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )

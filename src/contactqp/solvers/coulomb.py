@@ -313,7 +313,7 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     tol : float
         Target of :func:`~contactqp.local.natural_map_error` (relative; it adds reactions and
         velocities, so give a problem whose ``W`` is O(1), e.g.
-        :meth:`~contactqp.FrictionalProblem.fclib`, not one in newtons and metres).
+        :attr:`~contactqp.problem.FrictionStep.fclib`, not one in newtons and metres).
     max_iter : int
         Newton iterations per run. A round is a Newton run then a Levenberg-Marquardt run; at
         most 3 rounds, the later two each after up to 100 Gauss-Seidel sweeps.
