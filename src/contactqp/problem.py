@@ -52,13 +52,17 @@ __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "L
 CLOSED_RTOL = 1e-10
 
 
-def _influence(model: ReducedModel, matrix: scipy.sparse.csr_matrix) -> np.ndarray:
-    """``R M^T`` for a sparse constraint matrix ``M``: displacements under unit contact forces."""
+def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
+    """``(R M^T, M R M^T)`` for a sparse constraint matrix ``M``: the displacements under unit
+    contact forces and the Delassus operator, symmetrised (its asymmetry is round-off)."""
     if model.given == "flexibility":
         # only the freedoms the constraints touch enter R M^T
         used = np.unique(matrix.indices)
-        return model.flexibility[:, used] @ matrix[:, used].T.toarray()
-    return model.displacements(matrix.T.toarray())
+        influence = model.flexibility[:, used] @ matrix[:, used].T.toarray()
+    else:
+        influence = model.displacements(matrix.T.toarray())
+    W = np.asarray(matrix @ influence)
+    return influence, 0.5 * (W + W.T)
 
 
 def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.ndarray:
@@ -98,9 +102,7 @@ class DualForm:
 
     def __init__(self, model: ReducedModel, constraints: Constraints, loads: np.ndarray):
         A = constraints.matrix
-        self.influence = _influence(model, A)
-        W = np.asarray(A @ self.influence)
-        self.W = 0.5 * (W + W.T)
+        self.influence, self.W = _delassus(model, A)
         self.free_displacements = model.displacements(loads)
         self.b = A @ self.free_displacements - constraints.gaps
 
@@ -218,9 +220,7 @@ class LocalForm:
     def __init__(self, model: ReducedModel, constraints: Constraints, frames: LocalFrames):
         H = frames.operator
         self.operator = H
-        self.influence = _influence(model, H)
-        W = np.asarray(H @ self.influence)
-        self.W = 0.5 * (W + W.T)
+        self.influence, self.W = _delassus(model, H)
         self.offset = np.zeros(H.shape[0])
         self.offset[::frames.dim] = constraints.gaps
         self._model = model
@@ -356,8 +356,7 @@ class FrictionalProblem:
 
     def with_loads(self, loads) -> "FrictionalProblem":
         """The same contacts and law under other loads (nothing is assembled again)."""
-        twin = object.__new__(FrictionalProblem)
-        twin.__dict__.update(self.__dict__)
+        twin = copy.copy(self)
         twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
         twin._local = self.local()
         return twin
