@@ -38,7 +38,7 @@ from .errors import InvalidInputError
 from .model import finite_array
 from .solvers.polygonal import polygon_normals
 
-__all__ = ["FrictionLaw", "STATUS_LABELS"]
+__all__ = ["FrictionLaw", "STATUS_LABELS", "apex_distance"]
 
 #: Contact status codes of :meth:`FrictionLaw.status`, by index.
 STATUS_LABELS = ("open", "stick", "slip")
@@ -58,6 +58,14 @@ def _per_contact(value, name: str, count: int) -> np.ndarray:
         raise InvalidInputError(
             f"{name} must be >= 0, got {array.min():g} at contact {int(np.argmin(array))}")
     return array
+
+
+def apex_distance(mu: np.ndarray, cohesion: np.ndarray) -> np.ndarray:
+    """``c / mu`` per contact (N): how far the Mohr-Coulomb cone's apex lies below ``r_N = 0``
+    (zero without cohesion; cohesion needs ``mu > 0``)."""
+    distance = np.zeros(np.shape(mu))
+    np.divide(cohesion, mu, out=distance, where=np.asarray(cohesion) > 0)
+    return distance
 
 
 @dataclass(frozen=True)
@@ -107,8 +115,7 @@ class FrictionLaw:
     def apex_forces(self, forces) -> np.ndarray:
         """Local forces measured from the cone's apex, ``r + (c / mu) e_N``, shape (k, d)."""
         shifted = np.array(forces, dtype=float)
-        np.add(shifted[:, 0], self.cohesion / np.where(self.mu > 0, self.mu, 1.0),
-               out=shifted[:, 0])
+        shifted[:, 0] += apex_distance(self.mu, self.cohesion)
         return shifted
 
     def bound(self, normal_forces) -> np.ndarray:

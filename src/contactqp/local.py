@@ -155,8 +155,10 @@ class LocalProblem:
         ``r + apex_shift`` lies in the Coulomb cone exactly when ``r`` lies in the Mohr-Coulomb
         cone: the translation that turns a cohesive problem into an FCLIB one.
         """
+        from .friction import apex_distance
+
         shift = np.zeros((self.n_contacts, self.dim))
-        np.divide(self.cohesion, self.mu, out=shift[:, 0], where=self.cohesion > 0)
+        shift[:, 0] = apex_distance(self.mu, self.cohesion)
         return shift.reshape(-1)
 
 
