@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import InvalidInputError, MissingDependencyError
 
-__all__ = ["write_vtu", "write_csv"]
+__all__ = ["write_vtu", "write_csv", "write_rows"]
 
 
 def write_vtu(path, points, cells, point_data) -> Path:
@@ -69,10 +69,27 @@ def write_csv(path, columns) -> Path:
     if not names or len({len(v) for v in values}) != 1:
         raise InvalidInputError("columns must be non-empty and of one length, got lengths "
                                 f"{[len(v) for v in values]}")
+    return write_rows(path, names, zip(*(v.tolist() for v in values)))
+
+
+def write_rows(path, header, rows) -> Path:
+    """Write a header row and ``rows`` (iterables of values) as a UTF-8 CSV table.
+
+    Parameters
+    ----------
+    path : str or Path
+        Created with its folders; overwritten.
+    header : sequence of str
+    rows : iterable of sequence
+
+    Returns
+    -------
+    Path
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as handle:
+    with path.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(names)
-        writer.writerows(zip(*(v.tolist() for v in values)))
+        writer.writerow(header)
+        writer.writerows(rows)
     return path

@@ -233,7 +233,6 @@ the key as a prefix and their class kept (e.g.
 
 from __future__ import annotations
 
-import csv
 import difflib
 import inspect
 import json
@@ -254,6 +253,7 @@ from ..model import ReducedModel
 from ..problem import ContactProblem, FrictionalProblem, friction_route
 from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
+from .export import write_rows
 
 __all__ = [
     "ProblemSpec",
@@ -1203,13 +1203,6 @@ def _json_ready(value):
     return str(value)
 
 
-def _write_csv(path: Path, header, rows) -> None:
-    with open(path, "w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(header)
-        writer.writerows(rows)
-
-
 def _expected_steps(spec: ProblemSpec, result) -> list:
     """The results of each step of ``result``, after checking its kind and shapes."""
     problem = spec.problem
@@ -1318,8 +1311,8 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
         summary["friction"] = {"mu": law.mu, "cohesion": law.cohesion, "facets": law.facets}
     try:
         out.mkdir(parents=True, exist_ok=True)
-        _write_csv(paths[0], lead + ["node", "freedom", "u"], displacements)
-        _write_csv(paths[1], lead + header, contacts)
+        write_rows(paths[0], lead + ["node", "freedom", "u"], displacements)
+        write_rows(paths[1], lead + header, contacts)
         with open(paths[2], "wb") as handle:
             np.savez(handle, **arrays)
         with open(paths[3], "w", encoding="utf-8") as handle:
@@ -1327,7 +1320,7 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
             handle.write("\n")
         if history:
             cumulative = np.cumsum([step.dissipated for step in steps])
-            _write_csv(paths[4], ["step", "factor", *STATUS_LABELS, "dissipated",
+            write_rows(paths[4], ["step", "factor", *STATUS_LABELS, "dissipated",
                                   "cumulative_dissipated", "iterations", "certificate_worst",
                                   "success"], [
                 [k, "" if spec.factors is None else _float_text(spec.factors[k]),
