@@ -30,7 +30,7 @@ from contactqp.local import (
     contact_status,
     natural_map_error,
 )
-from contactqp.solvers import coulomb
+import contactqp.local
 from contactqp.solvers.coulomb import alart_curnier, solve_coulomb
 from contactqp.solvers.local import solve_local
 from contactqp.solvers.pgs import GaussSeidel
@@ -187,10 +187,10 @@ def test_newton_agrees_with_gauss_seidel_where_unique(dim, sparse):
 
 
 def test_dense_and_sparse_newton_matrices_give_the_same_solution(monkeypatch):
-    # a small sparse W is factored dense; lift the thresholds to run the SuperLU path, on a full
-    # W and on one with missing blocks (diagonally dominant, so SPD)
-    monkeypatch.setattr(coulomb, "DENSE_SIZE", 0)
-    monkeypatch.setattr(coulomb, "DENSE_FILL", 2.0)
+    # a small sparse W is factored dense; lift the thresholds to run the SuperLU paths (Newton
+    # and the PSD check), on a full W and on one with missing blocks (diagonally dominant, so SPD)
+    monkeypatch.setattr(contactqp.local, "DENSE_SIZE", 0)
+    monkeypatch.setattr(contactqp.local, "DENSE_FILL", 2.0)
     base = random_problem(10, 3, seed=7)
     pattern = np.kron(np.random.default_rng(1).random((10, 10)) < 0.3, np.ones((3, 3)))
     holes = base.W * np.maximum(pattern, pattern.T) + 3 * np.eye(30)

@@ -11,6 +11,7 @@ and measures the accuracy of a candidate solution with the natural-map error use
 
 from __future__ import annotations
 
+import functools
 import operator
 from dataclasses import dataclass, field
 
@@ -25,6 +26,7 @@ __all__ = [
     "GlobalProblem",
     "condense_global",
     "natural_map_error",
+    "natural_map_parts",
     "projection_on_cones",
     "project_rows",
     "contact_status",
@@ -148,7 +150,7 @@ class LocalProblem:
         """Number of contacts, ``len(mu)``."""
         return int(self.mu.shape[0])
 
-    @property
+    @functools.cached_property
     def apex_shift(self) -> np.ndarray:
         """Shape (m,): ``c_i / mu_i`` on each normal component, 0 elsewhere.
 
@@ -159,6 +161,7 @@ class LocalProblem:
 
         shift = np.zeros((self.n_contacts, self.dim))
         shift[:, 0] = apex_distance(self.mu, self.cohesion)
+        shift.flags.writeable = False
         return shift.reshape(-1)
 
 
@@ -420,19 +423,25 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
     float
         0 exactly at a solution, positive otherwise.
     """
+    numerator, denominator = natural_map_parts(problem, *_candidate(problem, r, u))
+    return numerator / denominator
+
+
+def natural_map_parts(problem: LocalProblem, r, u) -> tuple[float, float]:
+    """Numerator and denominator of :func:`natural_map_error`, without checks.
+
+    ``r`` and ``u`` are float arrays of shape (m,). The numerator alone is an absolute measure
+    that, unlike the ratio, does not fall when ``r`` grows without bound (on a problem with no
+    solution); solvers use it to accept steps.
+    """
     d = problem.dim
-    nc = problem.n_contacts
-    rv, uv = _candidate(problem, r, u)
-    U = uv.reshape(nc, d)
-    ut = np.sqrt(np.sum(U[:, 1:] ** 2, axis=1))
-    shifted = U.copy()
-    shifted[:, 0] += problem.mu * ut
-    apex = rv + problem.apex_shift
-    residual = apex - projection_on_cones(apex - shifted.reshape(-1), problem.mu, d)
-    denom = max(np.linalg.norm(problem.q), np.linalg.norm(rv), np.linalg.norm(uv))
-    if denom == 0.0:
-        denom = 1.0
-    return float(np.linalg.norm(residual) / denom)
+    R = (r + problem.apex_shift).reshape(-1, d)
+    U = u.reshape(-1, d)
+    shifted = R - U
+    shifted[:, 0] -= problem.mu * np.sqrt(np.einsum("ij,ij->i", U[:, 1:], U[:, 1:]))
+    numerator = float(np.linalg.norm(R - project_rows(shifted, problem.mu)))
+    denominator = max(np.linalg.norm(problem.q), np.linalg.norm(r), np.linalg.norm(u))
+    return numerator, float(denominator or 1.0)
 
 
 def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.ndarray:
@@ -476,6 +485,17 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     return np.array(STATUS_LABELS)[codes]
 
 
+#: A sparse matrix of at most this size, or at least this full, is factored dense (LAPACK beats
+#: SuperLU and scipy.sparse's per-call costs there).
+DENSE_SIZE, DENSE_FILL = 150, 0.2
+
+
+def better_dense(W) -> bool:
+    """True when a sparse ``W`` is better factored as a dense array (:data:`DENSE_SIZE`)."""
+    m = W.shape[0]
+    return m <= DENSE_SIZE or W.nnz >= DENSE_FILL * m * m
+
+
 #: Diagonal shift, relative to the unit diagonal of the Jacobi-scaled matrix, accepted by
 #: :func:`check_positive_semidefinite`. Matrices written with 6 significant digits (Siconos text
 #: files) are perturbed by ~5e-7 per entry; the scaled granular-flow file has eigenvalues down to
@@ -504,6 +524,8 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
     import scipy.linalg
 
     S = 0.5 * (W + W.T)
+    if sp.issparse(S) and better_dense(S):
+        S = S.toarray()
     diag = np.asarray(S.diagonal(), dtype=float)
     if np.any(diag < 0):
         i = int(np.argmin(diag))

@@ -11,10 +11,10 @@ and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
 :class:`~contactqp.local.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
 ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
 contact, built for all contacts at once with numpy; ``rho_i`` = 1 / mean diagonal of ``W_ii``).
-Each Newton step factors it with LAPACK (``scipy.linalg.lu_factor``: dense ``W``, or sparse
-with ``m <= 150`` or 20 % fill; on dense ``W`` only the rows of contacts that are not released,
-whose step is not simply ``-Phi``) or SuperLU (``scipy.sparse.linalg.splu``; the matrix is assembled
-on ``W``'s stored blocks, straight into CSC storage).
+Each Newton step solves it with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W``
+that :func:`~contactqp.local.better_dense` prefers dense; only the rows of contacts that are not
+released, whose step is not simply ``-Phi``) or SuperLU (``scipy.sparse.linalg.splu``; the
+matrix is assembled on ``W``'s stored blocks, straight into CSC storage).
 
 Safeguards, for the singular ``W`` of rigid multibody problems (more contact unknowns than body
 freedoms):
@@ -22,9 +22,10 @@ freedoms):
 * the Newton matrix is regularised as ``A + B (W + eta D)``, ``D`` the mean diagonal of each
   contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (it vanishes at
   the solution, so convergence stays fast);
-* a non-monotone Armijo line search on the merit ``1/2 ||Phi||^2`` (the reference is the
-  largest merit of the last 5 iterations; Grippo, Lampariello and Lucidi 1986), because the
-  merit has kinks where contacts change status;
+* a full step is taken when it lowers the natural-map error; otherwise a non-monotone Armijo
+  line search on the merit ``1/2 ||Phi||^2`` (the reference is the largest merit of the last 5
+  iterations; Grippo, Lampariello and Lucidi 1986), because the merit has kinks where contacts
+  change status;
 * a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
   (``eta`` adapted to the success of full steps) then continues from the best point;
 * if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.solvers.pgs`) and both
@@ -50,11 +51,11 @@ import time
 import warnings
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 
 from ..errors import InvalidInputError
-from ..local import LocalProblem, check_positive_semidefinite, natural_map_error
+from ..local import (LocalProblem, better_dense, check_positive_semidefinite,
+                     natural_map_parts)
 from ..model import finite_array
 from .local import finish
 from .pgs import GaussSeidel
@@ -67,7 +68,6 @@ MEMORY = 5  # iterations looked back by the non-monotone line search (twice that
 ARMIJO = 1e-4  # sufficient-decrease constant
 MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
 STALL = 20  # a Newton run stops when its best error has not halved in this many iterations
-DENSE_SIZE, DENSE_FILL = 150, 0.2  # sparse W at most this size or this full is made dense
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
 
@@ -123,17 +123,16 @@ def alart_curnier(R, U, mu, rho, jacobian: bool = False):
 class _Newton:
     """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``."""
 
-    def __init__(self, W, q, mu, dim, error_of):
-        m = W.shape[0]
-        if sp.issparse(W) and (m <= DENSE_SIZE or W.nnz >= DENSE_FILL * m * m):
-            W = W.toarray()  # LAPACK on a small or well-filled matrix beats SuperLU
+    def __init__(self, W, q, mu, dim, measure):
+        if sp.issparse(W) and better_dense(W):
+            W = W.toarray()
         self.W, self.q, self.mu, self.d = W, q, mu, dim
         self.nc = mu.shape[0]
         self.sparse = sp.issparse(W)
         diag = np.asarray(W.diagonal(), dtype=float).reshape(self.nc, dim).mean(axis=1)
         self.scale = np.where(diag > 0, diag, 1.0)  # D: per-contact diagonal scale of W
         self.rho = 1.0 / self.scale
-        self.error_of = error_of
+        self.measure = measure
         if self.sparse:
             self._block_structure()
 
@@ -195,39 +194,50 @@ class _Newton:
         """The Newton step on dense ``W``, solving only for the contacts that are not released.
 
         A released contact (``r_N - rho u_N <= 0`` with a nonzero tangential trial) has
-        ``A_c = I`` and ``B_c = 0``: its step is ``-Phi_c`` outright, and only the other
+        ``B_c = 0`` (hence ``A_c = I``): its step is ``-Phi_c`` outright, and only the other
         contacts' block of ``A + B W`` is factored (most contacts are open in a typical problem).
         """
         nc, d = self.nc, self.d
-        released = np.all(B == 0.0, axis=(1, 2)) & np.all(A == np.eye(d), axis=(1, 2))
+        kept = np.flatnonzero(B.reshape(nc, d * d).any(axis=1))
         step = rhs.copy()  # released contacts: dr = -Phi
-        kept = np.flatnonzero(~released)
         if kept.size == 0:
             return step
-        rows = (kept[:, None] * d + np.arange(d)).reshape(-1)
         n_kept = kept.size
-        J = np.einsum("cij,cjm->cim", B[kept],
-                      self.W[np.ix_(rows, rows)].reshape(n_kept, d, n_kept * d))
-        J = J.reshape(n_kept * d, n_kept * d)
+        if n_kept == nc:
+            rows, W_kept = slice(None), self.W
+        else:
+            rows = (kept[:, None] * d + np.arange(d)).reshape(-1)
+            W_kept = self.W[np.ix_(rows, rows)]
+        J = np.matmul(B[kept], W_kept.reshape(n_kept, d, n_kept * d)).reshape(n_kept * d, -1)
         idx = np.arange(n_kept)
         J.reshape(n_kept, d, n_kept, d)[idx, :, idx, :] += A[kept]
         reduced = rhs[rows]
-        if kept.size < nc:
+        if n_kept < nc:
             others = np.setdiff1d(np.arange(nc * d), rows, assume_unique=True)
-            coupling = (self.W[np.ix_(rows, others)] @ step[others]).reshape(n_kept, d)
-            reduced -= np.einsum("cij,cj->ci", B[kept], coupling).reshape(-1)
-        step[rows] = scipy.linalg.lu_solve(scipy.linalg.lu_factor(J, check_finite=False),
-                                           reduced, check_finite=False)
+            coupling = (self.W[np.ix_(rows, others)] @ step[others]).reshape(n_kept, d, 1)
+            reduced -= np.matmul(B[kept], coupling).reshape(-1)
+        try:
+            step[rows] = np.linalg.solve(J, reduced)
+        except np.linalg.LinAlgError:  # exactly singular
+            return None
         return step
 
-    def line_search(self, r, step, reference, merit, tries=MAX_HALVINGS):
-        """Backtrack from a full step to the non-monotone Armijo condition; None if it fails."""
+    def line_search(self, r, step, residual, reference, merit, tries=MAX_HALVINGS):
+        """Backtrack from a full step; return ``(r, u, Phi, measures)`` or None if it fails.
+
+        The full step is taken when it lowers ``residual``, the natural-map residual of ``r``
+        (the merit ``1/2 ||Phi||^2`` can rise where that falls: it weighs reactions and
+        velocities differently); any step when it meets the non-monotone Armijo condition.
+        ``measures`` is ``(residual, relative error)`` of the new point.
+        """
         t = 1.0
         for _ in range(tries):
             trial = r + t * step
             u, Phi = self.residual(trial)
-            if 0.5 * float(Phi @ Phi) <= reference - ARMIJO * t * merit:
-                return trial, u, Phi
+            measures = self.measure(trial, u)
+            if (0.5 * float(Phi @ Phi) <= reference - ARMIJO * t * merit
+                    or (t == 1.0 and measures[0] < residual)):
+                return trial, u, Phi, measures
             t *= 0.5
         return None
 
@@ -243,7 +253,7 @@ class _Newton:
         memory = 2 * MEMORY if adaptive else MEMORY
         eta = REGULARISATION
         u, Phi = self.residual(r)
-        error = self.error_of(r, u)
+        residual, error = self.measure(r, u)
         best = (r, error)
         history, errors = [], [error]
         for k in range(max_iter):
@@ -259,7 +269,7 @@ class _Newton:
                 for _ in range(LM_TRIES):
                     step = self.direction(r, u, eta)
                     if step is not None:
-                        found = self.line_search(r, step, reference, merit, tries=1)
+                        found = self.line_search(r, step, residual, reference, merit, tries=1)
                         if found:
                             eta = max(0.1 * eta, LM_MIN)
                             break
@@ -268,11 +278,10 @@ class _Newton:
                 step = self.direction(r, u, min(REGULARISATION, error))
             if step is None:
                 return best[0], best[1], k, "singular Newton matrix"
-            found = found or self.line_search(r, step, reference, merit)
+            found = found or self.line_search(r, step, residual, reference, merit)
             if found is None:
                 return best[0], best[1], k, "line search failed"
-            r, u, Phi = found
-            error = self.error_of(r, u)
+            r, u, Phi, (residual, error) = found
             errors.append(error)
             if error < best[1]:
                 best = (r, error)
@@ -345,11 +354,13 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     shift = problem.apex_shift
     q = problem.q - W @ shift if np.any(shift) else problem.q
 
-    def error_of(r_apex, u):
-        return natural_map_error(problem, r_apex - shift, u)
+    def measure(r_apex, u):
+        """Natural-map residual and relative error (the convergence test) of ``r_apex - shift``."""
+        numerator, denominator = natural_map_parts(problem, r_apex - shift, u)
+        return numerator, numerator / denominator
 
     r = r + shift
-    newton = _Newton(W, q, mu, d, error_of)
+    newton = _Newton(W, q, mu, d, measure)
     gauss_seidel = None
     error, iterations, stages = math.inf, 0, []
     for round_ in range(ROUNDS):
@@ -357,7 +368,7 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
             gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
             for sweep in range(1, PGS_SWEEPS + 1):
                 r = gauss_seidel.sweep(r)
-                if sweep % 10 == 0 and error_of(r, W @ r + q) <= tol:
+                if sweep % 10 == 0 and measure(r, W @ r + q)[1] <= tol:
                     break
             iterations += sweep
             stages.append(f"gauss-seidel {sweep} sweeps")
