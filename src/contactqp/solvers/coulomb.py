@@ -52,6 +52,7 @@ import warnings
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.linalg import splu
 
 from ..errors import InvalidInputError
 from ..local import (LocalProblem, better_dense, check_positive_semidefinite,
@@ -70,6 +71,7 @@ MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
 STALL = 20  # a Newton run stops when its best error has not halved in this many iterations
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
+PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this fraction of the column's largest
 
 
 def alart_curnier(R, U, mu, rho, jacobian: bool = False):
@@ -141,6 +143,8 @@ class _Newton:
 
         ``A + B W`` has the block pattern of ``W`` plus the diagonal: each Newton step only
         rescales the stored blocks (``B_c W_cj``), adds ``A_c`` and permutes the values to CSC.
+        The unknowns are renumbered once by SuperLU's minimum-degree ordering of that pattern,
+        so that each step's factorisation keeps the natural order (no new ordering per step).
         """
         nc, d, m = self.nc, self.d, self.W.shape[0]
         coo = sp.coo_matrix(self.W)
@@ -157,6 +161,11 @@ class _Newton:
         positions = sp.bsr_matrix(
             (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
              blocks.indptr), shape=(m, m)).tocsc()
+        pattern = positions.copy()
+        pattern.data[:] = 1.0
+        pattern.setdiag(float(m))  # diagonally dominant: only the ordering is wanted here
+        self.order = np.argsort(splu(pattern, permc_spec="MMD_AT_PLUS_A").perm_c)
+        positions = positions[self.order][:, self.order].tocsc()
         positions.sort_indices()
         self.csc_order = positions.data.astype(np.int64) - 1
         self.csc_indices, self.csc_indptr = positions.indices, positions.indptr
@@ -176,16 +185,16 @@ class _Newton:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # singularity is detected below
             if self.sparse:
-                from scipy.sparse.linalg import splu
-
                 values = B[self.block_row] @ self.W_blocks
                 values[self.diagonal_blocks] += A
                 J = sp.csc_matrix((values.reshape(-1)[self.csc_order], self.csc_indices,
                                    self.csc_indptr), shape=(m, m))
                 try:
-                    step = splu(J, permc_spec="MMD_AT_PLUS_A").solve(rhs)
+                    lu = splu(J, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD)
                 except RuntimeError:  # exactly singular
                     return None
+                step = np.empty(m)
+                step[self.order] = lu.solve(rhs[self.order])
             else:
                 step = self._dense_step(A, B, rhs)
         return step if np.all(np.isfinite(step)) else None
