@@ -358,18 +358,13 @@ def projection_on_cones(x, mu, dim):
 
 def project_rows(X, mu):
     """Row-wise :func:`projection_on_cones` of ``X`` (n, d) for ``mu`` (n,), without checks."""
-    xn = X[:, 0]
-    xt = X[:, 1:]
-    t = np.sqrt(np.sum(xt * xt, axis=1))
+    xn, xt = X[:, 0], X[:, 1:]
+    t = np.sqrt(np.einsum("ij,ij->i", xt, xt))
     inside = (t <= mu * xn) & (xn >= 0)
-    polar = (mu * t <= -xn) & ~inside
-    a = (xn + mu * t) / (1.0 + mu * mu)
+    a = np.maximum(xn + mu * t, 0.0) / (1.0 + mu * mu)  # 0 in the polar cone
     scale = np.divide(mu * a, t, out=np.zeros_like(t), where=t > 0)
-    P = np.empty_like(X)
-    P[:, 0] = a
-    P[:, 1:] = xt * scale[:, None]
-    P[inside] = X[inside]
-    P[polar] = 0.0
+    P = X * np.where(inside, 1.0, scale)[:, None]
+    P[:, 0] = np.where(inside, xn, a)
     return P
 
 

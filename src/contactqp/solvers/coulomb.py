@@ -93,33 +93,24 @@ def alart_curnier(R, U, mu, rho, jacobian: bool = False):
         Only with ``jacobian=True``.
     """
     nc, d = R.shape
-    xn = R[:, 0] - rho * U[:, 0]
-    pressed = xn > 0
+    X = R - rho[:, None] * U  # the augmented point projected by the law
+    xn, Y = X[:, 0], X[:, 1:]
     radius = mu * np.maximum(xn, 0.0)
-    Y = R[:, 1:] - rho[:, None] * U[:, 1:]
-    ny = np.sqrt(np.sum(Y * Y, axis=1))
+    ny = np.sqrt(np.einsum("ij,ij->i", Y, Y))
     outside = ny > radius
-    s = np.ones(nc)
-    s[outside] = radius[outside] / ny[outside]
-    Phi = np.empty_like(R)
+    s = np.divide(radius, ny, out=np.ones(nc), where=outside)
+    Phi = R - X * s[:, None]
     Phi[:, 0] = R[:, 0] - np.maximum(xn, 0.0)
-    Phi[:, 1:] = R[:, 1:] - Y * s[:, None]
     if not jacobian:
         return Phi
-    yhat = np.zeros_like(Y)
-    yhat[outside] = Y[outside] / ny[outside, None]
-    eye = np.eye(d - 1)
-    P = eye - yhat[:, :, None] * yhat[:, None, :]  # projector orthogonal to the slip direction
-    A = np.zeros((nc, d, d))
-    B = np.zeros((nc, d, d))
-    A[:, 0, 0] = ~pressed
-    B[:, 0, 0] = rho * pressed
-    A[:, 1:, 1:] = eye - s[:, None, None] * P
-    B[:, 1:, 1:] = (rho * s)[:, None, None] * P
-    g = (mu * pressed)[:, None] * yhat  # d(radius)/d(xn) times the slip direction
-    A[:, 1:, 0] = -g
-    B[:, 1:, 0] = rho[:, None] * g
-    return Phi, A, B
+    # dPhi/dr = I - C and dPhi/du = rho C, with C the derivative of the projection
+    pressed = xn > 0
+    yhat = Y * np.divide(1.0, ny, out=np.zeros(nc), where=outside)[:, None]  # slip direction
+    C = np.zeros((nc, d, d))
+    C[:, 0, 0] = pressed
+    C[:, 1:, 1:] = s[:, None, None] * (np.eye(d - 1) - yhat[:, :, None] * yhat[:, None, :])
+    C[:, 1:, 0] = (mu * pressed)[:, None] * yhat  # d(radius)/d(xn) times the slip direction
+    return Phi, np.eye(d) - C, rho[:, None, None] * C
 
 
 class _Newton:
