@@ -482,7 +482,7 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
 
 #: A sparse matrix of at most this size, or at least this full, is factored dense (LAPACK beats
 #: SuperLU and scipy.sparse's per-call costs there).
-DENSE_SIZE, DENSE_FILL = 150, 0.2
+DENSE_SIZE, DENSE_FILL = 200, 0.1
 
 
 def better_dense(W) -> bool:
