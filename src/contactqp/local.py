@@ -14,12 +14,16 @@ from __future__ import annotations
 import functools
 import operator
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.model import finite_array
+
+if TYPE_CHECKING:
+    from contactqp.friction import FrictionLaw
 
 __all__ = [
     "LocalProblem",
@@ -96,6 +100,11 @@ class LocalProblem:
         Cohesion ``c_i >= 0`` per contact, in units of ``r``; ``c_i > 0`` needs ``mu_i > 0``.
         Stored as zeros when not given.
 
+    Attributes
+    ----------
+    law : FrictionLaw
+        The contacts' friction law (``mu``, ``cohesion``), validated once.
+
     Raises
     ------
     InvalidInputError
@@ -109,6 +118,7 @@ class LocalProblem:
     dim: int
     title: str = field(default="")
     cohesion: np.ndarray | None = field(default=None)
+    law: FrictionLaw = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         dim = _check_dim(self.dim)
@@ -144,6 +154,7 @@ class LocalProblem:
         object.__setattr__(self, "q", q)
         object.__setattr__(self, "mu", mu)
         object.__setattr__(self, "cohesion", cohesion)
+        object.__setattr__(self, "law", law)
 
     @property
     def n_contacts(self) -> int:
@@ -464,7 +475,7 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     -------
     numpy.ndarray of str, shape (n_contacts,)
     """
-    from .friction import STATUS_LABELS, FrictionLaw
+    from .friction import STATUS_LABELS
 
     d = problem.dim
     nc = problem.n_contacts
@@ -474,8 +485,7 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     force = max(np.linalg.norm(rv), np.linalg.norm(rv + problem.apex_shift),
                 np.linalg.norm(problem.q) / w, np.linalg.norm(uv) / w)
     force = force if force > 0 else 1.0
-    law = FrictionLaw(problem.mu, problem.cohesion, n_contacts=nc)
-    codes = law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
+    codes = problem.law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
                        rtol * w * force)
     return np.array(STATUS_LABELS)[codes]
 
