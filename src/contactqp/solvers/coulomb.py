@@ -148,6 +148,7 @@ class _Newton:
         blocks.sort_indices()
         self.W_blocks = blocks.data
         self.block_row = np.repeat(np.arange(nc), np.diff(blocks.indptr))
+        self.block_col = blocks.indices
         self.diagonal_blocks = np.flatnonzero(blocks.indices == self.block_row)
         positions = sp.bsr_matrix(
             (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
@@ -168,42 +169,37 @@ class _Newton:
         return u, Phi.reshape(-1)
 
     def direction(self, r, u, eta):
-        """Solve ``(A + B (W + eta D)) dr = -Phi``; None if the matrix is singular."""
-        nc, d, m = self.nc, self.d, self.W.shape[0]
-        Phi, A, B = alart_curnier(r.reshape(nc, d), u.reshape(nc, d), self.mu, self.rho, True)
-        A += (eta * self.scale)[:, None, None] * B
-        rhs = -Phi.reshape(-1)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # singularity is detected below
-            if self.sparse:
-                values = B[self.block_row] @ self.W_blocks
-                values[self.diagonal_blocks] += A
-                J = sp.csc_matrix((values.reshape(-1)[self.csc_order], self.csc_indices,
-                                   self.csc_indptr), shape=(m, m))
-                try:
-                    lu = splu(J, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD)
-                except RuntimeError:  # exactly singular
-                    return None
-                step = np.empty(m)
-                step[self.order] = lu.solve(rhs[self.order])
-            else:
-                step = self._dense_step(A, B, rhs)
-        return step if np.all(np.isfinite(step)) else None
-
-    def _dense_step(self, A, B, rhs):
-        """The Newton step on dense ``W``, solving only for the contacts that are not released.
+        """Solve ``(A + B (W + eta D)) dr = -Phi``; None if the matrix is singular.
 
         A released contact (``r_N - rho u_N <= 0`` with a nonzero tangential trial) has
-        ``B_c = 0`` (hence ``A_c = I``): its step is ``-Phi_c`` outright, and only the other
-        contacts' block of ``A + B W`` is factored (most contacts are open in a typical problem).
+        ``B_c = 0`` (hence ``A_c = I``): its step is ``-Phi_c`` outright. Its coupling to the
+        other contacts moves to the right-hand side, and only their block of ``A + B W`` is
+        factored (most contacts are open in a typical problem).
         """
         nc, d = self.nc, self.d
-        kept = np.flatnonzero(B.reshape(nc, d * d).any(axis=1))
-        step = rhs.copy()  # released contacts: dr = -Phi
-        if kept.size == 0:
+        Phi, A, B = alart_curnier(r.reshape(nc, d), u.reshape(nc, d), self.mu, self.rho, True)
+        A += (eta * self.scale)[:, None, None] * B
+        kept = B.reshape(nc, d * d).any(axis=1)
+        step = -Phi.reshape(-1)
+        if not kept.any():
             return step
+        rhs = step.copy()
+        if not kept.all():
+            coupling = self.W @ np.where(np.repeat(kept, d), 0.0, step)  # W (released steps)
+            rhs -= np.matmul(B, coupling.reshape(nc, d, 1)).reshape(-1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # singularity is detected below
+            solve = self._sparse_solve if self.sparse else self._dense_solve
+            if not solve(A, B, kept, rhs, step):
+                return None
+        return step if np.all(np.isfinite(step)) else None
+
+    def _dense_solve(self, A, B, kept, rhs, step) -> bool:
+        """Write the kept contacts' rows of the step (LAPACK on their block); False if singular."""
+        d = self.d
+        kept = np.flatnonzero(kept)
         n_kept = kept.size
-        if n_kept == nc:
+        if n_kept == self.nc:
             rows, W_kept = slice(None), self.W
         else:
             rows = (kept[:, None] * d + np.arange(d)).reshape(-1)
@@ -211,16 +207,31 @@ class _Newton:
         J = np.matmul(B[kept], W_kept.reshape(n_kept, d, n_kept * d)).reshape(n_kept * d, -1)
         idx = np.arange(n_kept)
         J.reshape(n_kept, d, n_kept, d)[idx, :, idx, :] += A[kept]
-        reduced = rhs[rows]
-        if n_kept < nc:
-            others = np.setdiff1d(np.arange(nc * d), rows, assume_unique=True)
-            coupling = (self.W[np.ix_(rows, others)] @ step[others]).reshape(n_kept, d, 1)
-            reduced -= np.matmul(B[kept], coupling).reshape(-1)
         try:
-            step[rows] = np.linalg.solve(J, reduced)
+            step[rows] = np.linalg.solve(J, rhs[rows])
         except np.linalg.LinAlgError:  # exactly singular
-            return None
-        return step
+            return False
+        return True
+
+    def _sparse_solve(self, A, B, kept, rhs, step) -> bool:
+        """The step by SuperLU on the stored blocks, released columns dropped; False if singular.
+
+        Released contacts keep their identity rows (``step = rhs`` there); their columns are
+        dropped from the other rows, so they cause no fill.
+        """
+        m = self.W.shape[0]
+        values = B[self.block_row] @ self.W_blocks
+        values[self.diagonal_blocks] += A
+        values[~kept[self.block_col] & (self.block_col != self.block_row)] = 0.0
+        J = sp.csc_matrix((values.reshape(-1)[self.csc_order], self.csc_indices.copy(),
+                           self.csc_indptr.copy()), shape=(m, m))
+        J.eliminate_zeros()  # in place: hence the copies of the stored structure
+        try:
+            lu = splu(J, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD)
+        except RuntimeError:  # exactly singular
+            return False
+        step[self.order] = lu.solve(rhs[self.order])
+        return True
 
     def line_search(self, r, step, residual, reference, merit, tries=MAX_HALVINGS):
         """Backtrack from a full step; return ``(r, u, Phi, measures)`` or None if it fails.
