@@ -11,10 +11,11 @@ and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
 :class:`~contactqp.local.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
 ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
 contact, built for all contacts at once with numpy; ``rho_i`` = 1 / mean diagonal of ``W_ii``).
-Each Newton step solves it with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W``
-that :func:`~contactqp.local.better_dense` prefers dense; only the rows of contacts that are not
-released, whose step is not simply ``-Phi``) or SuperLU (``scipy.sparse.linalg.splu``; the
-matrix is assembled on ``W``'s stored blocks, straight into CSC storage).
+A released contact's step is simply ``-Phi``: each Newton step factors only the block of the
+other contacts, with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W`` that
+:func:`~contactqp.local.better_dense` prefers dense) or SuperLU (``scipy.sparse.linalg.splu``:
+the matrix is assembled on ``W``'s stored blocks straight into CSC storage, in a minimum-degree
+order computed once).
 
 Safeguards, for the singular ``W`` of rigid multibody problems (more contact unknowns than body
 freedoms):
@@ -22,10 +23,11 @@ freedoms):
 * the Newton matrix is regularised as ``A + B (W + eta D)``, ``D`` the mean diagonal of each
   contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (it vanishes at
   the solution, so convergence stays fast);
-* a full step is taken when it lowers the natural-map error; otherwise a non-monotone Armijo
-  line search on the merit ``1/2 ||Phi||^2`` (the reference is the largest merit of the last 5
-  iterations; Grippo, Lampariello and Lucidi 1986), because the merit has kinks where contacts
-  change status;
+* a full step is taken when it lowers the absolute natural-map residual (the numerator of the
+  error, :func:`~contactqp.local.natural_map_parts`, which unlike the ratio cannot fall by
+  letting ``r`` grow); otherwise a non-monotone Armijo line search on the merit
+  ``1/2 ||Phi||^2`` (the reference is the largest merit of the last 5 iterations; Grippo,
+  Lampariello and Lucidi 1986), because the merit has kinks where contacts change status;
 * a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
   (``eta`` adapted to the success of full steps) then continues from the best point;
 * if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.solvers.pgs`) and both
