@@ -264,6 +264,20 @@ def test_natural_map_error_zero_problem():
     assert natural_map_error(p, [0.0, 0.0]) == 0.0
 
 
+def test_natural_map_error_per_contact_holds_each_contact_to_its_own_scale():
+    # two decoupled sticking contacts pressed by 1 and by 1e-6: an error of 1e-9 on the small
+    # one is 1e-9 of the problem but 1e-3 of that contact
+    p = LocalProblem(np.eye(6), [-1.0, 0.0, 0.0, -1e-6, 0.0, 0.0], [0.3, 0.3], 3)
+    exact = np.array([1.0, 0.0, 0.0, 1e-6, 0.0, 0.0])
+    assert natural_map_error(p, exact, per_contact=True) == 0.0
+    off = exact + [0.0, 0.0, 0.0, 1e-9, 0.0, 0.0]
+    assert natural_map_error(p, off) == pytest.approx(1e-9, rel=1e-6)
+    assert natural_map_error(p, off, per_contact=True) == pytest.approx(1e-3, rel=1e-3)
+    # the same error on the large contact is the same relative size either way
+    big = exact + [1e-9, 0.0, 0.0, 0.0, 0.0, 0.0]
+    assert natural_map_error(p, big, per_contact=True) == pytest.approx(natural_map_error(p, big))
+
+
 def test_projection_known_cases():
     mu = [0.5, 0.5, 0.5, 0.0, 0.0]
     x = np.concatenate(

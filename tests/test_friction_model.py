@@ -353,6 +353,41 @@ def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
+def micrometre_contacts(far_gap=None):
+    """Six coupled 2-D nodes on gaps of micrometres; optionally a seventh, decoupled, far away."""
+    rng = np.random.default_rng(0)
+    B = rng.normal(size=(12, 12))
+    R = (B @ B.T / 12 + np.eye(12)) * 1e-6  # m/N
+    gaps = rng.uniform(0.0, 2e-6, 6)
+    P = np.tile([0.3, -1.5], 6) + rng.normal(scale=0.3, size=12)
+    if far_gap is not None:
+        R = np.block([[R, np.zeros((12, 2))], [np.zeros((2, 12)), 1e-6 * np.eye(2)]])
+        gaps, P = np.append(gaps, far_gap), np.append(P, [0.0, 0.0])
+    n = gaps.size
+    model = cq.ReducedModel(flexibility=R, dofs_per_node=2,
+                            coordinates=np.column_stack([np.arange(float(n)), np.zeros(n)]))
+    return cq.FrictionalProblem(model, P, [cq.GapObstacle(range(n), gaps, [0.0, -1.0])],
+                                mu=0.3)
+
+
+def test_a_wide_gap_elsewhere_does_not_loosen_the_solution():
+    # a contact 1 m from its obstacle, decoupled from six contacts on micrometre gaps, changes
+    # nothing physically. Measured on the whole problem (FCLIB's error), the solver stopped when
+    # the others were still 1e-5 off; each contact is now also held to its own scale.
+    near = micrometre_contacts().solve()
+    assert near.success, near.message
+    far = micrometre_contacts(far_gap=1.0)
+    solved = far.solve()
+    assert solved.success and solved.status_labels[-1] == "open", solved.message
+    np.testing.assert_allclose(solved.forces[:6], near.forces, rtol=0,
+                               atol=1e-12 * np.abs(near.forces).max())
+    np.testing.assert_allclose(solved.x[:12], near.x, rtol=0, atol=1e-12 * np.abs(near.x).max())
+    # the same solve stopped on the FCLIB measure alone: the certificate now sees the difference
+    loose = far.solve(per_contact=False)
+    assert np.abs(loose.forces[:6] - near.forces).max() > 1e-7 * np.abs(near.forces).max()
+    assert loose.status == 2 and loose.certificate.natural_map > 1e-6, loose.message
+
+
 def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
     # the same soft node blunted the frictionless certificate too: 1e-5 m of interpenetration
     # over 1 m/N * 1000 N passed as 1e-8

@@ -30,7 +30,7 @@ __all__ = [
     "GlobalProblem",
     "condense_global",
     "natural_map_error",
-    "natural_map_parts",
+    "natural_map_residual",
     "projection_on_cones",
     "project_rows",
     "contact_status",
@@ -393,7 +393,7 @@ def _candidate(problem: LocalProblem, r, u):
     return rv, uv
 
 
-def natural_map_error(problem: LocalProblem, r, u=None) -> float:
+def natural_map_error(problem: LocalProblem, r, u=None, *, per_contact: bool = False) -> float:
     r"""Relative natural-map error of a candidate solution (the current Siconos measure).
 
     .. math::
@@ -416,6 +416,12 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
     (:attr:`~contactqp.problem.FrictionStep.fclib`), whose certificate also checks the gaps
     in metres.
 
+    Scale: the FCLIB measure is relative to the whole problem, so one contact with a wide gap
+    (a large ``q_i``) loosens it for all the others. ``per_contact=True`` also measures each
+    contact's residual against its own ``max(||q_i||, ||r_i||, ||u_i||)`` (at least
+    :data:`CONTACT_FLOOR` times the denominator above) and returns the largest of these and
+    ``e``.
+
     Parameters
     ----------
     problem : LocalProblem
@@ -423,31 +429,53 @@ def natural_map_error(problem: LocalProblem, r, u=None) -> float:
         Reactions.
     u : array_like, shape (m,), optional
         Relative velocities; ``W r + q`` when not given.
+    per_contact : bool
+        Also hold every contact to its own scale (see above).
 
     Returns
     -------
     float
         0 exactly at a solution, positive otherwise.
     """
-    numerator, denominator = natural_map_parts(problem, *_candidate(problem, r, u))
-    return numerator / denominator
+    return natural_map_residual(problem, *_candidate(problem, r, u), per_contact=per_contact)[1]
 
 
-def natural_map_parts(problem: LocalProblem, r, u) -> tuple[float, float]:
-    """Numerator and denominator of :func:`natural_map_error`, without checks.
+#: Smallest scale of one contact in ``natural_map_error(..., per_contact=True)``, relative to
+#: the whole problem's: contacts whose reactions, velocities and free velocities are all below
+#: it are measured against it (their own figures are rounding noise).
+CONTACT_FLOOR = 1e-12
 
-    ``r`` and ``u`` are float arrays of shape (m,). The numerator alone is an absolute measure
+
+def natural_map_residual(problem: LocalProblem, r, u, *,
+                         per_contact: bool = False) -> tuple[float, float]:
+    """``(residual, error)`` of float arrays ``r``, ``u`` of shape (m,), without checks.
+
+    ``error`` is :func:`natural_map_error`; ``residual`` its numerator, an absolute measure
     that, unlike the ratio, does not fall when ``r`` grows without bound (on a problem with no
-    solution); solvers use it to accept steps.
+    solution): solvers accept steps on it.
     """
     d = problem.dim
     R = (r + problem.apex_shift).reshape(-1, d)
     U = u.reshape(-1, d)
     shifted = R - U
     shifted[:, 0] -= problem.mu * np.sqrt(np.einsum("ij,ij->i", U[:, 1:], U[:, 1:]))
-    numerator = float(np.linalg.norm(R - project_rows(shifted, problem.mu)))
-    denominator = max(np.linalg.norm(problem.q), np.linalg.norm(r), np.linalg.norm(u))
-    return numerator, float(denominator or 1.0)
+    gap = R - project_rows(shifted, problem.mu)
+    squares = np.einsum("ij,ij->i", gap, gap)
+    residual = float(np.sqrt(squares.sum()))
+    scale = float(max(np.linalg.norm(problem.q), np.linalg.norm(r), np.linalg.norm(u)) or 1.0)
+    error = residual / scale
+    if per_contact and squares.size:
+        own = np.maximum.reduce([_row_squares(problem.q, d), _row_squares(r, d),
+                                 _row_squares(u, d), np.full(squares.size,
+                                                             (CONTACT_FLOOR * scale) ** 2)])
+        error = max(error, float(np.sqrt(np.max(squares / own))))
+    return residual, error
+
+
+def _row_squares(x, d):
+    """Squared norm of each contact's block of ``x``."""
+    X = x.reshape(-1, d)
+    return np.einsum("ij,ij->i", X, X)
 
 
 def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.ndarray:

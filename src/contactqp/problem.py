@@ -467,7 +467,7 @@ class FrictionalProblem:
         if name == "polygonal":
             options = {"facets": self.law.facets, **options}
         elif name == "coulomb":  # W = H R H^T is semidefinite: R was validated
-            options = {"check_psd": False, **options}
+            options = {"check_psd": False, "per_contact": True, **options}
         solution = method(problem, tol=tol, r0=r0, **options)
         return self.make_result(unit * solution.r - shift, previous, solver=name,
                                 converged=solution.converged, message=solution.message,

@@ -267,7 +267,8 @@ class FrictionCertificate:
         force scale for a stiffness model).
     natural_map : float
         :func:`~contactqp.local.natural_map_error` of the step's dimensionless FCLIB problem
-        (:attr:`~contactqp.problem.FrictionStep.fclib`, exact cones). For a polygonal law it
+        (:attr:`~contactqp.problem.FrictionStep.fclib`, exact cones), each contact also on its
+        own scale (``per_contact=True``). For a polygonal law it
         measures the distance the linearisation puts between the answer and the Coulomb one.
     exact_cone : bool
         True for the exact cone, or any cone in 2-D (where the polygonal law is exact):
@@ -342,7 +343,8 @@ def certify_friction(problem, displacements, forces, step,
                               / (force * length)),
         dissipation=float(np.max(np.abs(law.dissipation_gap(R, slip))) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
-        natural_map=natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit),
+        natural_map=natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit,
+                                      per_contact=True),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )

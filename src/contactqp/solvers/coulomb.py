@@ -24,7 +24,7 @@ freedoms):
   contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (it vanishes at
   the solution, so convergence stays fast);
 * a full step is taken when it lowers the absolute natural-map residual (the numerator of the
-  error, :func:`~contactqp.local.natural_map_parts`, which unlike the ratio cannot fall by
+  error, :func:`~contactqp.local.natural_map_residual`, which unlike the ratio cannot fall by
   letting ``r`` grow); otherwise a non-monotone Armijo line search on the merit
   ``1/2 ||Phi||^2`` (the reference is the largest merit of the last 5 iterations; Grippo,
   Lampariello and Lucidi 1986), because the merit has kinks where contacts change status;
@@ -58,7 +58,7 @@ from scipy.sparse.linalg import splu
 
 from ..errors import InvalidInputError
 from ..local import (LocalProblem, better_dense, check_positive_semidefinite,
-                     natural_map_parts)
+                     natural_map_residual)
 from ..model import finite_array
 from .local import finish
 from .pgs import GaussSeidel
@@ -320,7 +320,7 @@ def _check_options(problem, r0, tol, max_iter):
 
 
 def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = 100, *,
-                  check_psd: bool = True):
+                  check_psd: bool = True, per_contact: bool = False):
     """Solve a local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
 
     Semismooth Newton on the Alart-Curnier formulation with a non-monotone line search, and
@@ -342,6 +342,10 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     check_psd : bool
         Check that ``W`` is positive semidefinite (one factorisation). Callers whose ``W`` is
         ``H R H^T`` of a validated model may skip it.
+    per_contact : bool
+        Converge to ``tol`` on every contact's own scale too
+        (``natural_map_error(..., per_contact=True)``): one contact with a wide gap then does
+        not loosen the test for the others. The FCLIB measure is the default.
 
     Returns
     -------
@@ -369,8 +373,7 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
 
     def measure(r_apex, u):
         """Natural-map residual and relative error (the convergence test) of ``r_apex - shift``."""
-        numerator, denominator = natural_map_parts(problem, r_apex - shift, u)
-        return numerator, numerator / denominator
+        return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
 
     r = r + shift
     newton = _Newton(W, q, mu, d, measure)
@@ -393,4 +396,5 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
                 break
         if error <= tol:
             break
-    return finish(problem, r - shift, tol, iterations, start, ", ".join(stages))
+    return finish(problem, r - shift, tol, iterations, start, ", ".join(stages),
+                  per_contact=per_contact)

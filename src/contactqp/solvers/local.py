@@ -118,20 +118,22 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
 
 
 def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
-           detail: str) -> LocalSolution:
+           detail: str, *, per_contact: bool = False) -> LocalSolution:
     """The :class:`LocalSolution` of reactions ``r``, checked by the natural-map error.
 
     ``u``, the error, ``converged`` and the contact status are computed here from ``r`` alone,
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
+    ``per_contact`` chooses the error (:func:`~contactqp.local.natural_map_error`).
     """
     u = np.asarray(problem.W @ r).reshape(-1) + problem.q
-    error = natural_map_error(problem, r, u)
+    error = natural_map_error(problem, r, u, per_contact=per_contact)
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     return LocalSolution(
         r=r, u=u, error=error, converged=converged, iterations=iterations,
         seconds=time.perf_counter() - start,
-        message=f"{verdict}: {detail}; natural-map error {error:.2e}",
+        message=(f"{verdict}: {detail}; natural-map error {error:.2e}"
+                 + (" (largest of the problem's and each contact's)" if per_contact else "")),
         status=contact_status(problem, r, u),
     )
