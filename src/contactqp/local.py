@@ -12,6 +12,7 @@ and measures the accuracy of a candidate solution with the natural-map error use
 from __future__ import annotations
 
 import functools
+import math
 import operator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -461,8 +462,8 @@ def natural_map_residual(problem: LocalProblem, r, u, *,
     shifted[:, 0] -= problem.mu * np.sqrt(np.einsum("ij,ij->i", U[:, 1:], U[:, 1:]))
     gap = R - project_rows(shifted, problem.mu)
     squares = np.einsum("ij,ij->i", gap, gap)
-    residual = float(np.sqrt(squares.sum()))
-    scale = float(max(np.linalg.norm(problem.q), np.linalg.norm(r), np.linalg.norm(u)) or 1.0)
+    residual = math.sqrt(squares.sum())
+    scale = math.sqrt(max(problem.q @ problem.q, r @ r, u @ u)) or 1.0
     error = residual / scale
     if per_contact and squares.size:
         own = np.maximum.reduce([_row_squares(problem.q, d), _row_squares(r, d),
