@@ -467,9 +467,9 @@ def natural_map_residual(problem: LocalProblem, r, u, *,
     error = residual / scale
     if per_contact and squares.size:
         own = np.maximum.reduce([_row_squares(problem.q, d), _row_squares(r, d),
-                                 _row_squares(u, d), np.full(squares.size,
-                                                             (CONTACT_FLOOR * scale) ** 2)])
-        error = max(error, float(np.sqrt(np.max(squares / own))))
+                                 _row_squares(u, d)])
+        floor = (CONTACT_FLOOR * scale) ** 2
+        error = max(error, math.sqrt(np.max(squares / np.maximum(own, floor))))
     return residual, error
 
 
@@ -515,7 +515,7 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
                 np.linalg.norm(problem.q) / w, np.linalg.norm(uv) / w)
     force = force if force > 0 else 1.0
     codes = problem.law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
-                       rtol * w * force)
+                               rtol * w * force)
     return np.array(STATUS_LABELS)[codes]
 
 

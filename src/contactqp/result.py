@@ -268,8 +268,8 @@ class FrictionCertificate:
     natural_map : float
         :func:`~contactqp.local.natural_map_error` of the step's dimensionless FCLIB problem
         (:attr:`~contactqp.problem.FrictionStep.fclib`, exact cones), each contact also on its
-        own scale (``per_contact=True``). For a polygonal law it
-        measures the distance the linearisation puts between the answer and the Coulomb one.
+        own scale (``per_contact=True``). For a polygonal law it measures the distance the
+        linearisation puts between the answer and the Coulomb one.
     exact_cone : bool
         True for the exact cone, or any cone in 2-D (where the polygonal law is exact):
         ``natural_map`` is then one of the checked residuals.

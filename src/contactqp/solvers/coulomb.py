@@ -73,7 +73,7 @@ MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
 STALL = 20  # a Newton run stops when its best error has not halved in this many iterations
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
-PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this fraction of the column's largest
+PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this share of its column's max
 
 
 def alart_curnier(R, U, mu, rho, jacobian: bool = False):
