@@ -189,11 +189,9 @@ class _Newton:
         if not kept.all():
             coupling = self.W @ np.where(np.repeat(kept, d), 0.0, step)  # W (released steps)
             rhs -= np.matmul(B, coupling.reshape(nc, d, 1)).reshape(-1)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # singularity is detected below
-            solve = self._sparse_solve if self.sparse else self._dense_solve
-            if not solve(A, B, kept, rhs, step):
-                return None
+        solve = self._sparse_solve if self.sparse else self._dense_solve
+        if not solve(A, B, kept, rhs, step):
+            return None
         return step if np.all(np.isfinite(step)) else None
 
     def _dense_solve(self, A, B, kept, rhs, step) -> bool:
@@ -228,11 +226,13 @@ class _Newton:
         J = sp.csc_matrix((values.reshape(-1)[self.csc_order], self.csc_indices.copy(),
                            self.csc_indptr.copy()), shape=(m, m))
         J.eliminate_zeros()  # in place: hence the copies of the stored structure
-        try:
-            lu = splu(J, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD)
-        except RuntimeError:  # exactly singular
-            return False
-        step[self.order] = lu.solve(rhs[self.order])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a near-singular factor shows as a non-finite step
+            try:
+                lu = splu(J, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD)
+            except RuntimeError:  # exactly singular
+                return False
+            step[self.order] = lu.solve(rhs[self.order])
         return True
 
     def line_search(self, r, step, residual, reference, merit, tries=MAX_HALVINGS):
