@@ -443,8 +443,10 @@ def natural_map_error(problem: LocalProblem, r, u=None, *, per_contact: bool = F
 
 #: Smallest scale of one contact in ``natural_map_error(..., per_contact=True)``, relative to
 #: the whole problem's: contacts whose reactions, velocities and free velocities are all below
-#: it are measured against it (their own figures are rounding noise).
-CONTACT_FLOOR = 1e-12
+#: it are measured against it. Rounding in ``u = W r + q`` is about 1e-16 of the problem's
+#: scale, so a smaller floor could hold such a contact to less than its rounding at ``tol``
+#: 1e-10.
+CONTACT_FLOOR = 1e-6
 
 
 def natural_map_residual(problem: LocalProblem, r, u, *,
