@@ -353,8 +353,11 @@ def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
-def micrometre_contacts(far_gap=None):
-    """Six coupled 2-D nodes on gaps of micrometres; optionally a seventh, decoupled, far away."""
+def micrometre_contacts(far_gap=None, mu=0.3):
+    """Six coupled 2-D nodes on gaps of micrometres; optionally a seventh, decoupled, far away.
+
+    A :class:`FrictionalProblem`, or with ``mu=None`` the frictionless ``ContactProblem``.
+    """
     rng = np.random.default_rng(0)
     B = rng.normal(size=(12, 12))
     R = (B @ B.T / 12 + np.eye(12)) * 1e-6  # m/N
@@ -366,8 +369,10 @@ def micrometre_contacts(far_gap=None):
     n = gaps.size
     model = cq.ReducedModel(flexibility=R, dofs_per_node=2,
                             coordinates=np.column_stack([np.arange(float(n)), np.zeros(n)]))
-    return cq.FrictionalProblem(model, P, [cq.GapObstacle(range(n), gaps, [0.0, -1.0])],
-                                mu=0.3)
+    obstacles = [cq.GapObstacle(range(n), gaps, [0.0, -1.0])]
+    if mu is None:
+        return cq.ContactProblem(model, P, obstacles)
+    return cq.FrictionalProblem(model, P, obstacles, mu=mu)
 
 
 def test_a_wide_gap_elsewhere_does_not_loosen_the_solution():
@@ -388,6 +393,20 @@ def test_a_wide_gap_elsewhere_does_not_loosen_the_solution():
     assert loose.status == 2 and loose.certificate.natural_map > 1e-6, loose.message
 
 
+def test_each_contact_is_certified_on_its_own_scales():
+    # 1 % too much force on contacts of micrometres: their gaps open by about 1e-8 m while
+    # they push. Against the 1 m gap of the far contact that complementarity residual was 1e-8
+    # and passed; against each contact's own length it is about 1e-2.
+    problem = micrometre_contacts(far_gap=1.0)
+    good = problem.solve()
+    assert good.success, good.message
+    wrong = good.forces.copy()
+    wrong[:6] *= 1.01
+    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
+                              wall_time=0.0)
+    assert not bad.success and bad.certificate.complementarity > 1e-3
+
+
 def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
     # the same soft node blunted the frictionless certificate too: 1e-5 m of interpenetration
     # over 1 m/N * 1000 N passed as 1e-8
@@ -404,6 +423,17 @@ def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
                                     solver="test", converged=True, message="", nit=0,
                                     wall_time=0.0)
     assert good.success, good.message
+
+
+def test_frictionless_certificate_judges_each_contact_on_its_own_length():
+    # the frictionless twin of test_each_contact_is_certified_on_its_own_scales
+    problem = micrometre_contacts(far_gap=1.0, mu=None)
+    good = cq.solve(problem)
+    assert good.success, good.message
+    wrong = good.forces * 1.01
+    bad = problem.make_result(problem.dual().displacements(wrong), wrong, solver="test",
+                              converged=True, message="", nit=0, wall_time=0.0)
+    assert not bad.success and bad.certificate.complementarity > 1e-3
 
 
 # --------------------------------------------------------------------------------- bad input

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .friction import STATUS_LABELS
-from .local import natural_map_error
+from .local import CONTACT_FLOOR, natural_map_error
 
 __all__ = ["Certificate", "ContactResult", "certify", "FrictionCertificate", "FrictionalResult",
            "certify_friction", "scales", "contact_scales"]
@@ -30,12 +30,14 @@ class Certificate:
     Attributes
     ----------
     penetration : float
-        ``max(A U - Delta, 0)`` over the contacts' length scale: the largest ``|A U|``,
-        ``|Delta|`` or ``|A R P|``.
+        ``max(A U - Delta, 0)`` over each contact's length scale: the largest of its ``|A U|``,
+        ``|Delta|`` and ``|A R P|`` (at least :data:`~contactqp.local.CONTACT_FLOOR` times
+        the largest over the contacts).
     force_sign : float
         ``max(-lambda, 0)`` over the force scale (contact forces push, never pull).
     complementarity : float
-        ``max |lambda_i (Delta - A U)_i|`` over force scale times the contacts' length scale.
+        ``max |lambda_i (Delta - A U)_i|`` over the force scale times the contact's length
+        scale.
     equilibrium : float
         ``max |U - R (P - A^T lambda)|`` over the length scale (or ``K U`` against the forces over
         the force scale when the model was given by its stiffness).
@@ -84,18 +86,17 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     force, length = scales(problem.model, P, U, lam, gaps)
     AU = A @ U
     final_gaps = gaps - AU
-    # gaps are judged on the contacts' own length: their displacements, initial gaps and the
-    # interpenetration the loads alone would cause (not max diag(R) times the largest force,
-    # which a soft freedom away from the contacts makes metres long)
     dual = getattr(problem, "_dual", None)
     free = dual.free_displacements if dual is not None else problem.model.displacements(P)
-    contact_length = max(np.max(np.abs(AU), initial=0.0), np.max(np.abs(gaps), initial=0.0),
-                         np.max(np.abs(A @ free), initial=0.0), np.finfo(float).tiny)
+    # gaps are judged on each contact's own length: its displacement, initial gap and the
+    # interpenetration the loads alone would cause there (not max diag(R) times the largest
+    # force, which a soft freedom away from the contacts makes metres long, nor another
+    # contact's wide gap)
+    contact_length = _floored(np.maximum.reduce([np.abs(AU), np.abs(gaps), np.abs(A @ free)]))
     return Certificate(
-        penetration=float(max(0.0, -np.min(final_gaps, initial=0.0)) / contact_length),
+        penetration=_worst(-final_gaps / contact_length),
         force_sign=float(max(0.0, -np.min(lam, initial=0.0)) / force),
-        complementarity=float(np.max(np.abs(lam * final_gaps), initial=0.0)
-                              / (force * contact_length)),
+        complementarity=_worst(np.abs(lam * final_gaps) / (force * contact_length)),
         equilibrium=_equilibrium(problem.model, U, P - A.T @ lam, force, length),
         tol=tol,
     )
@@ -118,19 +119,20 @@ def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
     return float(force), float(length)
 
 
-def contact_scales(problem, local_displacements, forces, step) -> tuple[float, float]:
-    """``(force, length)``: the scales (N, m) of a frictional step's contact residuals.
+def contact_scales(problem, local_displacements, forces, step) -> tuple[np.ndarray, np.ndarray]:
+    """``(force, length)``, each of shape (k,): the scales (N, m) of each contact's residuals.
 
-    Measured on the contacts only, so that a soft or heavily loaded freedom away from them
-    does not loosen the contact checks (nor turn real slips into "stick"): the length scale is
-    the largest local displacement ``H U``, initial gap, or local displacement the loads cause
-    with the apex forces applied (``q~``, :attr:`~contactqp.problem.FrictionStep.q_apex`:
-    the length the solver's own tolerance is relative to); the force scale the largest local
-    contact force, tensile strength ``c / mu`` or ``max |q~ - w| / max diag(W)`` (the force
-    that takes up the largest local displacement the loads cause, initial gaps ``w`` left
-    out, at the softest contact). Never
-    ``max diag(R)`` times a force, which mixes the softest freedom with the largest load, nor
-    the largest load, which may not reach the contacts.
+    Each contact is measured on its own quantities, so that neither a soft or heavily loaded
+    freedom away from the contacts nor another contact's wide gap or large force loosens its
+    checks (nor turns its real slips into "stick"). Its length scale is the largest of its
+    local displacement ``H U``, initial gap and local displacement the loads cause with the
+    apex forces applied (``q~``, :attr:`~contactqp.problem.FrictionStep.q_apex`); its force
+    scale the largest of its local force, tensile strength ``c / mu`` and
+    ``max |q~_i - w_i| / max diag(W_ii)`` (the force that takes up what the loads do at the
+    contact, initial gap left out). Never ``max diag(R)`` times a force, which mixes the softest
+    freedom with the largest load, nor the largest load, which may not reach the contacts.
+    Both are at least :data:`~contactqp.local.CONTACT_FLOOR` times their largest value over the
+    contacts: an unloaded open contact is judged on that, not on its rounding noise.
 
     Parameters
     ----------
@@ -142,19 +144,26 @@ def contact_scales(problem, local_displacements, forces, step) -> tuple[float, f
     step : FrictionStep
         The step (:meth:`~contactqp.FrictionalProblem.step`).
     """
+    k, d = problem.n_contacts, problem.dim
+    free = step.q_apex.reshape(k, d)
+    # what the loads (and the previous state) do at the contacts, without the initial gaps (a
+    # 1 m gap is no force of 1 m / W)
+    loaded = (step.q_apex - problem.local().offset).reshape(k, d)
+    compliance = np.abs(np.asarray(step.local.W.diagonal())).reshape(k, d).max(axis=1)
+    taken_up = np.divide(np.abs(loaded).max(axis=1), compliance, out=np.zeros(k),
+                         where=compliance > 0)
+    force = np.maximum.reduce([np.abs(np.reshape(forces, (k, d))).max(axis=1),
+                               step.apex_shift.reshape(k, d)[:, 0], taken_up])
+    length = np.maximum.reduce([np.abs(free).max(axis=1),
+                                np.abs(local_displacements).max(axis=1),
+                                np.abs(problem.constraints.gaps)])
+    return _floored(force), _floored(length)
+
+
+def _floored(scale):
+    """``scale`` raised to :data:`~contactqp.local.CONTACT_FLOOR` times its largest value."""
     tiny = np.finfo(float).tiny
-    free, shift = step.q_apex, step.apex_shift
-    compliance = float(np.max(np.abs(step.local.W.diagonal()), initial=0.0))
-    # the floor left when no contact carries force: what the loads (and the previous state)
-    # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
-    loaded = free - problem.local().offset
-    force = max(np.max(np.abs(forces), initial=0.0), np.max(shift, initial=0.0),
-                np.max(np.abs(loaded), initial=0.0) / compliance if compliance > 0 else 0.0,
-                tiny)
-    length = max(np.max(np.abs(free), initial=0.0),
-                 np.max(np.abs(local_displacements), initial=0.0),
-                 np.max(np.abs(problem.constraints.gaps), initial=0.0), tiny)
-    return float(force), float(length)
+    return np.maximum(scale, max(CONTACT_FLOOR * float(np.max(scale, initial=0.0)), tiny))
 
 
 def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
@@ -240,31 +249,33 @@ class ContactResult:
 
 @dataclass(frozen=True)
 class FrictionCertificate:
-    """Residuals of the frictional contact conditions, each relative to the problem's scale.
+    """Residuals of the frictional contact conditions, each relative to its own scale.
 
     Computed from the model's own matrix, the local frames and the returned displacements and
-    forces (see :func:`certify_friction`), never from the solver's internal quantities. The
-    contact residuals are relative to the contacts' scales (:func:`contact_scales`), the
-    equilibrium to the model's (:func:`scales`).
+    forces (see :func:`certify_friction`), never from the solver's internal quantities. Each
+    contact residual is relative to that contact's own scales (:func:`contact_scales`) and the
+    largest over the contacts is kept; the equilibrium is relative to the model's scales
+    (:func:`scales`).
 
     Attributes
     ----------
     penetration : float
-        ``max(-gap, 0)`` over the length scale.
+        ``max(-gap_i, 0)`` over the contact's length scale.
     force_sign : float
-        ``max(-r~_N, 0)`` over the force scale, ``r~`` the force from the cone's apex.
+        ``max(-r~_N,i, 0)`` over the contact's force scale, ``r~`` the force from the cone's apex.
     cone : float
         Largest excess of a tangential force over its friction set (disc or polygon of radius
-        ``mu r_N + c``), over the force scale.
+        ``mu r_N + c``), over the contact's force scale.
     complementarity : float
-        ``max ||r~_i|| |gap_i|`` over force times length: an open contact carries no force
-        (beyond the tension ``c / mu`` of a cohesive one).
+        ``max ||r~_i|| |gap_i|`` over the contact's force times length: an open contact carries
+        no force (beyond the tension ``c / mu`` of a cohesive one).
     dissipation : float
-        Largest maximum-dissipation gap ``(mu r_N + c) support(-s_T) + r_T . s_T`` over force
-        times length: zero when every slip is opposed by a friction force on the bound.
+        Largest maximum-dissipation gap ``(mu r_N + c) support(-s_T) + r_T . s_T`` over the
+        contact's force times length: zero when every slip is opposed by a friction force on the
+        bound.
     equilibrium : float
-        ``max |U - R (P + H^T r)|`` over the length scale (``K U`` against the forces over the
-        force scale for a stiffness model).
+        ``max |U - R (P + H^T r)|`` over the model's length scale (``K U`` against the forces
+        over its force scale for a stiffness model).
     natural_map : float
         :func:`~contactqp.local.natural_map_error` of the step's dimensionless FCLIB problem
         (:attr:`~contactqp.problem.FrictionStep.fclib`, exact cones), each contact also on its
@@ -336,18 +347,23 @@ def certify_friction(problem, displacements, forces, step,
     # the equilibrium of every freedom is measured on the model's own scales
     global_force, global_length = scales(problem.model, P, U, r, gaps)
     return FrictionCertificate(
-        penetration=float(max(0.0, -np.min(final_gaps)) / length),
-        force_sign=float(max(0.0, -np.min(apex[:, 0])) / force),
-        cone=float(max(0.0, np.max(law.cone_excess(R))) / force),
-        complementarity=float(np.max(np.linalg.norm(apex, axis=1) * np.abs(final_gaps))
-                              / (force * length)),
-        dissipation=float(np.max(np.abs(law.dissipation_gap(R, slip))) / (force * length)),
+        penetration=_worst(-final_gaps / length),
+        force_sign=_worst(-apex[:, 0] / force),
+        cone=_worst(law.cone_excess(R) / force),
+        complementarity=_worst(np.linalg.norm(apex, axis=1) * np.abs(final_gaps)
+                               / (force * length)),
+        dissipation=_worst(np.abs(law.dissipation_gap(R, slip)) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
         natural_map=natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit,
                                       per_contact=True),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )
+
+
+def _worst(relative) -> float:
+    """The largest of per-contact relative residuals, 0 when none is positive."""
+    return float(max(0.0, np.max(relative, initial=0.0)))
 
 
 @dataclass
@@ -371,8 +387,8 @@ class FrictionalResult:
         ``(H U)_T``, total tangential displacement (m): the origin of the next step's slips.
     contact_status : ndarray of int, shape (k,)
         Index into :data:`~contactqp.friction.STATUS_LABELS` (open, stick, slip). "Open": the
-        force from the cone's apex is below ``1e-10`` times the contacts' force scale; "slip":
-        the slip exceeds ``certificate_tol`` times the contacts' length scale (both of
+        force from the cone's apex is below ``1e-10`` times the contact's force scale; "slip":
+        the slip exceeds ``certificate_tol`` times the contact's length scale (both of
         :func:`contact_scales`), below which the certificate could not tell a slip from none.
     dissipation : ndarray, shape (k,)
         Energy dissipated by friction during the step, ``-r_T . s_T`` per contact (J), with the
