@@ -119,20 +119,23 @@ def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
     return float(force), float(length)
 
 
-def contact_scales(problem, local_displacements, forces, step) -> tuple[np.ndarray, np.ndarray]:
-    """``(force, length)``, each of shape (k,): the scales (N, m) of each contact's residuals.
+def contact_scales(problem, local_displacements, forces, step) -> tuple[float, np.ndarray]:
+    """``(force, length)``: the force scale (N) of the contacts and each one's length scale (m).
 
-    Each contact is measured on its own quantities, so that neither a soft or heavily loaded
-    freedom away from the contacts nor another contact's wide gap or large force loosens its
-    checks (nor turns its real slips into "stick"). Its length scale is the largest of its
-    local displacement ``H U``, initial gap and local displacement the loads cause with the
-    apex forces applied (``q~``, :attr:`~contactqp.problem.FrictionStep.q_apex`); its force
-    scale the largest of its local force, tensile strength ``c / mu`` and
-    ``max |q~_i - w_i| / max diag(W_ii)`` (the force that takes up what the loads do at the
-    contact, initial gap left out). Never ``max diag(R)`` times a force, which mixes the softest
+    Measured on the contacts only, so that a soft or heavily loaded freedom away from them does
+    not loosen the contact checks (nor turn real slips into "stick"). The force scale is the
+    largest local contact force, tensile strength ``c / mu`` or ``max |q~ - w| / max diag(W)``
+    (the force that takes up the largest local displacement the loads cause, initial gaps ``w``
+    left out, at the softest contact): one figure for all contacts, since whether a force is
+    zero is a question about the whole problem's forces (an open contact's force is the
+    solver's rounding of them). Never ``max diag(R)`` times a force, which mixes the softest
     freedom with the largest load, nor the largest load, which may not reach the contacts.
-    Both are at least :data:`~contactqp.local.CONTACT_FLOOR` times their largest value over the
-    contacts: an unloaded open contact is judged on that, not on its rounding noise.
+
+    The length scale is each contact's own: the largest of its local displacement ``H U``,
+    initial gap and local displacement the loads cause with the apex forces applied (``q~``,
+    :attr:`~contactqp.problem.FrictionStep.q_apex`), so that another contact's wide gap does
+    not loosen its gap checks; at least :data:`~contactqp.local.CONTACT_FLOOR` times the
+    largest over the contacts.
 
     Parameters
     ----------
@@ -146,18 +149,17 @@ def contact_scales(problem, local_displacements, forces, step) -> tuple[np.ndarr
     """
     k, d = problem.n_contacts, problem.dim
     free = step.q_apex.reshape(k, d)
-    # what the loads (and the previous state) do at the contacts, without the initial gaps (a
-    # 1 m gap is no force of 1 m / W)
-    loaded = (step.q_apex - problem.local().offset).reshape(k, d)
-    compliance = np.abs(np.asarray(step.local.W.diagonal())).reshape(k, d).max(axis=1)
-    taken_up = np.divide(np.abs(loaded).max(axis=1), compliance, out=np.zeros(k),
-                         where=compliance > 0)
-    force = np.maximum.reduce([np.abs(np.reshape(forces, (k, d))).max(axis=1),
-                               step.apex_shift.reshape(k, d)[:, 0], taken_up])
+    compliance = float(np.max(np.abs(step.local.W.diagonal()), initial=0.0))
+    # the floor left when no contact carries force: what the loads (and the previous state)
+    # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
+    loaded = step.q_apex - problem.local().offset
+    force = max(np.max(np.abs(forces), initial=0.0), np.max(step.apex_shift, initial=0.0),
+                np.max(np.abs(loaded), initial=0.0) / compliance if compliance > 0 else 0.0,
+                np.finfo(float).tiny)
     length = np.maximum.reduce([np.abs(free).max(axis=1),
                                 np.abs(local_displacements).max(axis=1),
                                 np.abs(problem.constraints.gaps)])
-    return _floored(force), _floored(length)
+    return float(force), _floored(length)
 
 
 def _floored(scale):
@@ -249,30 +251,30 @@ class ContactResult:
 
 @dataclass(frozen=True)
 class FrictionCertificate:
-    """Residuals of the frictional contact conditions, each relative to its own scale.
+    """Residuals of the frictional contact conditions, each relative to the problem's scale.
 
     Computed from the model's own matrix, the local frames and the returned displacements and
-    forces (see :func:`certify_friction`), never from the solver's internal quantities. Each
-    contact residual is relative to that contact's own scales (:func:`contact_scales`) and the
-    largest over the contacts is kept; the equilibrium is relative to the model's scales
-    (:func:`scales`).
+    forces (see :func:`certify_friction`), never from the solver's internal quantities. The
+    contact residuals are relative to the contacts' force scale and to each contact's own
+    length scale (:func:`contact_scales`), the largest over the contacts kept; the equilibrium
+    is relative to the model's scales (:func:`scales`).
 
     Attributes
     ----------
     penetration : float
         ``max(-gap_i, 0)`` over the contact's length scale.
     force_sign : float
-        ``max(-r~_N,i, 0)`` over the contact's force scale, ``r~`` the force from the cone's apex.
+        ``max(-r~_N, 0)`` over the force scale, ``r~`` the force from the cone's apex.
     cone : float
         Largest excess of a tangential force over its friction set (disc or polygon of radius
-        ``mu r_N + c``), over the contact's force scale.
+        ``mu r_N + c``), over the force scale.
     complementarity : float
-        ``max ||r~_i|| |gap_i|`` over the contact's force times length: an open contact carries
-        no force (beyond the tension ``c / mu`` of a cohesive one).
+        ``max ||r~_i|| |gap_i|`` over the force scale times the contact's length: an open
+        contact carries no force (beyond the tension ``c / mu`` of a cohesive one).
     dissipation : float
         Largest maximum-dissipation gap ``(mu r_N + c) support(-s_T) + r_T . s_T`` over the
-        contact's force times length: zero when every slip is opposed by a friction force on the
-        bound.
+        force scale times the contact's length: zero when every slip is opposed by a friction
+        force on the bound.
     equilibrium : float
         ``max |U - R (P + H^T r)|`` over the model's length scale (``K U`` against the forces
         over its force scale for a stiffness model).
@@ -387,7 +389,7 @@ class FrictionalResult:
         ``(H U)_T``, total tangential displacement (m): the origin of the next step's slips.
     contact_status : ndarray of int, shape (k,)
         Index into :data:`~contactqp.friction.STATUS_LABELS` (open, stick, slip). "Open": the
-        force from the cone's apex is below ``1e-10`` times the contact's force scale; "slip":
+        force from the cone's apex is below ``1e-10`` times the contacts' force scale; "slip":
         the slip exceeds ``certificate_tol`` times the contact's length scale (both of
         :func:`contact_scales`), below which the certificate could not tell a slip from none.
     dissipation : ndarray, shape (k,)
