@@ -405,6 +405,12 @@ def test_each_contact_is_certified_on_its_own_scales():
     bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
                               wall_time=0.0)
     assert not bad.success and bad.certificate.complementarity > 1e-3
+    # but a rounding-sized force on the open contact is judged against the contacts' forces
+    noisy = good.forces.copy()
+    noisy[6] = [1e-13, 1e-13]
+    fine = problem.make_result(noisy.ravel(), solver="test", converged=True, message="", nit=0,
+                               wall_time=0.0)
+    assert fine.success and fine.status_labels[6] == "open", fine.message
 
 
 def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
