@@ -116,11 +116,13 @@ def alart_curnier(R, U, mu, rho, jacobian: bool = False):
 
 
 class _Newton:
-    """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``."""
+    """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``.
+
+    ``W`` is a dense array, or a sparse matrix that :func:`~contactqp.local.better_dense`
+    leaves sparse.
+    """
 
     def __init__(self, W, q, mu, dim, measure):
-        if sp.issparse(W) and better_dense(W):
-            W = W.toarray()
         self.W, self.q, self.mu, self.d = W, q, mu, dim
         self.nc = mu.shape[0]
         self.sparse = sp.issparse(W)
@@ -365,9 +367,11 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
-    if check_psd:
-        check_positive_semidefinite(problem.W)
     W, d, mu = problem.W, problem.dim, problem.mu
+    if sp.issparse(W) and better_dense(W):
+        W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
+    if check_psd:
+        check_positive_semidefinite(W)
     shift = problem.apex_shift
     q = problem.q - W @ shift if np.any(shift) else problem.q
 
