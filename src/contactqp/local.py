@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.sparse as sp
 
+from contactqp import kernels
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.model import finite_array
 
@@ -369,14 +370,9 @@ def projection_on_cones(x, mu, dim):
 
 
 def project_rows(X, mu):
-    """Row-wise :func:`projection_on_cones` of ``X`` (n, d) for ``mu`` (n,), without checks."""
-    xn, xt = X[:, 0], X[:, 1:]
-    t = np.sqrt(np.einsum("ij,ij->i", xt, xt))
-    inside = (t <= mu * xn) & (xn >= 0)
-    a = np.maximum(xn + mu * t, 0.0) / (1.0 + mu * mu)  # 0 in the polar cone
-    scale = np.divide(mu * a, t, out=np.zeros_like(t), where=t > 0)
-    P = X * np.where(inside, 1.0, scale)[:, None]
-    P[:, 0] = np.where(inside, xn, a)
+    """Row-wise :func:`projection_on_cones` of float arrays ``X`` (n, d), ``mu`` (n,), unchecked."""
+    P = np.empty_like(X)
+    kernels.project_rows(X, mu, P)
     return P
 
 
@@ -459,12 +455,8 @@ def natural_map_residual(problem: LocalProblem, r, u, *,
     """
     d = problem.dim
     R = (r + problem.apex_shift).reshape(-1, d)
-    U = u.reshape(-1, d)
-    shifted = R - U
-    shifted[:, 0] -= problem.mu * np.sqrt(np.einsum("ij,ij->i", U[:, 1:], U[:, 1:]))
-    gap = R - project_rows(shifted, problem.mu)
-    squares = np.einsum("ij,ij->i", gap, gap)
-    residual = math.sqrt(squares.sum())
+    squares = np.empty(R.shape[0])
+    residual = math.sqrt(kernels.natural_map_rows(R, u.reshape(-1, d), problem.mu, squares))
     scale = math.sqrt(max(problem.q @ problem.q, r @ r, u @ u)) or 1.0
     error = residual / scale
     if per_contact and squares.size:

@@ -10,7 +10,8 @@ Formulation (Alart and Curnier 1991). For each contact, with ``rho_i > 0``,
 and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
 :class:`~contactqp.local.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
 ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
-contact, built for all contacts at once with numpy; ``rho_i`` = 1 / mean diagonal of ``W_ii``).
+contact, computed with ``Phi`` by one compiled loop over the contacts, :mod:`contactqp.kernels`;
+``rho_i`` = 1 / mean diagonal of ``W_ii``).
 A released contact's step is simply ``-Phi``: each Newton step factors only the block of the
 other contacts, with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W`` that
 :func:`~contactqp.local.better_dense` prefers dense) or SuperLU (``scipy.sparse.linalg.splu``:
@@ -56,6 +57,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from .. import kernels
 from ..errors import InvalidInputError
 from ..local import (LocalProblem, better_dense, check_positive_semidefinite,
                      natural_map_residual)
@@ -74,6 +76,7 @@ STALL = 20  # a Newton run stops when its best error has not halved in this many
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this share of its column's max
+_NO_JACOBIAN = np.empty((0, 3, 3))  # tells kernels.alart_curnier_rows to skip the Jacobian
 
 
 def alart_curnier(R, U, mu, rho, jacobian: bool = False):
@@ -94,25 +97,13 @@ def alart_curnier(R, U, mu, rho, jacobian: bool = False):
     A, B : numpy.ndarray, shape (n_contacts, dim, dim)
         Only with ``jacobian=True``.
     """
-    nc, d = R.shape
-    X = R - rho[:, None] * U  # the augmented point projected by the law
-    xn, Y = X[:, 0], X[:, 1:]
-    radius = mu * np.maximum(xn, 0.0)
-    ny = np.sqrt(np.einsum("ij,ij->i", Y, Y))
-    outside = ny > radius
-    s = np.divide(radius, ny, out=np.ones(nc), where=outside)
-    Phi = R - X * s[:, None]
-    Phi[:, 0] = R[:, 0] - np.maximum(xn, 0.0)
+    Phi = np.empty_like(R)
     if not jacobian:
+        kernels.alart_curnier_rows(R, U, mu, rho, Phi, _NO_JACOBIAN, _NO_JACOBIAN)
         return Phi
-    # dPhi/dr = I - C and dPhi/du = rho C, with C the derivative of the projection
-    pressed = xn > 0
-    yhat = Y * np.divide(1.0, ny, out=np.zeros(nc), where=outside)[:, None]  # slip direction
-    C = np.zeros((nc, d, d))
-    C[:, 0, 0] = pressed
-    C[:, 1:, 1:] = s[:, None, None] * (np.eye(d - 1) - yhat[:, :, None] * yhat[:, None, :])
-    C[:, 1:, 0] = (mu * pressed)[:, None] * yhat  # d(radius)/d(xn) times the slip direction
-    return Phi, np.eye(d) - C, rho[:, None, None] * C
+    A, B = np.empty(R.shape + R.shape[1:]), np.empty(R.shape + R.shape[1:])
+    kernels.alart_curnier_rows(R, U, mu, rho, Phi, A, B)
+    return Phi, A, B
 
 
 class _Newton:

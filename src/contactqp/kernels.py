@@ -1,0 +1,120 @@
+"""Per-contact loops of the friction solvers, compiled by Numba.
+
+The Newton and Gauss-Seidel solvers evaluate the same small maps of every contact at each
+iteration: the projection on a Coulomb cone, the natural map and the Alart-Curnier function
+with its generalised Jacobian. Written with numpy, each evaluation is some twenty array calls
+whose fixed cost (about a microsecond each) outweighs the arithmetic on problems of a few
+dozen contacts; compiled, one loop over the contacts does it. The functions here take rows of
+validated float arrays (one row per contact, normal component first), write into the arrays
+they are given and check nothing; :mod:`contactqp.local` and
+:mod:`contactqp.solvers.coulomb` are their callers.
+
+Compiled code is cached beside this file (Numba's ``cache=True``; Numba falls back to a
+user cache directory when that is read-only), so only the first call on a machine pays the
+compilation, about a second per function.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows"]
+
+_jit = njit(cache=True, nogil=True, error_model="numpy")
+
+
+@_jit
+def _project(x, mu, out):
+    """``out`` = projection of one contact's ``x`` on the cone ``||x_T|| <= mu x_N``."""
+    xn = x[0]
+    t = 0.0
+    for k in range(1, x.shape[0]):
+        t += x[k] * x[k]
+    t = math.sqrt(t)
+    if t <= mu * xn and xn >= 0.0:  # inside
+        out[:] = x
+        return
+    a = max(xn + mu * t, 0.0) / (1.0 + mu * mu)  # 0 in the polar cone
+    scale = mu * a / t if t > 0.0 else 0.0
+    out[0] = a
+    for k in range(1, x.shape[0]):
+        out[k] = scale * x[k]
+
+
+@_jit
+def project_rows(X, mu, P):
+    """``P[i]`` = projection of ``X[i]`` on the Coulomb cone of ``mu[i]``."""
+    for i in range(X.shape[0]):
+        _project(X[i], mu[i], P[i])
+
+
+@_jit
+def natural_map_rows(R, U, mu, squares):
+    """Squared natural-map residual of each contact into ``squares``; returns their sum.
+
+    Contact ``i``: ``||R_i - P_K(R_i - U_i - mu_i ||U_iT|| e_N)||^2`` (De Saxce's modified
+    velocity; ``R`` measured from the cone apex).
+    """
+    d = R.shape[1]
+    x, p = np.empty(d), np.empty(d)
+    total = 0.0
+    for i in range(R.shape[0]):
+        slip = 0.0
+        for k in range(1, d):
+            slip += U[i, k] * U[i, k]
+        for k in range(d):
+            x[k] = R[i, k] - U[i, k]
+        x[0] -= mu[i] * math.sqrt(slip)
+        _project(x, mu[i], p)
+        square = 0.0
+        for k in range(d):
+            square += (R[i, k] - p[k]) ** 2
+        squares[i] = square
+        total += square
+    return total
+
+
+@_jit
+def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
+    """Alart-Curnier function of each contact into ``Phi``; with ``A``, ``B`` its Jacobian.
+
+    ``X = R - rho U``; ``Phi_N = R_N - max(0, X_N)`` and
+    ``Phi_T = R_T - P_{B(0, mu max(0, X_N))}(X_T)``. When ``A`` and ``B`` have a row per
+    contact they receive ``dPhi/dr = I - C`` and ``dPhi/du = rho C``, ``C`` the derivative of
+    the projection (``C_NN = 1`` when ``X_N > 0``; on a slipping contact, with
+    ``y = X_T / ||X_T||``: ``C_TT = s (I - y y^T)``, ``s = radius / ||X_T||``, and
+    ``C_TN = mu y``); zero-row ``A`` and ``B`` skip it.
+    """
+    d = R.shape[1]
+    jacobian = A.shape[0] > 0
+    y = np.empty(d)  # the trial point X_i (its tangential part)
+    for i in range(R.shape[0]):
+        xn = R[i, 0] - rho[i] * U[i, 0]
+        pressed = xn > 0.0
+        radius = mu[i] * xn if pressed else 0.0
+        norm = 0.0
+        for k in range(1, d):
+            y[k] = R[i, k] - rho[i] * U[i, k]
+            norm += y[k] * y[k]
+        norm = math.sqrt(norm)
+        outside = norm > radius
+        s = radius / norm if outside else 1.0
+        Phi[i, 0] = R[i, 0] - (xn if pressed else 0.0)
+        for k in range(1, d):
+            Phi[i, k] = R[i, k] - s * y[k]
+        if not jacobian:
+            continue
+        inverse = 1.0 / norm if outside else 0.0  # y / ||y|| is the slip direction
+        for a in range(d):
+            for b in range(d):
+                if a == 0:
+                    c = 1.0 if (b == 0 and pressed) else 0.0
+                elif b == 0:
+                    c = mu[i] * y[a] * inverse if pressed else 0.0
+                else:
+                    c = s * ((1.0 if a == b else 0.0) - y[a] * y[b] * inverse * inverse)
+                A[i, a, b] = (1.0 if a == b else 0.0) - c
+                B[i, a, b] = rho[i] * c
