@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows"]
+__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
 
 _jit = njit(cache=True, nogil=True, error_model="numpy")
 
@@ -118,3 +118,38 @@ def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
                     c = s * ((1.0 if a == b else 0.0) - y[a] * y[b] * inverse * inverse)
                 A[i, a, b] = (1.0 if a == b else 0.0) - c
                 B[i, a, b] = rho[i] * c
+
+
+@_jit
+def sparse_newton_matrix(A, B, W_blocks, block_row, block_col, kept, entries, indptr, indices,
+                         data, new_indices, new_indptr):
+    """CSC storage of ``A + B W`` on the stored blocks of ``W``; returns its number of entries.
+
+    ``W_blocks[k]`` is the block of contacts ``(block_row[k], block_col[k])``; entry ``p`` of
+    the CSC pattern ``(indptr, indices)`` is element ``entries[p, 1:]`` of block
+    ``entries[p, 0]``. Off-diagonal blocks in the row or column of a contact that is not
+    ``kept`` are left out (such a contact's row is the identity of ``A``; its coupling is the
+    caller's), and so are zeros. The compressed matrix is written to ``data``, ``new_indices``
+    and ``new_indptr``.
+    """
+    d = A.shape[1]
+    count = 0
+    new_indptr[0] = 0
+    for column in range(indptr.shape[0] - 1):
+        for p in range(indptr[column], indptr[column + 1]):
+            k, a, b = entries[p, 0], entries[p, 1], entries[p, 2]
+            i, j = block_row[k], block_col[k]
+            if i == j:
+                value = A[i, a, b]
+            elif kept[i] and kept[j]:
+                value = 0.0
+            else:
+                continue
+            for c in range(d):
+                value += B[i, a, c] * W_blocks[k, c, b]
+            if value != 0.0:
+                data[count] = value
+                new_indices[count] = indices[p]
+                count += 1
+        new_indptr[column + 1] = count
+    return count

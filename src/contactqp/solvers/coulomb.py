@@ -127,8 +127,9 @@ class _Newton:
     def _block_structure(self):
         """Blocks of ``W`` (diagonal blocks always stored) and their order in CSC storage.
 
-        ``A + B W`` has the block pattern of ``W`` plus the diagonal: each Newton step only
-        rescales the stored blocks (``B_c W_cj``), adds ``A_c`` and permutes the values to CSC.
+        ``A + B W`` has the block pattern of ``W`` plus the diagonal: each Newton step computes
+        ``B_c W_cj`` (plus ``A_c``) on the stored blocks straight into CSC order
+        (:func:`~contactqp.kernels.sparse_newton_matrix`).
         The unknowns are renumbered once by SuperLU's minimum-degree ordering of that pattern,
         so that each step's factorisation keeps the natural order (no new ordering per step).
         """
@@ -144,7 +145,6 @@ class _Newton:
         self.W_blocks = blocks.data
         self.block_row = np.repeat(np.arange(nc), np.diff(blocks.indptr))
         self.block_col = blocks.indices
-        self.diagonal_blocks = np.flatnonzero(blocks.indices == self.block_row)
         positions = sp.bsr_matrix(
             (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
              blocks.indptr), shape=(m, m)).tocsc()
@@ -154,7 +154,8 @@ class _Newton:
         self.order = np.argsort(splu(pattern, permc_spec="MMD_AT_PLUS_A").perm_c)
         positions = positions[self.order][:, self.order].tocsc()
         positions.sort_indices()
-        self.csc_order = positions.data.astype(np.int64) - 1
+        block, element = np.divmod(positions.data.astype(np.int64) - 1, d * d)
+        self.csc_entries = np.column_stack([block, *np.divmod(element, d)])  # (block, row, col)
         self.csc_indices, self.csc_indptr = positions.indices, positions.indptr
 
     def residual(self, r):
@@ -213,12 +214,13 @@ class _Newton:
         dropped from the other rows, so they cause no fill.
         """
         m = self.W.shape[0]
-        values = B[self.block_row] @ self.W_blocks
-        values[self.diagonal_blocks] += A
-        values[~kept[self.block_col] & (self.block_col != self.block_row)] = 0.0
-        J = sp.csc_matrix((values.reshape(-1)[self.csc_order], self.csc_indices.copy(),
-                           self.csc_indptr.copy()), shape=(m, m))
-        J.eliminate_zeros()  # in place: hence the copies of the stored structure
+        data = np.empty(self.csc_indices.size)
+        indices = np.empty_like(self.csc_indices)
+        indptr = np.empty_like(self.csc_indptr)
+        count = kernels.sparse_newton_matrix(A, B, self.W_blocks, self.block_row, self.block_col,
+                                             kept, self.csc_entries, self.csc_indptr,
+                                             self.csc_indices, data, indices, indptr)
+        J = sp.csc_matrix((data[:count], indices[:count], indptr), shape=(m, m))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a near-singular factor shows as a non-finite step
             try:
