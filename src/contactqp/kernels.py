@@ -4,14 +4,15 @@ The Newton and Gauss-Seidel solvers evaluate the same small maps of every contac
 iteration: the projection on a Coulomb cone, the natural map and the Alart-Curnier function
 with its generalised Jacobian. Written with numpy, each evaluation is some twenty array calls
 whose fixed cost (about a microsecond each) outweighs the arithmetic on problems of a few
-dozen contacts; compiled, one loop over the contacts does it. The functions here take rows of
+dozen contacts; compiled, one loop over the contacts does it. The sparse Newton matrix is
+likewise filled block by block straight into compressed storage. The functions here take
 validated float arrays (one row per contact, normal component first), write into the arrays
 they are given and check nothing; :mod:`contactqp.local` and
 :mod:`contactqp.solvers.coulomb` are their callers.
 
 Compiled code is cached beside this file (Numba's ``cache=True``; Numba falls back to a
-user cache directory when that is read-only), so only the first call on a machine pays the
-compilation, about a second per function.
+user cache directory when that is read-only), so only the first solve on a machine pays the
+compilation, a few seconds in all.
 """
 
 from __future__ import annotations
