@@ -122,35 +122,36 @@ def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
 
 
 @_jit
-def sparse_newton_matrix(A, B, W_blocks, block_row, block_col, kept, entries, indptr, indices,
-                         data, new_indices, new_indptr):
-    """CSC storage of ``A + B W`` on the stored blocks of ``W``; returns its number of entries.
+def sparse_newton_matrix(A, B, W_blocks, block_row, block_col, entries, indptr, indices,
+                         renumber, data, new_indices, new_indptr):
+    """CSC storage of ``A + B W`` on the kept unknowns; returns its number of entries.
 
     ``W_blocks[k]`` is the block of contacts ``(block_row[k], block_col[k])``; entry ``p`` of
-    the CSC pattern ``(indptr, indices)`` is element ``entries[p, 1:]`` of block
-    ``entries[p, 0]``. Off-diagonal blocks in the row or column of a contact that is not
-    ``kept`` are left out (such a contact's row is the identity of ``A``; its coupling is the
-    caller's), and so are zeros. The compressed matrix is written to ``data``, ``new_indices``
-    and ``new_indptr``.
+    the CSC pattern ``(indptr, indices)`` of ``W`` (diagonal blocks always stored) is element
+    ``entries[p, 1:]`` of block ``entries[p, 0]``. Unknown ``i`` of that pattern becomes row
+    and column ``renumber[i]`` of the result, or is left out where ``renumber[i] < 0``; zeros
+    are left out too. The result is written to ``data``, ``new_indices`` and ``new_indptr``.
     """
     d = A.shape[1]
     count = 0
+    columns = 0
     new_indptr[0] = 0
     for column in range(indptr.shape[0] - 1):
+        if renumber[column] < 0:
+            continue
         for p in range(indptr[column], indptr[column + 1]):
-            k, a, b = entries[p, 0], entries[p, 1], entries[p, 2]
-            i, j = block_row[k], block_col[k]
-            if i == j:
-                value = A[i, a, b]
-            elif kept[i] and kept[j]:
-                value = 0.0
-            else:
+            row = renumber[indices[p]]
+            if row < 0:
                 continue
+            k, a, b = entries[p, 0], entries[p, 1], entries[p, 2]
+            i = block_row[k]
+            value = A[i, a, b] if i == block_col[k] else 0.0
             for c in range(d):
                 value += B[i, a, c] * W_blocks[k, c, b]
             if value != 0.0:
                 data[count] = value
-                new_indices[count] = indices[p]
+                new_indices[count] = row
                 count += 1
-        new_indptr[column + 1] = count
+        columns += 1
+        new_indptr[columns] = count
     return count

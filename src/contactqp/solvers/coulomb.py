@@ -208,26 +208,26 @@ class _Newton:
         return True
 
     def _sparse_solve(self, A, B, kept, rhs, step) -> bool:
-        """The step by SuperLU on the stored blocks, released columns dropped; False if singular.
-
-        Released contacts keep their identity rows (``step = rhs`` there); their columns are
-        dropped from the other rows, so they cause no fill.
-        """
-        m = self.W.shape[0]
+        """The kept contacts' rows of the step by SuperLU on their block; False if singular."""
+        kept_unknowns = np.repeat(kept, self.d)[self.order]  # in the factorisation's order
+        renumber = np.cumsum(kept_unknowns) - 1
+        renumber[~kept_unknowns] = -1
+        n = int(kept_unknowns.sum())
         data = np.empty(self.csc_indices.size)
         indices = np.empty_like(self.csc_indices)
-        indptr = np.empty_like(self.csc_indptr)
+        indptr = np.empty(n + 1, dtype=self.csc_indptr.dtype)
         count = kernels.sparse_newton_matrix(A, B, self.W_blocks, self.block_row, self.block_col,
-                                             kept, self.csc_entries, self.csc_indptr,
-                                             self.csc_indices, data, indices, indptr)
-        J = sp.csc_matrix((data[:count], indices[:count], indptr), shape=(m, m))
+                                             self.csc_entries, self.csc_indptr, self.csc_indices,
+                                             renumber, data, indices, indptr)
+        J = sp.csc_matrix((data[:count], indices[:count], indptr), shape=(n, n))
+        rows = self.order[kept_unknowns]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a near-singular factor shows as a non-finite step
             try:
                 lu = splu(J, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD)
             except RuntimeError:  # exactly singular
                 return False
-            step[self.order] = lu.solve(rhs[self.order])
+            step[rows] = lu.solve(rhs[rows])
         return True
 
     def line_search(self, r, step, residual, reference, merit, tries=MAX_HALVINGS):
