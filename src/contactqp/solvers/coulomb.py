@@ -144,7 +144,7 @@ class _Newton:
         blocks.sort_indices()
         self.W_blocks = blocks.data
         self.block_row = np.repeat(np.arange(nc), np.diff(blocks.indptr))
-        self.block_col = blocks.indices
+        self.block_col = blocks.indices.astype(np.int64)
         positions = sp.bsr_matrix(
             (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
              blocks.indptr), shape=(m, m)).tocsc()
@@ -156,7 +156,8 @@ class _Newton:
         positions.sort_indices()
         block, element = np.divmod(positions.data.astype(np.int64) - 1, d * d)
         self.csc_entries = np.column_stack([block, *np.divmod(element, d)])  # (block, row, col)
-        self.csc_indices, self.csc_indptr = positions.indices, positions.indptr
+        self.csc_indices = positions.indices.astype(np.int64)
+        self.csc_indptr = positions.indptr.astype(np.int64)
 
     def residual(self, r):
         u = self.W @ r + self.q

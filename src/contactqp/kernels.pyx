@@ -1,4 +1,5 @@
-"""Per-contact loops of the friction solvers, compiled by Numba.
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+"""Per-contact loops of the friction solvers, compiled by Cython when the package is built.
 
 The Newton and Gauss-Seidel solvers evaluate the same small maps of every contact at each
 iteration: the projection on a Coulomb cone, the natural map and the Alart-Curnier function
@@ -6,70 +7,67 @@ with its generalised Jacobian. Written with numpy, each evaluation is some twent
 whose fixed cost (about a microsecond each) outweighs the arithmetic on problems of a few
 dozen contacts; compiled, one loop over the contacts does it. The sparse Newton matrix is
 likewise filled block by block straight into compressed storage. The functions here take
-validated float arrays (one row per contact, normal component first), write into the arrays
-they are given and check nothing; :mod:`contactqp.local` and
-:mod:`contactqp.solvers.coulomb` are their callers.
-
-Compiled code is cached beside this file (Numba's ``cache=True``; Numba falls back to a
-user cache directory when that is read-only), so only the first solve on a machine pays the
-compilation, a few seconds in all.
+validated float64 arrays (one row per contact, of dimension 2 or 3, normal component first;
+index arrays int64), write into the arrays they are given and check nothing beyond the buffer
+types: :mod:`contactqp.local` and :mod:`contactqp.solvers.coulomb` are their callers.
 """
 
-from __future__ import annotations
-
-import math
-
-import numpy as np
-from numba import njit
+from libc.math cimport sqrt
+from libc.stdint cimport int64_t
 
 __all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
 
-_jit = njit(cache=True, nogil=True, error_model="numpy")
 
-
-@_jit
-def _project(x, mu, out):
-    """``out`` = projection of one contact's ``x`` on the cone ``||x_T|| <= mu x_N``."""
-    xn = x[0]
-    t = 0.0
-    for k in range(1, x.shape[0]):
+cdef inline void _project(const double* x, Py_ssize_t d, double mu, double* out) noexcept nogil:
+    """``out`` = projection of one contact's ``x`` (length ``d``) on ``||x_T|| <= mu x_N``."""
+    cdef Py_ssize_t k
+    cdef double xn = x[0], t = 0.0, a, scale
+    for k in range(1, d):
         t += x[k] * x[k]
-    t = math.sqrt(t)
+    t = sqrt(t)
     if t <= mu * xn and xn >= 0.0:  # inside
-        out[:] = x
+        for k in range(d):
+            out[k] = x[k]
         return
     a = max(xn + mu * t, 0.0) / (1.0 + mu * mu)  # 0 in the polar cone
     scale = mu * a / t if t > 0.0 else 0.0
     out[0] = a
-    for k in range(1, x.shape[0]):
+    for k in range(1, d):
         out[k] = scale * x[k]
 
 
-@_jit
-def project_rows(X, mu, P):
+def project_rows(const double[:, :] X, const double[:] mu, double[:, :] P):
     """``P[i]`` = projection of ``X[i]`` on the Coulomb cone of ``mu[i]``."""
+    cdef Py_ssize_t i, k, d = X.shape[1]
+    cdef double x[3]
+    cdef double p[3]
     for i in range(X.shape[0]):
-        _project(X[i], mu[i], P[i])
+        for k in range(d):
+            x[k] = X[i, k]
+        _project(x, d, mu[i], p)
+        for k in range(d):
+            P[i, k] = p[k]
 
 
-@_jit
-def natural_map_rows(R, U, mu, squares):
+def natural_map_rows(const double[:, :] R, const double[:, :] U, const double[:] mu,
+                     double[:] squares):
     """Squared natural-map residual of each contact into ``squares``; returns their sum.
 
     Contact ``i``: ``||R_i - P_K(R_i - U_i - mu_i ||U_iT|| e_N)||^2`` (De Saxce's modified
     velocity; ``R`` measured from the cone apex).
     """
-    d = R.shape[1]
-    x, p = np.empty(d), np.empty(d)
-    total = 0.0
+    cdef Py_ssize_t i, k, d = R.shape[1]
+    cdef double slip, square, total = 0.0
+    cdef double x[3]
+    cdef double p[3]
     for i in range(R.shape[0]):
         slip = 0.0
         for k in range(1, d):
             slip += U[i, k] * U[i, k]
         for k in range(d):
             x[k] = R[i, k] - U[i, k]
-        x[0] -= mu[i] * math.sqrt(slip)
-        _project(x, mu[i], p)
+        x[0] -= mu[i] * sqrt(slip)
+        _project(x, d, mu[i], p)
         square = 0.0
         for k in range(d):
             square += (R[i, k] - p[k]) ** 2
@@ -78,8 +76,9 @@ def natural_map_rows(R, U, mu, squares):
     return total
 
 
-@_jit
-def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
+def alart_curnier_rows(const double[:, :] R, const double[:, :] U, const double[:] mu,
+                       const double[:] rho, double[:, :] Phi, double[:, :, :] A,
+                       double[:, :, :] B):
     """Alart-Curnier function of each contact into ``Phi``; with ``A``, ``B`` its Jacobian.
 
     ``X = R - rho U``; ``Phi_N = R_N - max(0, X_N)`` and
@@ -89,9 +88,10 @@ def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
     ``y = X_T / ||X_T||``: ``C_TT = s (I - y y^T)``, ``s = radius / ||X_T||``, and
     ``C_TN = mu y``); zero-row ``A`` and ``B`` skip it.
     """
-    d = R.shape[1]
-    jacobian = A.shape[0] > 0
-    y = np.empty(d)  # the trial point X_i (its tangential part)
+    cdef Py_ssize_t i, k, a, b, d = R.shape[1]
+    cdef bint jacobian = A.shape[0] > 0, pressed, outside
+    cdef double xn, radius, norm, s, inverse, c, identity
+    cdef double y[3]  # the trial point X_i (its tangential part)
     for i in range(R.shape[0]):
         xn = R[i, 0] - rho[i] * U[i, 0]
         pressed = xn > 0.0
@@ -100,7 +100,7 @@ def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
         for k in range(1, d):
             y[k] = R[i, k] - rho[i] * U[i, k]
             norm += y[k] * y[k]
-        norm = math.sqrt(norm)
+        norm = sqrt(norm)
         outside = norm > radius
         s = radius / norm if outside else 1.0
         Phi[i, 0] = R[i, 0] - (xn if pressed else 0.0)
@@ -111,19 +111,23 @@ def alart_curnier_rows(R, U, mu, rho, Phi, A, B):
         inverse = 1.0 / norm if outside else 0.0  # y / ||y|| is the slip direction
         for a in range(d):
             for b in range(d):
+                identity = 1.0 if a == b else 0.0
                 if a == 0:
                     c = 1.0 if (b == 0 and pressed) else 0.0
                 elif b == 0:
                     c = mu[i] * y[a] * inverse if pressed else 0.0
                 else:
-                    c = s * ((1.0 if a == b else 0.0) - y[a] * y[b] * inverse * inverse)
-                A[i, a, b] = (1.0 if a == b else 0.0) - c
+                    c = s * (identity - y[a] * y[b] * inverse * inverse)
+                A[i, a, b] = identity - c
                 B[i, a, b] = rho[i] * c
 
 
-@_jit
-def sparse_newton_matrix(A, B, W_blocks, block_row, block_col, entries, indptr, indices,
-                         renumber, data, new_indices, new_indptr):
+def sparse_newton_matrix(const double[:, :, :] A, const double[:, :, :] B,
+                         const double[:, :, :] W_blocks, const int64_t[:] block_row,
+                         const int64_t[:] block_col, const int64_t[:, :] entries,
+                         const int64_t[:] indptr, const int64_t[:] indices,
+                         const int64_t[:] renumber, double[:] data, int64_t[:] new_indices,
+                         int64_t[:] new_indptr):
     """CSC storage of ``A + B W`` on the kept unknowns; returns its number of entries.
 
     ``W_blocks[k]`` is the block of contacts ``(block_row[k], block_col[k])``; entry ``p`` of
@@ -132,9 +136,9 @@ def sparse_newton_matrix(A, B, W_blocks, block_row, block_col, entries, indptr, 
     and column ``renumber[i]`` of the result, or is left out where ``renumber[i] < 0``; zeros
     are left out too. The result is written to ``data``, ``new_indices`` and ``new_indptr``.
     """
-    d = A.shape[1]
-    count = 0
-    columns = 0
+    cdef Py_ssize_t column, p, c, d = A.shape[1]
+    cdef int64_t count = 0, columns = 0, row, k, a, b, i
+    cdef double value
     new_indptr[0] = 0
     for column in range(indptr.shape[0] - 1):
         if renumber[column] < 0:
