@@ -259,6 +259,22 @@ def test_natural_map_error_sliding_contact(dim):
     assert natural_map_error(p, np.array([1.0, 0.0, 0.0][:dim])) > 1e-3
 
 
+def test_strided_views_are_measured_as_their_copies():
+    # the compiled loops read arrays through their strides: a view must not need a copy
+    W = np.eye(6)
+    q = np.array([-1.0, 2.0, 0.0, 1.0, 0.0, 0.0])
+    p = LocalProblem(W, q, [0.5, 0.3], 3)
+    wide_r = np.zeros(12)
+    wide_r[::2] = [1.0, -0.5, 0.0, 0.0, 0.0, 0.0]
+    wide_u = np.zeros(12)
+    wide_u[::2] = W @ wide_r[::2] + q
+    assert natural_map_error(p, wide_r[::2], wide_u[::2]) == natural_map_error(
+        p, wide_r[::2].copy(), wide_u[::2].copy()) == 0.0
+    x = np.arange(12.0) - 5.0
+    np.testing.assert_array_equal(projection_on_cones(x[::2], [0.5, 0.3], 3),
+                                  projection_on_cones(x[::2].copy(), [0.5, 0.3], 3))
+
+
 def test_natural_map_error_zero_problem():
     p = LocalProblem(np.zeros((2, 2)), [0.0, 0.0], [0.5], 2)
     assert natural_map_error(p, [0.0, 0.0]) == 0.0
