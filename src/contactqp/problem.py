@@ -464,10 +464,11 @@ class FrictionalProblem:
         step = self.step(previous)
         problem, shift, unit = step.fclib, step.apex_shift, step.force_unit
         r0 = None if previous is None else (previous.forces.reshape(-1) + shift) / unit
+        options = {"per_contact": True, **options}  # a wide gap must not loosen the others
         if name == "polygonal":
             options = {"facets": self.law.facets, **options}
         elif name == "coulomb":  # W = H R H^T is semidefinite: R was validated
-            options = {"check_psd": False, "per_contact": True, **options}
+            options = {"check_psd": False, **options}
         solution = method(problem, tol=tol, r0=r0, **options)
         return self.make_result(unit * solution.r - shift, previous, solver=name,
                                 converged=solution.converged, message=solution.message,

@@ -121,8 +121,8 @@ class _PolygonalTresca:
 
 
 def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",
-                    tol: float = 1e-8, max_iter: int = 50, r0=None,
-                    **options) -> LocalSolution:
+                    tol: float = 1e-8, max_iter: int = 50, r0=None, *,
+                    per_contact: bool = False, **options) -> LocalSolution:
     """Solve a local problem with polygonal friction cones by a fixed point of QPs (qpsolvers).
 
     Parameters
@@ -142,6 +142,9 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
         Largest number of quadratic programs solved.
     r0 : array_like, shape (m,), optional
         Starting reactions (N); default: a frictionless first step.
+    per_contact : bool
+        Measure the natural map on every contact's own scale too
+        (``natural_map_error(..., per_contact=True)``); the FCLIB measure is the default.
     **options
         Passed to the backend over the tight defaults.
 
@@ -163,4 +166,5 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
     data = FixedPointData(problem)
     return run_fixed_point(problem, data, _PolygonalTresca(data, facets, backend, options),
-                           tol=tol, max_iter=max_iter, r0=start, exact=problem.dim == 2)
+                           tol=tol, max_iter=max_iter, r0=start, exact=problem.dim == 2,
+                           per_contact=per_contact)

@@ -111,7 +111,7 @@ class FixedPointData:
         self.dim, self.n_contacts = problem.dim, problem.n_contacts
 
 
-def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
+def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_contact=False):
     """Iterate ``s = mu r'_N`` over a Tresca sub-solver; the loop shared by the fixed-point routes.
 
     Parameters
@@ -131,6 +131,9 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
         relative change of ``r'`` between two iterations at most ``tol`` (or the exact-cone
         error, when no polygon constraint binds; with a singular ``W`` the reactions need not
         settle while the velocities do).
+    per_contact : bool
+        Measure the natural map on each contact's own scale too
+        (:func:`~contactqp.local.natural_map_error`).
 
     Returns
     -------
@@ -149,7 +152,7 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact):
         s = problem.mu * np.maximum(r[::d], 0.0)
         q = data.q if data.skew is None else data.q + np.asarray(data.skew @ r).ravel()
         previous, r = r, tresca(q, s)
-        error = natural_map_error(problem, r - data.shift)
+        error = natural_map_error(problem, r - data.shift, per_contact=per_contact)
         if exact:
             # stalled: no halving of the error since `reference` for _PATIENCE iterations (a
             # fixed point contracting at a rate in (0.5, 1) halves it every few iterations)
@@ -326,7 +329,7 @@ class _ClarabelTresca:
 
 
 def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
-                             r0=None) -> LocalSolution:
+                             r0=None, *, per_contact: bool = False) -> LocalSolution:
     """Solve a local Coulomb problem by a fixed point on Tresca cone programs (Clarabel).
 
     Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the
@@ -346,6 +349,9 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
     r0 : array_like, shape (m,), optional
         Starting reactions (N): the first bounds are ``mu r0_N``. By default the first
         sub-problem is frictionless (``s = 0``).
+    per_contact : bool
+        Converge on every contact's own scale too
+        (``natural_map_error(..., per_contact=True)``); the FCLIB measure is the default.
 
     Returns
     -------
@@ -365,4 +371,4 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
     data = FixedPointData(problem)
     return run_fixed_point(problem, data, _ClarabelTresca(data), tol=tol, max_iter=max_iter,
-                           r0=start, exact=True)
+                           r0=start, exact=True, per_contact=per_contact)
