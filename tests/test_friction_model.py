@@ -353,24 +353,26 @@ def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
-def micrometre_contacts(far_gap=None, mu=0.3, facets=None):
-    """Six coupled 2-D nodes on gaps of micrometres; optionally a seventh, decoupled, far away.
+def micrometre_contacts(far_gap=None, mu=0.3, facets=None, dim=2):
+    """Six coupled nodes on gaps of micrometres; optionally a seventh, decoupled, far away.
 
     A :class:`FrictionalProblem` (polygonal with ``facets``), or with ``mu=None`` the
     frictionless ``ContactProblem``.
     """
+    m = 6 * dim
     rng = np.random.default_rng(0)
-    B = rng.normal(size=(12, 12))
-    R = (B @ B.T / 12 + np.eye(12)) * 1e-6  # m/N
+    B = rng.normal(size=(m, m))
+    R = (B @ B.T / m + np.eye(m)) * 1e-6  # m/N
     gaps = rng.uniform(0.0, 2e-6, 6)
-    P = np.tile([0.3, -1.5], 6) + rng.normal(scale=0.3, size=12)
+    P = np.tile({2: [0.3, -1.5], 3: [0.3, 0.2, -1.5]}[dim], 6) + rng.normal(scale=0.3, size=m)
     if far_gap is not None:
-        R = np.block([[R, np.zeros((12, 2))], [np.zeros((2, 12)), 1e-6 * np.eye(2)]])
-        gaps, P = np.append(gaps, far_gap), np.append(P, [0.0, 0.0])
+        R = np.block([[R, np.zeros((m, dim))], [np.zeros((dim, m)), 1e-6 * np.eye(dim)]])
+        gaps, P = np.append(gaps, far_gap), np.append(P, np.zeros(dim))
     n = gaps.size
-    model = cq.ReducedModel(flexibility=R, dofs_per_node=2,
-                            coordinates=np.column_stack([np.arange(float(n)), np.zeros(n)]))
-    obstacles = [cq.GapObstacle(range(n), gaps, [0.0, -1.0])]
+    coordinates = np.zeros((n, dim))
+    coordinates[:, 0] = np.arange(float(n))
+    model = cq.ReducedModel(flexibility=R, dofs_per_node=dim, coordinates=coordinates)
+    obstacles = [cq.GapObstacle(range(n), gaps, np.eye(dim)[-1] * -1.0)]
     if mu is None:
         return cq.ContactProblem(model, P, obstacles)
     return cq.FrictionalProblem(model, P, obstacles, mu=mu, facets=facets)
@@ -396,6 +398,19 @@ def test_a_wide_gap_elsewhere_does_not_loosen_the_solution(solver, facets, rtol)
     loose = far.solve(solver=solver, per_contact=False)
     assert np.abs(loose.forces[:6] - near.forces).max() > 1e-7 * np.abs(near.forces).max()
     assert loose.status == 2 and loose.certificate.natural_map > 1e-6, loose.message
+
+
+@pytest.mark.parametrize("far_gap", [1e-2, 1.0])
+def test_polygonal_cone_in_3d_beside_a_wide_gap(far_gap):
+    # the QPs are scaled by the largest q, here the far gap: the micrometre contacts' forces
+    # were a 1e-4 to 1e-6 fraction of that scale, and came back 1e-5 to 1e-2 off (at 1 m
+    # "not converged"). The first iterate's largest force now rescales the QPs.
+    near = micrometre_contacts(facets=8, dim=3).solve()
+    far = micrometre_contacts(far_gap=far_gap, facets=8, dim=3).solve()
+    assert near.success and far.success, (near.message, far.message)
+    assert far.status_labels[-1] == "open"
+    np.testing.assert_allclose(far.forces[:6], near.forces, rtol=0,
+                               atol=1e-9 * np.abs(near.forces).max())
 
 
 def test_each_contact_is_certified_on_its_own_scales():

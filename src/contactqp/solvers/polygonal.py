@@ -70,7 +70,7 @@ class _PolygonalTresca:
                 f"{', '.join(available_backends())}")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
-        self.w, self.f = data.w, data.f
+        self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
         self.sparse = backend in self.qpsolvers.sparse_solvers
         P = self.W = data.W_sym / self.w
         if self.sparse:
@@ -82,9 +82,10 @@ class _PolygonalTresca:
         self.inradius = np.cos(np.pi / facets)
 
     def __call__(self, q, s):
+        f = self.data.f
         d, nc = self.d, self.nc
         keep, sliding, normal, tangent = free_unknowns(s, d)
-        bound = s[sliding] / self.f
+        bound = s[sliding] / f
         lower = np.full(keep.size, -np.inf)
         lower[normal] = 0.0
         G = h = None
@@ -103,7 +104,7 @@ class _PolygonalTresca:
         if G is not None and not self.sparse:
             G = G.toarray()
         P = self.P[keep][:, keep] if self.sparse else self.P[np.ix_(keep, keep)]
-        problem = self.qpsolvers.Problem(P, q[keep] / (self.f * self.w), G, h, lb=lower)
+        problem = self.qpsolvers.Problem(P, q[keep] / (f * self.w), G, h, lb=lower)
         with warnings.catch_warnings():
             # An inexact status (e.g. Clarabel's "AlmostSolved" at the tight tolerances) is
             # judged by the outer loop, which measures every iterate itself.
@@ -116,8 +117,8 @@ class _PolygonalTresca:
         r = np.zeros(d * nc)
         r[keep] = np.asarray(x)
         if d == 2:  # the segment is the Coulomb disc of 2-D: polish as the Tresca route does
-            r = polish(self.W, q / (self.f * self.w), s / self.f, r, d)
-        return self.f * r
+            r = polish(self.W, q / (f * self.w), s / f, r, d)
+        return f * r
 
 
 def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",

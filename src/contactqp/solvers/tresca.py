@@ -90,9 +90,14 @@ class FixedPointData:
     shift : ndarray, shape (m,)
         :attr:`~contactqp.local.LocalProblem.apex_shift`.
     w, f : float
-        Compliance scale (largest diagonal of ``W``) and force scale ``max|q'| / w``: the
-        sub-problems solve for ``r' / f`` with ``W / w`` and ``q / (f w)``, O(1) data on which
-        the backends' absolute tolerances mean the same thing on every problem.
+        Compliance scale (largest diagonal of ``W``) and force scale: the sub-problems solve
+        for ``r' / f`` with ``W / w`` and ``q / (f w)``, data on which the backends' absolute
+        tolerances mean the same thing on every problem. ``f`` starts as ``max|q'| / w`` and
+        :func:`run_fixed_point` replaces it by the largest reaction of its first iterate when
+        that is below 1 % of it: a contact far from its obstacle (large ``q_i``, no force)
+        would otherwise leave the others' forces a small fraction of ``f``, resolved only to
+        the backend's tolerance times ``f``. (Scaling up as well, when the reactions exceed
+        ``f``, made the fixed point stall earlier on rigid multibody FCLIB files.)
     dim, n_contacts : int
     """
 
@@ -152,6 +157,8 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
         s = problem.mu * np.maximum(r[::d], 0.0)
         q = data.q if data.skew is None else data.q + np.asarray(data.skew @ r).ravel()
         previous, r = r, tresca(q, s)
+        if iteration == 1 and _rescale(data, r):
+            r = tresca(q, s)  # the first sub-problem again, on the reactions' own scale
         error = natural_map_error(problem, r - data.shift, per_contact=per_contact)
         if exact:
             # stalled: no halving of the error since `reference` for _PATIENCE iterations (a
@@ -184,6 +191,15 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
     return LocalSolution(r=r, u=u, error=float(error), converged=converged, iterations=iteration,
                          seconds=time.perf_counter() - start_time, message=message,
                          status=contact_status(problem, r, u))
+
+
+def _rescale(data, r) -> bool:
+    """Set ``data.f`` to the largest reaction of ``r`` if that is below 1 % of it; True if so."""
+    force = float(np.max(np.abs(r), initial=0.0))
+    if 0.0 < force < 0.01 * data.f:
+        data.f = force
+        return True
+    return False
 
 
 def free_unknowns(s, d):
@@ -294,7 +310,7 @@ class _ClarabelTresca:
             raise MissingDependencyError(
                 "the Tresca fixed point needs Clarabel: pip install clarabel") from None
         self._clarabel = clarabel
-        self.w, self.f = data.w, data.f
+        self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
         self.W = data.W_sym / self.w  # scaled, full (for the polish)
         self.P = sp.triu(sp.csc_matrix(self.W), format="csc")
         self.d, self.nc = data.dim, data.n_contacts
@@ -306,6 +322,7 @@ class _ClarabelTresca:
         self.settings = settings
 
     def __call__(self, q, s):
+        f = self.data.f
         clarabel = self._clarabel
         d, nc = self.d, self.nc
         m = d * nc
@@ -317,15 +334,15 @@ class _ClarabelTresca:
         cols = np.concatenate([normal, tangent.ravel()])
         A = sp.csc_matrix((-np.ones(rows.size), (rows, cols)), shape=(nc + d * n_slide, keep.size))
         b = np.zeros(nc + d * n_slide)
-        b[nc::d] = s[sliding] / self.f
+        b[nc::d] = s[sliding] / f
         cones = [clarabel.NonnegativeConeT(nc)] + [clarabel.SecondOrderConeT(d)] * n_slide
         P = self.P[keep][:, keep]
-        solver = clarabel.DefaultSolver(P, q[keep] / (self.f * self.w), A, b, cones,
+        solver = clarabel.DefaultSolver(P, q[keep] / (f * self.w), A, b, cones,
                                         self.settings)
         solution = solver.solve()
         x = np.zeros(m)
         x[keep] = np.asarray(solution.x)
-        return self.f * polish(self.W, q / (self.f * self.w), s / self.f, x, d)
+        return f * polish(self.W, q / (f * self.w), s / f, x, d)
 
 
 def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
