@@ -352,7 +352,8 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
     Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the
     previous reactions as a second-order cone program with Clarabel (``NonnegativeConeT`` for
     the normal reactions, one ``SecondOrderConeT`` per contact with a positive bound), the data
-    scaled to O(1): reactions in units of ``max|q| / max diag W``.
+    scaled: reactions in units of ``max|q| / max diag W``, or of the first iterate's largest
+    reaction when that is below 1 % of it (:class:`FixedPointData`).
 
     Parameters
     ----------
