@@ -275,6 +275,16 @@ def test_strided_views_are_measured_as_their_copies():
                                   projection_on_cones(x[::2].copy(), [0.5, 0.3], 3))
 
 
+def test_compiled_loops_refuse_rows_they_cannot_hold():
+    # the per-contact buffers of contactqp.kernels hold 3 components: 4 must not overrun them
+    from contactqp import kernels
+
+    with pytest.raises(ValueError, match="2 or 3 components"):
+        kernels.project_rows(np.zeros((2, 4)), np.zeros(2), np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="2 or 3 components"):
+        kernels.natural_map_rows(np.zeros((2, 4)), np.zeros((2, 4)), np.zeros(2), np.zeros(2))
+
+
 def test_natural_map_error_zero_problem():
     p = LocalProblem(np.zeros((2, 2)), [0.0, 0.0], [0.5], 2)
     assert natural_map_error(p, [0.0, 0.0]) == 0.0

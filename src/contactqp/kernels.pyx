@@ -9,13 +9,20 @@ dozen contacts; compiled, one loop over the contacts does it. The sparse Newton 
 likewise filled block by block straight into compressed storage. The functions here take
 validated float64 arrays (one row per contact, of dimension 2 or 3, normal component first;
 index arrays int64), write into the arrays they are given and check nothing beyond the buffer
-types: :mod:`contactqp.local` and :mod:`contactqp.solvers.coulomb` are their callers.
+types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overrun):
+:mod:`contactqp.local` and :mod:`contactqp.solvers.coulomb` are their callers.
 """
 
 from libc.math cimport sqrt
 from libc.stdint cimport int64_t
 
 __all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
+
+
+cdef inline void _check_dimension(Py_ssize_t d) except *:
+    """Rows of 2 or 3 components only: the per-contact buffers hold 3."""
+    if d < 2 or d > 3:
+        raise ValueError(f"contact rows must have 2 or 3 components, got {d}")
 
 
 cdef inline void _project(const double* x, Py_ssize_t d, double mu, double* out) noexcept nogil:
@@ -39,6 +46,7 @@ cdef inline void _project(const double* x, Py_ssize_t d, double mu, double* out)
 def project_rows(const double[:, :] X, const double[:] mu, double[:, :] P):
     """``P[i]`` = projection of ``X[i]`` on the Coulomb cone of ``mu[i]``."""
     cdef Py_ssize_t i, k, d = X.shape[1]
+    _check_dimension(d)
     cdef double x[3]
     cdef double p[3]
     for i in range(X.shape[0]):
@@ -57,6 +65,7 @@ def natural_map_rows(const double[:, :] R, const double[:, :] U, const double[:]
     velocity; ``R`` measured from the cone apex).
     """
     cdef Py_ssize_t i, k, d = R.shape[1]
+    _check_dimension(d)
     cdef double slip, square, total = 0.0
     cdef double x[3]
     cdef double p[3]
@@ -89,6 +98,7 @@ def alart_curnier_rows(const double[:, :] R, const double[:, :] U, const double[
     ``C_TN = mu y``); zero-row ``A`` and ``B`` skip it.
     """
     cdef Py_ssize_t i, k, a, b, d = R.shape[1]
+    _check_dimension(d)
     cdef bint jacobian = A.shape[0] > 0, pressed, outside
     cdef double xn, radius, norm, s, inverse, c, identity
     cdef double y[3]  # the trial point X_i (its tangential part)
