@@ -372,7 +372,7 @@ def micrometre_contacts(far_gap=None, mu=0.3, facets=None, dim=2):
     coordinates = np.zeros((n, dim))
     coordinates[:, 0] = np.arange(float(n))
     model = cq.ReducedModel(flexibility=R, dofs_per_node=dim, coordinates=coordinates)
-    obstacles = [cq.GapObstacle(range(n), gaps, np.eye(dim)[-1] * -1.0)]
+    obstacles = [cq.GapObstacle(range(n), gaps, -np.eye(dim)[-1])]
     if mu is None:
         return cq.ContactProblem(model, P, obstacles)
     return cq.FrictionalProblem(model, P, obstacles, mu=mu, facets=facets)
