@@ -143,7 +143,7 @@ class _Newton:
         blocks = sp.csr_matrix((values, (rows, cols)), shape=(m, m)).tobsr(blocksize=(d, d))
         blocks.sort_indices()
         self.W_blocks = blocks.data
-        self.block_row = np.repeat(np.arange(nc), np.diff(blocks.indptr))
+        self.block_row = np.repeat(np.arange(nc, dtype=np.int64), np.diff(blocks.indptr))
         self.block_col = blocks.indices.astype(np.int64)
         positions = sp.bsr_matrix(
             (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
@@ -211,7 +211,7 @@ class _Newton:
     def _sparse_solve(self, A, B, kept, rhs, step) -> bool:
         """The kept contacts' rows of the step by SuperLU on their block; False if singular."""
         kept_unknowns = np.repeat(kept, self.d)[self.order]  # in the factorisation's order
-        renumber = np.cumsum(kept_unknowns) - 1
+        renumber = np.cumsum(kept_unknowns, dtype=np.int64) - 1
         renumber[~kept_unknowns] = -1
         n = int(kept_unknowns.sum())
         data = np.empty(self.csc_indices.size)
