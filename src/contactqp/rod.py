@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numbers
 import time
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -55,10 +56,16 @@ from .solvers import solve
 
 __all__ = ["Rod", "RodLoad", "RodLoadCase", "FullSolution", "CaseComparison", "DEFAULT_CASES",
            "ReferenceSolveError", "solve_reduced", "solve_full", "compare", "deviations",
-           "as_record", "write_vtu", "ABSOLUTE_BELOW"]
+           "as_record", "write_vtu", "ABSOLUTE_BELOW", "MAX_ELEMENTS"]
 
 #: Reference values below this fraction of a case's largest displacement get absolute deviations.
 ABSOLUTE_BELOW = 1e-6
+
+#: Finest mesh offered. The frame's bending stiffness has a condition number growing like the
+#: fourth power of the element count: at 1600 elements round-off reaches 1e-4 of the answer
+#: (the same-node deviation, zero in exact arithmetic, is 6e-3 %; 7e-8 % at 80), and from about
+#: 2400 the stiffness is singular to working precision (the condensation refuses it).
+MAX_ELEMENTS = 1600
 
 
 class ReferenceSolveError(ContactError):
@@ -108,7 +115,8 @@ class Rod:
     nodes : tuple of float
         ``x`` of the computational nodes (m); each must be a mesh node and not the clamp.
     n_elements : int
-        Frame elements of the finite-element mesh (equal lengths).
+        Frame elements of the finite-element mesh (equal lengths), at most
+        :data:`MAX_ELEMENTS`.
     """
 
     length: float = 0.04
@@ -145,6 +153,12 @@ class Rod:
                 or int(self.n_elements) != self.n_elements or self.n_elements < 1:
             raise InvalidInputError(
                 f"n_elements must be a whole number >= 1, got {self.n_elements!r}")
+        if self.n_elements > MAX_ELEMENTS:
+            raise InvalidInputError(
+                f"n_elements must be at most {MAX_ELEMENTS}, got {self.n_elements}: the frame's "
+                f"stiffness is ill-conditioned like n_elements^4 (round-off reaches 1e-4 of the "
+                f"answer at {MAX_ELEMENTS}, and it is singular to working precision from about "
+                f"2400)")
         try:
             x = np.asarray(self.nodes, dtype=float)
         except (TypeError, ValueError):
@@ -261,8 +275,10 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     The QP is scaled by the stiffness diagonal (``u = l D v``, ``D = diag(K)^{-1/2}``, ``l`` the
     largest gap) because the rod's freedoms differ by ten orders of magnitude in stiffness and an
     interior-point method's tolerances are absolute. The interior-point answer is then polished:
-    the KKT system on its active set is solved exactly (sparse LU), and the result is verified
-    (forces >= 0, no penetration) to 1e-9.
+    its active set starts Lawson and Hanson's exact active-set method on the contacts' dual
+    (``K`` factored once by sparse LU), which corrects it where the interior-point method
+    stopped short (fine meshes), and the result is verified (forces >= 0, no penetration) to
+    1e-9.
 
     Raises
     ------
@@ -294,28 +310,69 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     scale = float(h.max())
     Gs, fs, hs = (G @ sp.diags(d)).tocsc(), d * f / scale, h / scale
     qp = qpsolvers.Problem(Ks, -fs, Gs, hs)
-    answer = qpsolvers.solve_problem(qp, solver="clarabel", **backend_options("clarabel"))
+    with warnings.catch_warnings():  # an inexact status is corrected by the polish, verified
+        warnings.simplefilter("ignore", UserWarning)
+        answer = qpsolvers.solve_problem(qp, solver="clarabel", **backend_options("clarabel"))
     if answer.x is None or answer.z is None:
         raise ReferenceSolveError(f"load case {case.name!r}: Clarabel found no solution")
     # contact forces (z * scale) above 1e-8 of the largest load are active; no load, no contact
     largest = np.max(np.abs(f), initial=0.0)
-    active = np.flatnonzero(np.asarray(answer.z) * scale > 1e-8 * largest) if largest > 0 \
-        else np.array([], dtype=int)
-    Ga = Gs[active]
-    kkt = sp.bmat([[Ks, Ga.T], [Ga, None]], format="csc")
-    solution = spla.spsolve(kkt, np.concatenate([fs, hs[active]]))
-    v, za = solution[:n], solution[n:]
-    forces = np.zeros(len(nodes))
-    forces[active] = za * scale
+    active = np.asarray(answer.z) * scale > 1e-8 * largest if largest > 0 \
+        else np.zeros(len(nodes), dtype=bool)
+    v, z = _active_set_polish(Ks, Gs, fs, hs, active, case.name)
+    forces = z * scale
     penetration = np.max(Gs @ v - hs, initial=0.0)
-    if penetration > 1e-9 or np.min(za, initial=0.0) < -1e-9 * np.max(np.abs(za), initial=0.0):
+    if penetration > 1e-9 or np.min(z, initial=0.0) < -1e-9 * np.max(np.abs(z), initial=0.0):
         raise ReferenceSolveError(
             f"load case {case.name!r}: the polished reference violates contact (penetration "
-            f"{penetration * scale:.3g} m, least force {np.min(za, initial=0.0) * scale:.3g} N)")
+            f"{penetration * scale:.3g} m, least force {np.min(z, initial=0.0) * scale:.3g} N)")
     seconds = time.perf_counter() - start
     full = np.zeros(3 * frame.n_nodes)
     full[frame.free] = scale * d * v
     return FullSolution(full.reshape(-1, 3), np.asarray(nodes), forces, seconds)
+
+
+#: Columns of ``K^-1 G^T`` computed at once by the reference's polish.
+_COLUMN_BLOCK = 256
+
+
+def _active_set_polish(K, G, f, h, active, name):
+    """The reference's exact solution, from the interior-point answer's active set.
+
+    On the contacts' dual, ``min 1/2 z^T W z - z^T (G K^-1 f - h), z >= 0`` with
+    ``W = G K^-1 G^T`` (from one sparse LU of ``K``), Lawson and Hanson's active-set method
+    (finite, monotone: it cannot cycle) starts from the interior-point answer's active set
+    ``active`` (bool per contact). On fine meshes the interior-point method stops short
+    (``AlmostSolved``, ``InsufficientProgress``: the frame's stiffness has a condition number
+    growing like the fourth power of the element count) and that set may be empty or wrong; a
+    single KKT solve on it then violated contact. The data are scaled (unit stiffness diagonal,
+    gaps of order one).
+
+    Returns
+    -------
+    v, z : ndarray
+        Scaled displacements and contact forces.
+    """
+    from .solvers.lawson_hanson import solve_nonnegative_qp
+
+    try:
+        lu = spla.splu(K.tocsc())
+    except RuntimeError as exc:  # SuperLU: exactly singular
+        raise ReferenceSolveError(
+            f"load case {name!r}: the mesh's stiffness is singular ({exc})") from None
+    Gt = G.T.tocsc()
+    influence = np.empty(Gt.shape)
+    for start in range(0, Gt.shape[1], _COLUMN_BLOCK):
+        influence[:, start:start + _COLUMN_BLOCK] = lu.solve(
+            Gt[:, start:start + _COLUMN_BLOCK].toarray())
+    W = np.asarray(G @ influence)
+    free = lu.solve(f)
+    z, converged, _, _ = solve_nonnegative_qp(0.5 * (W + W.T), G @ free - h,
+                                              x0=active.astype(float))
+    if not converged:
+        raise ReferenceSolveError(
+            f"load case {name!r}: the reference's active-set polish did not converge")
+    return free - influence @ z, z
 
 
 def deviations(values, reference, floor: float) -> tuple[np.ndarray, np.ndarray]:
