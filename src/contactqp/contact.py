@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse
 
 from .errors import InvalidInputError
-from .model import ReducedModel
+from .model import MAX_MAGNITUDE, ReducedModel, real_array
 
 __all__ = [
     "Constraints",
@@ -62,7 +62,7 @@ class Constraints:
 
 
 def _unit_directions(directions, count: int, name: str) -> np.ndarray:
-    dirs = np.asarray(directions, dtype=float)
+    dirs = real_array(directions, name)
     if dirs.ndim == 1:
         dirs = np.tile(dirs, (count, 1))
     if dirs.ndim != 2 or dirs.shape[0] != count or dirs.shape[1] not in (1, 2, 3):
@@ -137,7 +137,7 @@ class GapObstacle:
     def rows(self, model: ReducedModel):
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
         nodes = _node_indices(model, self.nodes, "GapObstacle.nodes")
-        gaps = np.asarray(self.gaps, dtype=float).reshape(-1)
+        gaps = real_array(self.gaps, "GapObstacle.gaps").reshape(-1)
         if gaps.shape != nodes.shape:
             raise InvalidInputError(
                 f"GapObstacle.gaps has {gaps.size} values for {nodes.size} nodes"
@@ -171,7 +171,7 @@ class PlaneObstacle:
         coords = _coordinates(model, "PlaneObstacle")
         nodes = _node_indices(model, self.nodes, "PlaneObstacle.nodes")
         normal = _unit_directions(self.normal, 1, "PlaneObstacle.normal")[0]
-        point = np.asarray(self.point, dtype=float).reshape(-1)
+        point = real_array(self.point, "PlaneObstacle.point").reshape(-1)
         if point.shape != normal.shape or coords.shape[1] != len(normal):
             raise InvalidInputError(
                 f"PlaneObstacle: point {point.shape}, normal {normal.shape} and coordinates "
@@ -210,7 +210,7 @@ class ProfileObstacle:
             raise InvalidInputError(
                 f"ProfileObstacle.direction has {len(direction)} components, coordinates {coords.shape[1]}"
             )
-        surface = np.asarray(self.profile(coords[nodes]), dtype=float).reshape(-1)
+        surface = real_array(self.profile(coords[nodes]), "ProfileObstacle.profile").reshape(-1)
         if surface.shape != nodes.shape or not np.all(np.isfinite(surface)):
             raise InvalidInputError(
                 f"ProfileObstacle.profile must return {nodes.size} finite values, got shape {surface.shape}"
@@ -248,7 +248,7 @@ class NodePairs:
         second = _node_indices(model, pairs[:, 1], "NodePairs.pairs")
         if np.any(first == second):
             raise InvalidInputError("NodePairs.pairs pairs a node with itself")
-        gaps = np.asarray(self.gaps, dtype=float).reshape(-1)
+        gaps = real_array(self.gaps, "NodePairs.gaps").reshape(-1)
         if gaps.shape != first.shape or not np.all(np.isfinite(gaps)):
             raise InvalidInputError(
                 f"NodePairs.gaps must hold {first.size} finite values, got shape {gaps.shape}"
@@ -268,25 +268,80 @@ def assemble_constraints(model: ReducedModel, obstacles) -> Constraints:
     Parameters
     ----------
     model : ReducedModel
-    obstacles : sequence of GapObstacle, PlaneObstacle, ProfileObstacle or NodePairs
+    obstacles : GapObstacle, PlaneObstacle, ProfileObstacle or NodePairs, or a sequence of them
 
     Returns
     -------
     Constraints
+
+    Raises
+    ------
+    InvalidInputError
+        Something that is not an obstacle, no constraint at all, a gap beyond
+        :data:`~contactqp.model.MAX_MAGNITUDE`, or a duplicate: one node (or pair) constrained
+        twice along the same direction, which makes the Delassus operator singular. A node may
+        meet several obstacles along different directions (a corner, or a slot between two
+        walls with opposite normals).
     """
-    rows = [row for obstacle in obstacles for row in obstacle.rows(model)]
+    rows = [row for obstacle in _obstacle_list(obstacles) for row in obstacle.rows(model)]
     if not rows:
         raise InvalidInputError("obstacles define no constraint: give at least one node")
+    gaps = np.array([r[3] for r in rows])
+    if np.max(np.abs(gaps)) > MAX_MAGNITUDE:
+        worst = int(np.argmax(np.abs(gaps)))
+        raise InvalidInputError(f"the gap of {rows[worst][4]} is {gaps[worst]:.3g} m, beyond "
+                                f"{MAX_MAGNITUDE:g}: rescale the units")
+    _refuse_duplicates(rows)
     indptr = np.cumsum([0] + [len(r[1]) for r in rows])
     indices = np.concatenate([r[1] for r in rows])
     data = np.concatenate([r[2] for r in rows])
     matrix = scipy.sparse.csr_matrix((data, indices, indptr), shape=(len(rows), model.n_freedoms))
     return Constraints(
         matrix=matrix,
-        gaps=np.array([r[3] for r in rows]),
+        gaps=gaps,
         nodes=np.array([r[0] for r in rows], dtype=int),
         labels=[r[4] for r in rows],
     )
+
+
+def _obstacle_list(obstacles) -> list:
+    """``obstacles`` as a list of objects with ``rows``: one obstacle alone is accepted."""
+    if hasattr(obstacles, "rows"):
+        return [obstacles]
+    try:
+        listed = list(obstacles)
+    except TypeError:
+        raise InvalidInputError(
+            f"obstacles must be an obstacle or a sequence of obstacles, got "
+            f"{type(obstacles).__name__}") from None
+    for position, obstacle in enumerate(listed):
+        if not hasattr(obstacle, "rows"):
+            raise InvalidInputError(
+                f"obstacles[{position}] is a {type(obstacle).__name__}, not an obstacle "
+                f"(GapObstacle, PlaneObstacle, ProfileObstacle or NodePairs)")
+    return listed
+
+
+#: Rows whose unit coefficient vectors on the same freedoms agree to this many decimals are one
+#: constraint given twice.
+_DUPLICATE_DECIMALS = 9
+
+
+def _refuse_duplicates(rows) -> None:
+    """Raise if two rows constrain the same freedoms along the same direction."""
+    seen = {}
+    for position, (_, dofs, coefficients, _, label) in enumerate(rows):
+        order = np.argsort(dofs)
+        unit = np.asarray(coefficients, dtype=float)[order] / np.linalg.norm(coefficients)
+        key = (tuple(np.asarray(dofs)[order].tolist()),
+               tuple(np.round(unit, _DUPLICATE_DECIMALS).tolist()))
+        if key in seen:
+            first = seen[key]
+            raise InvalidInputError(
+                f"{label} is constrained twice along the same direction (constraints {first} "
+                f"and {position}, '{rows[first][4]}' and '{label}'): the contact operator would "
+                f"be singular; give each node and direction once (keep the smaller gap)")
+        seen[key] = position
 
 
 def tangent_basis(normals) -> np.ndarray:

@@ -7,6 +7,8 @@ in the zone where contact may occur: ``U = R P`` with ``R`` the flexibility (com
 
 from __future__ import annotations
 
+import math
+import numbers
 import warnings
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -17,23 +19,71 @@ import scipy.linalg
 from .errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
 
 __all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix",
-           "checked_cholesky", "finite_array"]
+           "checked_cholesky", "finite_array", "real_array", "positive_tolerance", "iteration_cap",
+           "MAX_MAGNITUDE"]
 
 #: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised silently-with-warning.
 SYMMETRY_RTOL = 1e-6
 
 
-def finite_array(value, name: str, ndim: int) -> np.ndarray:
-    """``value`` as a float array of ``ndim`` dimensions, all finite; errors name ``name``."""
+#: Largest magnitude accepted in a matrix, a load or a gap (and the inverse of the smallest
+#: accepted matrix scale): products of several such numbers (an energy is a compliance times two
+#: forces), even through an ill-conditioned inverse, stay far from overflow (1.8e308), and no
+#: physical quantity in any unit system comes near it.
+MAX_MAGNITUDE = 1e50
+
+
+def real_array(value, name: str) -> np.ndarray:
+    """``value`` as a float array; complex values and non-numbers are refused, naming ``name``."""
+    if _is_complex(value):
+        raise InvalidInputError(f"{name} must be real, got complex values")
     try:
-        array = np.asarray(value, dtype=float)
+        return np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} must be a real {ndim}-D array: {exc}") from None
+        raise InvalidInputError(f"{name} must be an array of real numbers: {exc}") from None
+
+
+def finite_array(value, name: str, ndim: int, *, magnitude: float | None = None) -> np.ndarray:
+    """``value`` as a float array of ``ndim`` dimensions, real and finite; errors name ``name``.
+
+    ``magnitude``: also refuse entries larger in absolute value (see :data:`MAX_MAGNITUDE`).
+    """
+    array = real_array(value, name)
     if array.ndim != ndim:
         raise InvalidInputError(f"{name} must be {ndim}-D, got shape {array.shape}")
     if not np.all(np.isfinite(array)):
         raise InvalidInputError(f"{name} contains NaN or inf (shape {array.shape})")
+    if magnitude is not None and array.size and np.max(np.abs(array)) > magnitude:
+        raise InvalidInputError(
+            f"{name} has an entry of magnitude {np.max(np.abs(array)):.3g}, beyond {magnitude:g}: "
+            f"its products with forces and displacements would overflow; rescale the units")
     return array
+
+
+def _is_complex(value) -> bool:
+    """True when ``value`` holds complex numbers (which a cast to float would truncate)."""
+    if isinstance(value, np.ndarray) or hasattr(value, "dtype"):
+        return bool(np.iscomplexobj(value))
+    try:
+        return bool(np.iscomplexobj(np.asarray(value)))
+    except (TypeError, ValueError):  # ragged or not numbers: the float cast reports it
+        return False
+
+
+def positive_tolerance(value, name: str = "tol", *, below_one: bool = False) -> float:
+    """``value`` as a float, refused unless a finite number > 0 (and < 1 with ``below_one``)."""
+    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+            or not math.isfinite(value) or value <= 0 or (below_one and value >= 1)):
+        raise InvalidInputError(f"{name} must be a positive finite number"
+                                f"{' below 1' if below_one else ''}, got {value!r}")
+    return float(value)
+
+
+def iteration_cap(value, name: str = "max_iter") -> int:
+    """``value`` as an int, refused unless an integer >= 1."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise InvalidInputError(f"{name} must be an integer >= 1, got {value!r}")
+    return int(value)
 
 
 def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
@@ -59,7 +109,8 @@ def checked_cholesky(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL):
     Raises
     ------
     InvalidInputError
-        Wrong shape, NaN or inf, asymmetry beyond ``symmetry_rtol``, or a singular matrix.
+        Wrong shape, complex values, NaN or inf, entries beyond :data:`MAX_MAGNITUDE` (or all
+        below its inverse), asymmetry beyond ``symmetry_rtol``, or a singular matrix.
     NotPositiveDefiniteError
         The Cholesky factorisation fails; the message gives the failed pivot and the smallest
         eigenvalue.
@@ -70,13 +121,17 @@ def checked_cholesky(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL):
     factor : ndarray, shape (n, n)
         Lower triangular ``L`` with ``L L^T = array``.
     """
-    array = finite_array(matrix, name, 2)
+    array = finite_array(matrix, name, 2, magnitude=MAX_MAGNITUDE)
     n, m = array.shape
     if n != m or n == 0:
         raise InvalidInputError(f"{name} must be a non-empty square matrix, got shape {array.shape}")
     scale = np.max(np.abs(array))
     if scale == 0.0:
         raise InvalidInputError(f"{name} is singular: all its entries are zero (shape {array.shape})")
+    if scale < 1.0 / MAX_MAGNITUDE:
+        raise InvalidInputError(
+            f"{name}'s largest entry is {scale:.3g}, below {1.0 / MAX_MAGNITUDE:g}: its products "
+            f"with forces and displacements would underflow; rescale the units")
     asymmetry = np.max(np.abs(array - array.T)) / scale
     if asymmetry > symmetry_rtol:
         raise InvalidInputError(

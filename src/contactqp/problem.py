@@ -41,7 +41,8 @@ from .contact import Constraints, LocalFrames, assemble_constraints, local_frame
 from .errors import ContactWarning, InvalidInputError
 from .friction import FrictionLaw
 from .local import LocalProblem
-from .model import ReducedModel, finite_array
+from .model import (MAX_MAGNITUDE, ReducedModel, finite_array, iteration_cap, positive_tolerance,
+                    real_array)
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
                      contact_scales)
 
@@ -69,19 +70,13 @@ def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.nda
     """Validate the model, the loads ``(n_freedoms,)`` and the tolerance; return the loads."""
     if not isinstance(model, ReducedModel):
         raise InvalidInputError(f"model must be a ReducedModel, got {type(model).__name__}")
-    try:
-        P = np.asarray(loads, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"loads must be an array of real numbers: {exc}") from None
+    P = finite_array(real_array(loads, "loads").reshape(-1), "loads", 1, magnitude=MAX_MAGNITUDE)
     if P.shape != (model.n_freedoms,):
         raise InvalidInputError(
             f"loads must have shape ({model.n_freedoms},) to match the model, got "
             f"{np.shape(loads)}"
         )
-    if not np.all(np.isfinite(P)):
-        raise InvalidInputError("loads contains NaN or inf")
-    if not certificate_tol > 0:
-        raise InvalidInputError(f"certificate_tol must be > 0, got {certificate_tol}")
+    positive_tolerance(certificate_tol, "certificate_tol")
     return P
 
 
@@ -163,7 +158,7 @@ class ContactProblem:
             twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
             dual.free_displacements = self.model.displacements(twin.loads)
         if gaps is not None:
-            values = finite_array(gaps, "gaps", 1)
+            values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
             if values.shape != (self.n_constraints,):
                 raise InvalidInputError(f"gaps must have shape ({self.n_constraints},), got "
                                         f"{values.shape}")
@@ -184,7 +179,17 @@ class ContactProblem:
 
     def make_result(self, displacements, forces, *, solver: str, converged: bool, message: str,
                     nit: int, wall_time: float, info: dict | None = None) -> ContactResult:
-        """Wrap a solver's answer in a :class:`ContactResult` with its certificate."""
+        """Wrap a solver's answer in a :class:`ContactResult` with its certificate.
+
+        An answer holding NaN or inf (an overflow, or a backend that found nothing) fails the
+        certificate (status 2) and the message says so; numpy's warnings are kept inside.
+        """
+        with np.errstate(all="ignore"):
+            return self._result(displacements, forces, solver=solver, converged=converged,
+                                message=message, nit=nit, wall_time=wall_time, info=info)
+
+    def _result(self, displacements, forces, *, solver, converged, message, nit, wall_time,
+                info) -> ContactResult:
         U = np.asarray(displacements, dtype=float)
         lam = np.asarray(forces, dtype=float)
         certificate = certify(self, U, lam, self.certificate_tol)
@@ -399,9 +404,18 @@ class FrictionalProblem:
                     step: "FrictionStep | None" = None) -> FrictionalResult:
         """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`.
 
-        ``step`` is :meth:`step` of ``previous`` when the caller has it already.
+        ``step`` is :meth:`step` of ``previous`` when the caller has it already. Forces holding
+        NaN or inf (an overflow, or a failed solve) fail the certificate (status 2) and the
+        message says so; numpy's warnings are kept inside.
         """
-        r = finite_array(np.ravel(forces), "forces", 1)
+        with np.errstate(all="ignore"):
+            return self._result(forces, previous, solver=solver, converged=converged,
+                                message=message, nit=nit, wall_time=wall_time, info=info,
+                                step=step)
+
+    def _result(self, forces, previous, *, solver, converged, message, nit, wall_time, info,
+                step) -> FrictionalResult:
+        r = real_array(forces, "forces").reshape(-1)
         if r.shape != (self.n_contacts * self.dim,):
             raise InvalidInputError(
                 f"forces must hold {self.dim} local components per contact "
@@ -424,7 +438,7 @@ class FrictionalProblem:
             note = (f"{pulling.size} cohesive contact(s) pulled open (first: contact "
                     f"{pulling[0]}) still pull with their tensile strength c/mu: the model has no "
                     f"tension cut-off, results past the opening are not physical")
-            warnings.warn(note, ContactWarning, stacklevel=3)
+            warnings.warn(note, ContactWarning, stacklevel=4)
             message = f"{message}; {note}"
         nodal = local.operator.T @ r
         return FrictionalResult(
@@ -460,6 +474,9 @@ class FrictionalProblem:
             Passed to the solver.
         """
         name, method = friction_route(self.law, solver)
+        positive_tolerance(tol, "tol", below_one=name != "coulomb")
+        if "max_iter" in options:
+            iteration_cap(options["max_iter"])
         start = time.perf_counter()
         step = self.step(previous)
         problem, shift, unit = step.fclib, step.apex_shift, step.force_unit
@@ -469,7 +486,8 @@ class FrictionalProblem:
             options = {"facets": self.law.facets, **options}
         elif name == "coulomb":  # W = H R H^T is semidefinite: R was validated
             options = {"check_psd": False, **options}
-        solution = method(problem, tol=tol, r0=r0, **options)
+        with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite r
+            solution = method(problem, tol=tol, r0=r0, **options)
         return self.make_result(unit * solution.r - shift, previous, solver=name,
                                 converged=solution.converged, message=solution.message,
                                 nit=solution.iterations, wall_time=time.perf_counter() - start,
@@ -482,6 +500,9 @@ class FrictionalProblem:
 
 def _verdict(converged: bool, certificate, message: str) -> tuple[int, bool, str]:
     """``(status, success, message)``: 0 solved, 1 not converged, 2 certificate failed."""
+    if not certificate.finite:
+        return 2, False, (f"{message}; certificate failed: the answer holds NaN or inf "
+                          f"(overflow or a failed solve)")
     if not converged:
         return 1, False, message
     if not certificate.passed:

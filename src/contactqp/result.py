@@ -53,13 +53,18 @@ class Certificate:
 
     @property
     def worst(self) -> float:
-        """The largest of the four residuals."""
+        """The largest of the four residuals (inf when the answer holds NaN or inf)."""
         return max(self.penetration, self.force_sign, self.complementarity, self.equilibrium)
 
     @property
     def passed(self) -> bool:
         """True when every residual is within ``tol``."""
         return bool(self.worst <= self.tol)
+
+    @property
+    def finite(self) -> bool:
+        """False when the answer or a residual overflowed, or holds NaN."""
+        return bool(np.isfinite(self.worst))
 
     def as_dict(self) -> dict:
         """Plain dictionary (for JSON)."""
@@ -79,9 +84,17 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     forces : ndarray, shape (n_constraints,)
         Contact force magnitudes ``lambda`` in newtons (the force on the body is ``-A^T lambda``).
     tol : float
+
+    Every residual is inf when ``U`` or ``lambda`` holds NaN or inf, or a residual overflows.
     """
-    U = np.asarray(displacements, dtype=float)
-    lam = np.asarray(forces, dtype=float)
+    with np.errstate(all="ignore"):  # an overflow shows as an infinite residual
+        return _certify(problem, np.asarray(displacements, dtype=float),
+                        np.asarray(forces, dtype=float), tol)
+
+
+def _certify(problem, U, lam, tol) -> Certificate:
+    if not (np.all(np.isfinite(U)) and np.all(np.isfinite(lam))):
+        return Certificate(np.inf, np.inf, np.inf, np.inf, tol)
     A, gaps, P = problem.constraints.matrix, problem.constraints.gaps, problem.loads
     force, length = scales(problem.model, P, U, lam, gaps)
     AU = A @ U
@@ -95,7 +108,7 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     contact_length = _floored(np.maximum.reduce([np.abs(AU), np.abs(gaps), np.abs(A @ free)]))
     return Certificate(
         penetration=_worst(-final_gaps / contact_length),
-        force_sign=float(max(0.0, -np.min(lam, initial=0.0)) / force),
+        force_sign=_worst(-lam / force),
         complementarity=_worst(np.abs(lam * final_gaps) / (force * contact_length)),
         equilibrium=_equilibrium(problem.model, U, P - A.T @ lam, force, length),
         tol=tol,
@@ -171,9 +184,9 @@ def _floored(scale):
 def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
     """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model)."""
     if model.given == "flexibility":
-        return float(np.max(np.abs(displacements - model.flexibility @ net_load), initial=0.0)
-                     / length)
-    return float(np.max(np.abs(model.stiffness @ displacements - net_load), initial=0.0) / force)
+        residual = displacements - model.flexibility @ net_load
+        return _worst(np.abs(residual) / length)
+    return _worst(np.abs(model.stiffness @ displacements - net_load) / force)
 
 
 @dataclass
@@ -300,8 +313,13 @@ class FrictionCertificate:
     tol: float = CERTIFICATE_TOL
 
     @property
+    def finite(self) -> bool:
+        """False when the answer or a residual overflowed, or holds NaN."""
+        return bool(np.isfinite(self.worst))
+
+    @property
     def worst(self) -> float:
-        """The largest checked residual."""
+        """The largest checked residual (inf when the answer holds NaN or inf)."""
         checked = [self.penetration, self.force_sign, self.cone, self.complementarity,
                    self.dissipation, self.equilibrium]
         return max(checked + [self.natural_map] * self.exact_cone)
@@ -335,9 +353,18 @@ def certify_friction(problem, displacements, forces, step,
         The step (:meth:`~contactqp.FrictionalProblem.step`); its tangential displacements are
         the origin of the slip increments.
     tol : float
+
+    Every residual is inf when ``U`` or ``r`` holds NaN or inf, or a residual overflows.
     """
-    U = np.asarray(displacements, dtype=float)
-    r = np.asarray(forces, dtype=float)
+    with np.errstate(all="ignore"):  # an overflow shows as an infinite residual
+        return _certify_friction(problem, np.asarray(displacements, dtype=float),
+                                 np.asarray(forces, dtype=float), step, tol)
+
+
+def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
+    if not (np.all(np.isfinite(U)) and np.all(np.isfinite(r))):
+        return FrictionCertificate(*[np.inf] * 7, exact_cone=problem.law.facets is None
+                                   or problem.dim == 2, tol=tol)
     k, d = problem.n_contacts, problem.dim
     R = r.reshape(k, d)
     H, gaps, P, law = problem.frames.operator, problem.constraints.gaps, problem.loads, problem.law
@@ -356,16 +383,25 @@ def certify_friction(problem, displacements, forces, step,
                                / (force * length)),
         dissipation=_worst(np.abs(law.dissipation_gap(R, slip)) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
-        natural_map=natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit,
-                                      per_contact=True),
+        natural_map=_finite_or_inf(natural_map_error(
+            step.fclib, (r + step.apex_shift) / step.force_unit, per_contact=True)),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )
 
 
 def _worst(relative) -> float:
-    """The largest of per-contact relative residuals, 0 when none is positive."""
+    """The largest of per-contact relative residuals, 0 when none is positive, inf when one is
+    NaN or inf."""
+    relative = np.asarray(relative, dtype=float)
+    if not np.all(np.isfinite(relative)):
+        return np.inf
     return float(max(0.0, np.max(relative, initial=0.0)))
+
+
+def _finite_or_inf(value: float) -> float:
+    """``value``, or inf when it is NaN or inf."""
+    return float(value) if np.isfinite(value) else np.inf
 
 
 @dataclass

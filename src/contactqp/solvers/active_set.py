@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..model import iteration_cap, positive_tolerance
 from .box_qp import solve_box_qp
 
 __all__ = ["solve_active_set", "cold_start"]
@@ -37,11 +38,20 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     tol : float
         Relative natural-residual tolerance of :func:`~contactqp.solvers.box_qp.solve_box_qp`.
     max_iter : int
+        Largest number of iterations (both phases of the box-QP solver together).
 
     Returns
     -------
     ContactResult
+
+    Raises
+    ------
+    InvalidInputError
+        ``tol`` not a finite number > 0, ``max_iter`` not an integer >= 1, or ``forces0`` of the
+        wrong shape.
     """
+    positive_tolerance(tol)
+    iteration_cap(max_iter)
     if forces0 is not None and np.shape(forces0) != (problem.n_constraints,):
         raise InvalidInputError(
             f"forces0 must have shape ({problem.n_constraints},), got {np.shape(forces0)}"
@@ -50,8 +60,9 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     dual = problem.dual()
     if forces0 is None:
         forces0 = cold_start(dual.W, dual.b)
-    solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol, max_iter=max_iter,
-                            check_finite=False)  # W comes from the validated model
+    with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite x
+        solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol,
+                                max_iter=max_iter, check_finite=False)  # W: validated model
     forces = solution.x
     displacements = dual.displacements(forces)
     elapsed = time.perf_counter() - start

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..model import iteration_cap, positive_tolerance
 from .free_block import FreeBlockSolver
 
 __all__ = ["BoxQPSolution", "solve_box_qp"]
@@ -231,7 +232,7 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
         Stop when the natural residual ``max|x - P(x - sigma (W x + c))|`` is below ``tol`` times
         the scale of the solution (``sigma`` is the inverse mean diagonal of ``W``).
     max_iter : int
-        Newton iterations allowed in each phase.
+        Newton iterations allowed in both phases together.
     check_finite : bool
         Check ``W`` for NaN and inf (a full pass over it); callers whose ``W`` is built from a
         validated model may skip it.
@@ -241,12 +242,13 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
     BoxQPSolution
         ``converged`` is False, with the reason in ``message``, when neither phase reached ``tol``.
     """
+    tol, max_iter = positive_tolerance(tol), iteration_cap(max_iter)
     W, c, lower, upper, x0 = _validated(W, c, lower, upper, x0, check_finite)
     qp = _BoxQP(W, c, lower, upper, tol)
     start = np.zeros(c.size) if x0 is None else x0
     x, g, iterations, converged, message = _active_set_phase(qp, start, max_iter)
-    if not converged:
-        x, g, more, converged, message = _projected_newton_phase(qp, x, max_iter)
+    if not converged and iterations < max_iter:
+        x, g, more, converged, message = _projected_newton_phase(qp, x, max_iter - iterations)
         iterations += more
         message = f"active set did not settle; {message}"
     state = np.where(x <= lower, AT_LOWER, np.where(x >= upper, AT_UPPER, FREE)).astype(np.int8)

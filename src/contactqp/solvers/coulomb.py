@@ -49,7 +49,6 @@ with Coulomb friction: formulations and numerical comparisons", INRIA RR-9118 (2
 from __future__ import annotations
 
 import math
-import numbers
 import time
 import warnings
 
@@ -61,7 +60,7 @@ from .. import kernels
 from ..errors import InvalidInputError
 from ..local import (LocalProblem, better_dense, check_positive_semidefinite,
                      natural_map_residual)
-from ..model import finite_array
+from ..model import finite_array, iteration_cap, positive_tolerance
 from .local import finish
 from .pgs import GaussSeidel
 
@@ -75,6 +74,9 @@ MAX_HALVINGS = 30  # line search gives up below a step of 2**-30
 STALL = 20  # a Newton run stops when its best error has not halved in this many iterations
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
+RUN_ITERATIONS = 100  # largest number of iterations of one Newton (or LM) run
+#: Default total budget: what all the stages can spend (3 rounds of two runs, 2 x 100 sweeps).
+MAX_ITER = 2 * ROUNDS * RUN_ITERATIONS + (ROUNDS - 1) * PGS_SWEEPS
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this share of its column's max
 _NO_JACOBIAN = np.empty((0, 3, 3))  # tells kernels.alart_curnier_rows to skip the Jacobian
 
@@ -300,12 +302,8 @@ class _Newton:
 def _check_options(problem, r0, tol, max_iter):
     if not isinstance(problem, LocalProblem):
         raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if not (isinstance(tol, numbers.Real) and not isinstance(tol, bool) and math.isfinite(tol)
-            and tol > 0):
-        raise InvalidInputError(f"tol must be a positive number, got {tol!r}")
-    if (isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral)
-            or max_iter < 1):
-        raise InvalidInputError(f"max_iter must be a positive int, got {max_iter!r}")
+    positive_tolerance(tol)
+    iteration_cap(max_iter)
     m = problem.q.shape[0]
     if r0 is None:
         return np.zeros(m)
@@ -315,7 +313,7 @@ def _check_options(problem, r0, tol, max_iter):
     return r
 
 
-def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = 100, *,
+def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = MAX_ITER, *,
                   check_psd: bool = True, per_contact: bool = False):
     """Solve a local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
 
@@ -333,8 +331,11 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
         velocities, so give a problem whose ``W`` is O(1), e.g.
         :attr:`~contactqp.problem.FrictionStep.fclib`, not one in newtons and metres).
     max_iter : int
-        Newton iterations per run. A round is a Newton run then a Levenberg-Marquardt run; at
-        most 3 rounds, the later two each after up to 100 Gauss-Seidel sweeps.
+        Total budget of Newton iterations and Gauss-Seidel sweeps over all stages (the
+        reported ``iterations`` never exceed it). A round is a Newton run then a
+        Levenberg-Marquardt run, each of at most 100 iterations; at most 3 rounds, the later
+        two each after up to 100 Gauss-Seidel sweeps. The default, 800, is what every stage
+        can spend.
     check_psd : bool
         Check that ``W`` is positive semidefinite (one factorisation). Callers whose ``W`` is
         ``H R H^T`` of a validated model may skip it.
@@ -380,19 +381,26 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     for round_ in range(ROUNDS):
         if round_:
             gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
-            for sweep in range(1, PGS_SWEEPS + 1):
+            sweeps = min(PGS_SWEEPS, max_iter - iterations)
+            for sweep in range(1, sweeps + 1):
                 r = gauss_seidel.sweep(r)
                 if sweep % 10 == 0 and measure(r, W @ r + q)[1] <= tol:
                     break
             iterations += sweep
             stages.append(f"gauss-seidel {sweep} sweeps")
         for adaptive in (False, True):
-            r, error, k, reason = newton.run(r, tol, max_iter, adaptive)
+            if iterations >= max_iter:
+                break
+            budget = min(RUN_ITERATIONS, max_iter - iterations)
+            r, error, k, reason = newton.run(r, tol, budget, adaptive)
             iterations += k
             stages.append(f"{'levenberg-marquardt' if adaptive else 'newton'} {k} it. ({reason})")
             if error <= tol:
                 break
         if error <= tol:
+            break
+        if iterations >= max_iter:
+            stages.append(f"max_iter = {max_iter} reached")
             break
     return finish(problem, r - shift, tol, iterations, start, ", ".join(stages),
                   per_contact=per_contact)

@@ -34,7 +34,6 @@ References
 
 from __future__ import annotations
 
-import numbers
 import time
 import warnings
 
@@ -44,6 +43,7 @@ from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
 from ..errors import InvalidInputError, MissingDependencyError
 from ..local import LocalProblem, contact_status, natural_map_error
+from ..model import iteration_cap, positive_tolerance
 from .local import LocalSolution
 
 __all__ = ["solve_tresca_fixed_point"]
@@ -60,10 +60,8 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     """Validate the arguments common to the fixed-point routes; return ``r0`` (array or None)."""
     if not isinstance(problem, LocalProblem):
         raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not 0.0 < tol < 1.0:
-        raise InvalidInputError(f"tol must be a number in (0, 1), got {tol!r}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 1:
-        raise InvalidInputError(f"max_iter must be a positive integer, got {max_iter!r}")
+    positive_tolerance(tol, below_one=True)
+    iteration_cap(max_iter)
     if r0 is None:
         return None
     m = problem.dim * problem.n_contacts
@@ -128,6 +126,8 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
         ``data.W_sym``, right-hand side ``q`` (shape (m,)) and friction bounds ``s`` (shape (nc,)).
     tol : float
     max_iter : int
+        Largest number of sub-problems solved (the first one solved again on the reactions' own
+        scale counts too); the reported ``iterations``.
     r0 : ndarray or None
         Starting reactions; None starts from the frictionless bounds ``s = 0``.
     exact : bool
@@ -152,13 +152,15 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
     best = (np.inf, r)
     message, converged, stalled = "", False, 0
     reference = np.inf  # the error at the last halving
-    iteration = 0
-    for iteration in range(1, max_iter + 1):
+    solved = 0  # sub-problems solved: at most max_iter
+    while solved < max_iter:
         s = problem.mu * np.maximum(r[::d], 0.0)
         q = data.q if data.skew is None else data.q + np.asarray(data.skew @ r).ravel()
         previous, r = r, tresca(q, s)
-        if iteration == 1 and _rescale(data, r):
+        solved += 1
+        if solved == 1 and solved < max_iter and _rescale(data, r):
             r = tresca(q, s)  # the first sub-problem again, on the reactions' own scale
+            solved += 1
         error = natural_map_error(problem, r - data.shift, per_contact=per_contact)
         if exact:
             # stalled: no halving of the error since `reference` for _PATIENCE iterations (a
@@ -188,7 +190,7 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
     error, r = best
     r = r - data.shift
     u = np.asarray(problem.W @ r).ravel() + problem.q
-    return LocalSolution(r=r, u=u, error=float(error), converged=converged, iterations=iteration,
+    return LocalSolution(r=r, u=u, error=float(error), converged=converged, iterations=solved,
                          seconds=time.perf_counter() - start_time, message=message,
                          status=contact_status(problem, r, u))
 
