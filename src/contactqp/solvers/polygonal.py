@@ -36,6 +36,7 @@ import warnings
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.linalg import splu
 
 from ..errors import InvalidInputError
 from ..local import LocalProblem
@@ -114,11 +115,53 @@ class _PolygonalTresca:
             raise InvalidInputError(
                 f"backend {self.backend!r} found no solution of the polygonal Tresca problem "
                 f"(is W positive semidefinite?)")
+        x = np.asarray(x)
+        if d == 3 and G is not None:
+            x = _polish_active_set(P, q[keep] / (f * self.w), G, h, normal, x)
         r = np.zeros(d * nc)
-        r[keep] = np.asarray(x)
+        r[keep] = x
         if d == 2:  # the segment is the Coulomb disc of 2-D: polish as the Tresca route does
             r = polish(self.W, q / (f * self.w), s / f, r, d)
         return f * r
+
+
+#: A constraint whose slack is below this fraction of the solution's scale is taken as active.
+_ACTIVE_RTOL = 1e-7
+
+
+def _polish_active_set(P, c, G, h, normal, x):
+    """``x`` refined by one exact KKT solve on the interior-point answer's active set.
+
+    The polygonal Tresca problem ``min 1/2 x^T P x + c^T x, G x <= h, x_normal >= 0`` has linear
+    constraints: with the binding facets and normal bounds known, its solution is that of a
+    linear system. The interior-point answer is accurate to about 1e-9 relative, which left the
+    outer fixed point cycling at that level (relative change 2e-10 against a tol of 1e-10 on a
+    3-D hex block, 50 iterations without converging); the solve brings each answer to rounding.
+    The refined point is kept only if it is feasible and its multipliers are >= 0 (the active
+    set was right); otherwise ``x`` is returned.
+    """
+    G = sp.csr_matrix(G)
+    scale = max(float(np.max(np.abs(x), initial=0.0)), float(np.max(np.abs(h), initial=0.0)),
+                np.finfo(float).tiny)
+    facets = np.flatnonzero(h - G @ x <= _ACTIVE_RTOL * scale)
+    bounds = normal[x[normal] <= _ACTIVE_RTOL * scale]
+    n = x.size
+    C = sp.vstack([G[facets], sp.csr_matrix((-np.ones(bounds.size), (np.arange(bounds.size),
+                                                                      bounds)),
+                                            shape=(bounds.size, n))]).tocsc()
+    kkt = sp.bmat([[sp.csc_matrix(P), C.T], [C, None]], format="csc")
+    rhs = np.concatenate([-c, h[facets], np.zeros(bounds.size)])
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a singular system shows as a non-finite answer
+            solution = splu(kkt).solve(rhs)
+    except RuntimeError:  # exactly singular (degenerate active set)
+        return x
+    refined, multipliers = solution[:n], solution[n:]
+    tiny = _ACTIVE_RTOL * scale
+    feasible = (np.all(np.isfinite(solution)) and np.all(G @ refined <= h + tiny)
+                and np.all(refined[normal] >= -tiny) and np.all(multipliers >= -tiny))
+    return refined if feasible else x
 
 
 def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",
