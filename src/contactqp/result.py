@@ -169,11 +169,15 @@ def _floored(scale):
 
 
 def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
-    """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model)."""
+    """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model).
+
+    ``R`` (``K``) is the matrix as the user gave it (:attr:`~contactqp.ReducedModel.as_given`),
+    not its symmetric part, which the solvers use.
+    """
     if model.given == "flexibility":
-        return float(np.max(np.abs(displacements - model.flexibility @ net_load), initial=0.0)
+        return float(np.max(np.abs(displacements - model.as_given @ net_load), initial=0.0)
                      / length)
-    return float(np.max(np.abs(model.stiffness @ displacements - net_load), initial=0.0) / force)
+    return float(np.max(np.abs(model.as_given @ displacements - net_load), initial=0.0) / force)
 
 
 @dataclass

@@ -21,8 +21,9 @@ A matrix block is ``storage rows cols`` followed by
 
 Precision: the problem is the one written, digit for digit. Each array's significant digits
 (those of its longest non-integer value; a value without a decimal point or exponent is exact) are
-recorded in the problem's ``digits`` when fewer than 16 (e.g. ``{"W": 6}`` for a ``cs_print``
-dump, 7 for ``%e``), so that a solution can say how far the rounding of the data limits its
+recorded in the problem's ``digits`` when from 4 to 15 (e.g. ``{"W": 6}`` for a ``cs_print``
+dump, 7 for ``%e``; an array whose values all have at most 3 digits, such as ``0.5 1.25``, is
+taken as written by hand, exactly), so that a solution can say how far the rounding of the data limits its
 meaning for the problem the file was written from (:func:`contactqp.local.accuracy_limits`).
 
 Local or global is decided by content, not by the file name: the tokens are first read as a
@@ -58,8 +59,9 @@ _CS_ENTRY = re.compile(r"^\s*(\d+)\s*:\s*(\S+)\s*$")
 _CS_TRIPLET_ENTRY = re.compile(r"^\s*(\d+)\s+(\d+)\s*:\s*(\S+)\s*$")
 
 
-#: Arrays written with at least this many significant digits are exact doubles.
-FULL_DIGITS = 16
+#: Arrays written with at least this many significant digits are exact doubles; with fewer than
+#: SHORT_DIGITS everywhere, exact hand-written values.
+FULL_DIGITS, SHORT_DIGITS = 16, 4
 
 
 def _significant_digits(tokens) -> int:
@@ -322,7 +324,7 @@ def _read(tk, digits, name, read):
     """``read()``'s array, recording in ``digits[name]`` its significant digits if limited."""
     tk.digits = 0
     value = read()
-    if 0 < tk.digits < FULL_DIGITS:
+    if SHORT_DIGITS <= tk.digits < FULL_DIGITS:
         digits[name] = tk.digits
     return value
 
