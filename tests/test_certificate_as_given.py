@@ -45,7 +45,7 @@ def written_local(g):
 
 def run(*args):
     return subprocess.run([sys.executable, "-m", "contactqp.cli", *args], capture_output=True,
-                          text=True, cwd=ROOT)
+                          text=True, cwd=ROOT, check=False)
 
 
 def digest(path):
@@ -130,8 +130,7 @@ def test_cli_json_certifies_global_files_and_reports_limits(tmp_path):
 
 
 def test_few_digits_define_the_problem_and_limit_its_meaning():
-    text = "3\n1\n0\n3\n3\n3 3\n" + " ".join(
-        ["1.5", "0.1", "0.2", "0.1", "2.2501", "0.3", "0.2", "0.3", "1.75"]) + "\n-1 0.5 0\n0.3\n"
+    text = "3\n1\n0\n3\n3\n3 3\n1.5 0.1 0.2 0.1 2.2501 0.3 0.2 0.3 1.75\n-1 0.5 0\n0.3\n"
     exact = parse_dat(text)
     # W's longest value has 5 significant digits; q's short values are taken as exact
     assert exact.digits == {"W": 5}
@@ -158,6 +157,8 @@ def _scaled_problem(seed=0):
     W += 1e-3 * np.triu(W, 1)  # slightly unsymmetric
     q = rng.standard_normal(nc * d) * 1e-6
     q[0] = 1e3  # one contact far from its obstacle
+    W[-d:, :] = W[:, -d:] = 0.0  # and one whose rows are zero (open: q_N > 0)
+    q[-d] = 1e-6
     return LocalProblem(W, q, np.full(nc, 0.4), d)
 
 
@@ -177,7 +178,10 @@ def test_rescaling_solvers_report_the_given_problems_error(route):
     u = W @ solution.r + problem.q
     assert solution.error == pytest.approx(natural_map_error(
         LocalProblem(W, problem.q, problem.mu, 3), solution.r, u), rel=1e-9, abs=1e-18)
-    assert solution.converged and solution.error <= TOL
+    assert solution.converged == (solution.error <= TOL)
+    # the fixed point stalls near 6e-7 on this problem (the zero-row contact; with a unit
+    # block there it converges), and says so; Newton converges
+    assert solution.converged or route == "tresca"
 
 
 def test_frictionless_route_is_judged_on_every_row_of_the_unsymmetric_w():
