@@ -277,3 +277,9 @@ def test_solution_dir_refuses_to_overwrite_inputs_or_foreign_files(tmp_path):
     _assert_refused(run("fclib", str(folder / "x.dat"), "--solution-dir", str(folder)),
                     "not a solution file written by contactqp")
     assert digest(folder / "x.dat.solution.hdf5") == before
+    # nor, in a later run, another input's solution
+    assert run("fclib", str(folder / "x.dat"), "--solution-dir", str(out)).returncode == 0
+    written = digest(out / "x.dat.solution.hdf5")
+    _assert_refused(run("fclib", str(other / "x.dat"), "--solution-dir", str(out)),
+                    "the solution of another input", str(folder / "x.dat"))
+    assert digest(out / "x.dat.solution.hdf5") == written

@@ -29,7 +29,8 @@ SOLUTION_SUFFIX = ".solution.hdf5"
               help=f"Write DIR/<file name>{SOLUTION_SUFFIX} (e.g. x.dat{SOLUTION_SUFFIX}) with "
                    "/solution/r, /solution/u (and /solution/v for global problems), converged "
                    "only. Refused if a target is an input, two inputs share a target, or a "
-                   "target exists and is not a solution file written by this command.")
+                   "target exists and is not the solution file this command wrote for the same "
+                   "input.")
 def fclib(files, tol, as_json, solution_dir):
     """Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.
 
@@ -87,10 +88,10 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
     """The solution file of each input; exit 2 (one line) if any would damage a file.
 
     A target is refused when it is one of the inputs, when two different inputs share it, or
-    when it exists and is not a solution file written by this command
+    when it exists and is not the solution file this command wrote for the same input
     (:func:`~contactqp.io.fclib.is_own_solution`): nothing is solved then.
     """
-    from ..io.fclib import is_own_solution
+    from ..io.fclib import is_own_solution, solution_source
 
     def key(path: Path) -> str:
         return os.path.normcase(os.path.realpath(path))
@@ -107,9 +108,12 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
         if key(other) != key(path):
             _refuse(f"{target}: {other} and {path} would write the same solution file; solve "
                     f"them with different --solution-dir")
-        if target.exists() and not is_own_solution(target):
-            _refuse(f"{target}: exists and is not a solution file written by contactqp fclib; "
-                    f"not overwritten (remove it or choose another --solution-dir)")
+        if target.exists() and not is_own_solution(target, path):
+            written_for = solution_source(target)
+            what = (f"the solution of another input, {written_for}" if written_for
+                    else "not a solution file written by contactqp fclib")
+            _refuse(f"{target}: exists and is {what}; not overwritten (remove it or choose "
+                    f"another --solution-dir)")
         targets[path] = target
     return targets
 

@@ -37,7 +37,7 @@ from contactqp.io.siconos import read_dat
 from contactqp.local import GlobalProblem, LocalProblem
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
-           "is_hdf5", "is_own_solution", "SOLUTION_OF"]
+           "is_hdf5", "is_own_solution", "solution_source", "SOLUTION_OF"]
 
 #: Root attribute of a solution file written with ``write_solution(..., source=...)``.
 SOLUTION_OF = "contactqp_solution_of"
@@ -328,15 +328,37 @@ def write_problem(path, problem: LocalProblem) -> None:
         raise FileFormatError(f"{p}: cannot be written ({exc})") from None
 
 
-def is_own_solution(path) -> bool:
-    """True if ``path`` is an HDF5 file written by ``write_solution(..., source=...)``."""
+def solution_source(path) -> str | None:
+    """The input a solution file was written for (:data:`SOLUTION_OF`), or None.
+
+    None unless ``path`` is an HDF5 file holding only ``/solution`` and marked by
+    ``write_solution(..., source=...)``.
+    """
     if not is_hdf5(path):
-        return False
+        return None
     try:
         with _h5py().File(path, "r") as fh:
-            return SOLUTION_OF in fh.attrs and set(fh.keys()) <= {"solution"}
+            if SOLUTION_OF not in fh.attrs or not set(fh.keys()) <= {"solution"}:
+                return None
+            value = fh.attrs[SOLUTION_OF]
     except OSError:
-        return False
+        return None
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
+def is_own_solution(path, source=None) -> bool:
+    """True if ``path`` is a solution file written by ``write_solution(..., source=...)``.
+
+    With ``source``, only if it was written for that input (compared as real paths).
+    """
+    written_for = solution_source(path)
+    if written_for is None or source is None:
+        return written_for is not None
+    return _same_file(written_for, source)
+
+
+def _same_file(a, b) -> bool:
+    return os.path.normcase(os.path.realpath(a)) == os.path.normcase(os.path.realpath(b))
 
 
 def write_solution(path, r, u, v=None, *, source=None) -> None:
@@ -345,8 +367,9 @@ def write_solution(path, r, u, v=None, *, source=None) -> None:
     Without ``source``: a missing file is created; an existing HDF5 file (e.g. the problem
     file) is opened for appending and its ``/solution`` group, if any, is replaced; everything
     else is kept. With ``source`` (the input's path): a solution file of its own is written,
-    marked with the root attribute :data:`SOLUTION_OF`; an existing file is replaced only if it
-    is such a file (:func:`is_own_solution`), never any other.
+    marked with the root attribute :data:`SOLUTION_OF` (the input's real path); an existing file
+    is replaced only if it is such a file written for the same input
+    (:func:`is_own_solution`), never any other.
 
     Parameters
     ----------
@@ -361,8 +384,8 @@ def write_solution(path, r, u, v=None, *, source=None) -> None:
     Raises
     ------
     FileFormatError
-        If ``path`` exists but is not HDF5 (or, with ``source``, not a solution file), or
-        cannot be written.
+        If ``path`` exists but is not HDF5 (or, with ``source``, not the solution file of that
+        input), or cannot be written.
     InvalidInputError
         If ``r`` and ``u`` are not 1-D arrays of the same length.
     """
@@ -380,13 +403,13 @@ def write_solution(path, r, u, v=None, *, source=None) -> None:
     p = Path(os.fspath(path))
     if p.exists() and not is_hdf5(p):
         raise FileFormatError(f"{p}: exists and is not an HDF5 file")
-    if source is not None and p.exists() and not is_own_solution(p):
-        raise FileFormatError(f"{p}: exists and is not a solution file written by contactqp; "
-                              f"not overwritten")
+    if source is not None and p.exists() and not is_own_solution(p, source):
+        raise FileFormatError(f"{p}: exists and is not the solution file of {source} written by "
+                              f"contactqp; not overwritten")
     try:
         with h5py.File(p, "a" if source is None else "w") as fh:
             if source is not None:
-                fh.attrs[SOLUTION_OF] = str(source)
+                fh.attrs[SOLUTION_OF] = os.path.realpath(source)
             if "solution" in fh:
                 del fh["solution"]
             g = fh.create_group("solution")
