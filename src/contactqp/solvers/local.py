@@ -205,9 +205,8 @@ def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
     error, equilibrium = certificate.error, certificate.equilibrium
     converged = bool(error <= tol and equilibrium <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
-    detail = local.message.split(": ", 1)[1].split("; natural-map error")[0]
-    message = (f"{verdict}: {detail}; on the global equations as written: natural-map error "
-               f"{error:.2e}, equilibrium residual {equilibrium:.1e}")
+    message = (f"{verdict} on the global equations as written: natural-map error {error:.2e}, "
+               f"equilibrium residual {equilibrium:.1e} (condensed problem: {local.message})")
     return replace(
         local, u=certificate.u, error=error, converged=converged,
         seconds=time.perf_counter() - start,
