@@ -127,6 +127,20 @@ def test_fem_based_w_positive_definite_and_as_given(name):
     assert np.linalg.eigvalsh(0.5 * (W + W.T)).min() > 0
 
 
+@pytest.mark.parametrize("name, digits", [
+    ("fc2d_granularflowonwall_02020_00213.dat", {"W": 6}),  # cs_print, %g
+    ("FC3D_Example1_SBM.dat", {"W": 7}),  # sparse-block values, %e
+    ("FC3D_Example1.dat", {}),  # dense, full precision
+    ("GFC3D_TwoRods1.dat", {"M": 7, "H": 7}),
+    ("FrictionContact3D_1c.dat", {}),  # integers are exact
+    ("CubeH8.hdf5", {}),  # HDF5 holds doubles
+])
+def test_significant_digits_of_the_data_are_recorded(name, digits):
+    from contactqp.io.fclib import read_any
+
+    assert read_any(DATA / name).digits == digits
+
+
 def test_example1_dense_equals_sbm():
     a = read_problem(DATA / "FC3D_Example1.dat")
     b = read_problem(DATA / "FC3D_Example1_SBM.dat")
