@@ -84,7 +84,7 @@ def test_fclib_frictionless_problems_are_solved(tmp_path):
     assert [r["contacts"] for r in rows] == [2020, 296, 356, 5]
     for path, row in zip(files, rows):
         assert row["converged"] and row["error"] <= 1e-8
-        with h5py.File(out / f"{path.stem}.hdf5") as solution:
+        with h5py.File(out / f"{path.name}.solution.hdf5") as solution:
             r, u = solution["solution/r"][()], solution["solution/u"][()]
         assert natural_map_error(read_problem(path), r, u) <= 1e-8
 
@@ -100,7 +100,7 @@ def test_fclib_solves_every_shared_file_with_friction(tmp_path):
     for path, row in zip(files, rows):
         assert row["converged"] and row["error"] <= 1e-8
         assert row["open"] + row["stick"] + row["slip"] == row["contacts"]
-        with h5py.File(out / f"{path.stem}.hdf5") as solution:
+        with h5py.File(out / f"{path.name}.solution.hdf5") as solution:
             r, u = solution["solution/r"][()], solution["solution/u"][()]
         problem = read_problem(path)
         # the README's measure, recomputed here: from the written (r, u) and from r alone
@@ -121,7 +121,7 @@ def test_fclib_unsolvable_problem_says_why_and_keeps_other_results(tmp_path):
     assert not bad["converged"] and bad["error"] > 1e-8
     assert f"{bad['error']:.2e}" in proc.stderr
     assert good["converged"]
-    assert sorted(p.name for p in out.iterdir()) == ["Rover4516.hdf5"]
+    assert sorted(p.name for p in out.iterdir()) == ["Rover4516.dat.solution.hdf5"]
 
 
 def test_fclib_bad_problems_exit_2(tmp_path):

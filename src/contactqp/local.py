@@ -6,7 +6,15 @@ increments) ``u``, both of length ``m = dim * n_contacts``, ordered contact by c
 normal component first, then the tangential ones.
 
 The module also condenses a global problem ``M v = H r + f, u = H^T v + w`` to its local form
-and measures the accuracy of a candidate solution with the natural-map error used by Siconos.
+(as given: ``W = H^T M^-1 H`` is not symmetrised), certifies a candidate against the global
+equations (:meth:`GlobalProblem.certify`), and measures the accuracy of a candidate solution with
+the natural-map error used by Siconos.
+
+The problem as given is the problem as written: a file whose values carry only a few significant
+digits (the Siconos ``.dat`` dumps) defines exactly that problem, and every error is measured on
+it. :attr:`LocalProblem.digits` records the digits, so that a solution can also say how far the
+rounding of the data limits what it means for the problem the file was written from
+(:func:`accuracy_limits`).
 """
 
 from __future__ import annotations
@@ -28,15 +36,19 @@ if TYPE_CHECKING:
     from contactqp.friction import FrictionLaw
 
 __all__ = [
-    "LocalProblem",
+    "AccuracyLimits",
+    "GlobalCertificate",
     "GlobalProblem",
+    "LocalProblem",
+    "accuracy_limits",
+    "check_positive_semidefinite",
     "condense_global",
+    "contact_status",
     "natural_map_error",
     "natural_map_residual",
-    "projection_on_cones",
     "project_rows",
-    "contact_status",
-    "check_positive_semidefinite",
+    "projection_on_cones",
+    "relative_rounding",
 ]
 
 
@@ -101,6 +113,11 @@ class LocalProblem:
     cohesion : array_like, shape (n_contacts,), optional
         Cohesion ``c_i >= 0`` per contact, in units of ``r``; ``c_i > 0`` needs ``mu_i > 0``.
         Stored as zeros when not given.
+    digits : dict of str to int, optional
+        Significant decimal digits of the data as written, for the arrays (``"W"``, ``"q"``)
+        written with fewer than 16 (e.g. ``{"W": 6}`` for a Siconos sparse dump); arrays not
+        named are exact doubles. The problem is the one written; this only tells a solution how
+        far the data's rounding limits it (:func:`accuracy_limits`).
 
     Attributes
     ----------
@@ -120,10 +137,12 @@ class LocalProblem:
     dim: int
     title: str = field(default="")
     cohesion: np.ndarray | None = field(default=None)
+    digits: dict[str, int] = field(default_factory=dict, repr=False, compare=False)
     law: FrictionLaw = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         dim = _check_dim(self.dim)
+        object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
         W = _as_matrix("W", self.W)
         q = finite_array(self.q, "q", 1)
         mu = finite_array(self.mu, "mu", 1)
@@ -178,6 +197,28 @@ class LocalProblem:
         return shift.reshape(-1)
 
 
+def _check_digits(digits, names) -> dict[str, int]:
+    """Validated ``{array name: significant digits}`` (see :attr:`LocalProblem.digits`)."""
+    if not isinstance(digits, dict):
+        raise InvalidInputError(f"digits must be a dict of array name to int, got {digits!r}")
+    checked = {}
+    for name, count in digits.items():
+        if name not in names:
+            raise InvalidInputError(f"digits names an unknown array {name!r} (known: {names})")
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            raise InvalidInputError(f"digits[{name!r}] must be a positive int, got {count!r}")
+        checked[name] = count
+    return checked
+
+
+def relative_rounding(digits: int | None) -> float:
+    """Largest relative rounding of a value written with ``digits`` significant digits.
+
+    ``0.5 * 10**(1 - digits)`` (5e-6 for 6 digits); 0 for ``None`` (an exact double).
+    """
+    return 0.0 if digits is None else 0.5 * 10.0 ** (1 - digits)
+
+
 def _check_global(M, H, f, w, mu, dim):
     """Validate and normalise the data of a global problem."""
     dim = _check_dim(dim)
@@ -204,16 +245,168 @@ def _check_global(M, H, f, w, mu, dim):
 
 
 @dataclass(frozen=True)
+class AccuracyLimits:
+    """How far rounding, and the data's written digits, limit a natural-map error.
+
+    Both are relative, in the units of :func:`natural_map_error`, and are order-of-magnitude
+    estimates (first-order bounds with norms), not guarantees.
+
+    Attributes
+    ----------
+    rounding : float
+        Natural-map error that evaluating the certificate in double precision can leave on the
+        problem as given: about ``eps |W| |r|`` for a local problem, and ``cond(M) eps`` times
+        the size of ``H^T v`` for a global one, ``cond`` that of the Jacobi-scaled ``M`` in which
+        ``v`` is solved for. An error below it cannot be asked for.
+    data : float
+        Change of the natural map at this ``r`` when every value written with ``k`` significant
+        digits (:attr:`LocalProblem.digits`) moves by its rounding, ``0.5 * 10**(1 - k)``
+        relative: how closely ``r`` can be known to solve the problem the file was written
+        from. 0 when the data are exact doubles.
+    condition : float
+        1-norm condition number (estimated) of the Jacobi-scaled ``M`` of a global problem,
+        1 for a local one.
+    digits : dict of str to int
+        The data's digits, as in :attr:`LocalProblem.digits`.
+    """
+
+    rounding: float
+    data: float
+    condition: float = 1.0
+    digits: dict[str, int] = field(default_factory=dict)
+
+    def describe(self, tol: float) -> str:
+        """One clause per limit above ``tol`` (empty string when none is)."""
+        notes = []
+        if self.rounding > tol:
+            cause = (f"the conditioning of M (cond {self.condition:.1e} after Jacobi scaling)"
+                     if self.condition > 1.0 else "rounding")
+            notes.append(f"{cause} limits the attainable natural-map error to about "
+                         f"{self.rounding:.1e} > tol {tol:g}")
+        if self.data > tol:
+            written = ", ".join(f"{name} {count}" for name, count in self.digits.items())
+            notes.append(f"the data carry only a few significant digits ({written}): the error "
+                         f"is on the problem as written; the problem it was written from is met "
+                         f"only to about {self.data:.1e}")
+        return "; ".join(notes)
+
+    def as_dict(self) -> dict:
+        """JSON-ready ``{"attainable", "data_limit", "condition", "digits"}``."""
+        return {"attainable": self.rounding, "data_limit": self.data,
+                "condition": self.condition, "digits": dict(self.digits)}
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+def _abs_product(A, x) -> np.ndarray:
+    """``|A| |x|`` for a dense or sparse ``A``."""
+    return np.asarray(abs(A) @ np.abs(x)).ravel()
+
+
+def accuracy_limits(problem: LocalProblem, r, u) -> AccuracyLimits:
+    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) on a local problem.
+
+    With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
+    ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
+    ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
+    array's digits.
+    """
+    rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
+    scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
+    product = float(np.linalg.norm(_abs_product(problem.W, rv)))
+    size_q = float(np.linalg.norm(problem.q))
+    digits = problem.digits
+    data = (relative_rounding(digits.get("W")) * product
+            + relative_rounding(digits.get("q")) * size_q)
+    return AccuracyLimits(rounding=_EPS * (product + size_q) / scale, data=data / scale,
+                          digits=dict(digits))
+
+
+@dataclass(frozen=True)
+class GlobalCertificate:
+    """A candidate ``r`` judged on the global equations as written (:meth:`GlobalProblem.certify`).
+
+    Attributes
+    ----------
+    v : numpy.ndarray, shape (ndof,)
+        Solves ``M v = H r + f`` (one solve with the factorised ``M``).
+    u : numpy.ndarray, shape (m,)
+        ``H^T v + w``.
+    error : float
+        :func:`natural_map_error` of ``(r, u)``, with the scale of the condensed problem.
+    equilibrium : float
+        ``||S (M v - H r - f)|| / max(||S M v||, ||S H r||, ||S f||)``, ``S`` the Jacobi scaling
+        ``|diag M|^-1/2``: the relative residual of the written equilibrium.
+    limits : AccuracyLimits
+    """
+
+    v: np.ndarray
+    u: np.ndarray
+    error: float
+    equilibrium: float
+    limits: AccuracyLimits
+
+
+class _ScaledFactor:
+    """LU factorisation of the Jacobi-scaled ``S M S`` (``S = |diag M|^-1/2``, 1 on zeros).
+
+    The scaling makes the singularity test scale-invariant: a diagonal mass matrix with masses
+    and inertias of very different sizes is regular.
+    """
+
+    def __init__(self, M):
+        from scipy.sparse.linalg import splu
+
+        ndof = M.shape[0]
+        diag = np.abs(M.diagonal())
+        self.s = np.ones(ndof)
+        self.s[diag > 0] = 1.0 / np.sqrt(diag[diag > 0])
+        S = sp.diags(self.s)
+        self.scaled = sp.csc_matrix(S @ sp.csc_matrix(M) @ S)
+        try:
+            self.lu = splu(self.scaled)
+        except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
+            raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: {exc}") from None
+        pivots = np.abs(self.lu.U.diagonal())
+        if pivots.min() <= ndof * _EPS * pivots.max():
+            raise NotPositiveDefiniteError(
+                f"M ({ndof}x{ndof}) is numerically singular: smallest/largest LU pivot of the "
+                f"scaled matrix = {pivots.min() / pivots.max():.3g}"
+            )
+
+    def solve(self, rhs):
+        """``M^-1 rhs = S (S M S)^-1 S rhs`` for rhs of shape (ndof,) or (ndof, k)."""
+        sc = self.s[:, None] if rhs.ndim == 2 else self.s
+        return sc * self.lu.solve(np.ascontiguousarray(sc * rhs))
+
+    @functools.cached_property
+    def condition(self) -> float:
+        """1-norm condition number of ``S M S``: exact up to 100 freedoms, else estimated."""
+        from scipy.sparse.linalg import LinearOperator, onenormest
+
+        n = self.scaled.shape[0]
+        norm = float(abs(self.scaled).sum(axis=0).max())
+        if n <= 100:
+            inverse = self.lu.solve(np.eye(n))
+            return norm * float(np.abs(inverse).sum(axis=0).max())
+        inverse = LinearOperator((n, n), matvec=self.lu.solve, dtype=float,
+                                 rmatvec=lambda x: self.lu.solve(x, trans="T"))
+        return norm * float(onenormest(inverse))
+
+
+@dataclass(frozen=True)
 class GlobalProblem:
     """A global frictional-contact problem ``M v = H r + f``, ``u = H^T v + w``.
 
-    Kept as read from a file; :meth:`condense` gives the equivalent :class:`LocalProblem`.
-    Shapes and values are validated as in :func:`condense_global` (``InvalidInputError``).
+    Kept as read from a file; :meth:`condense` gives the equivalent :class:`LocalProblem` and
+    :meth:`certify` judges a candidate on the equations as written. Shapes and values are
+    validated as in :func:`condense_global` (``InvalidInputError``).
 
     Parameters
     ----------
     M : scipy.sparse matrix or numpy.ndarray, shape (ndof, ndof)
-        Mass (or stiffness) matrix, nonsingular.
+        Mass (or stiffness) matrix, nonsingular; not necessarily symmetric (it is used as given).
     H : scipy.sparse matrix or numpy.ndarray, shape (ndof, m)
         Transpose of the contact Jacobian, ``m = dim * n_contacts``.
     f : numpy.ndarray, shape (ndof,)
@@ -222,6 +415,9 @@ class GlobalProblem:
     dim : int
         2 or 3.
     title : str, optional
+    digits : dict of str to int, optional
+        Significant digits of the arrays ``"M"``, ``"H"``, ``"f"``, ``"w"`` written with fewer
+        than 16, as :attr:`LocalProblem.digits`.
     """
 
     M: sp.csr_matrix | np.ndarray
@@ -231,6 +427,7 @@ class GlobalProblem:
     mu: np.ndarray
     dim: int
     title: str = field(default="")
+    digits: dict[str, int] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
         Mm, Hm, fv, wv, muv, dim = _check_global(self.M, self.H, self.f, self.w, self.mu, self.dim)
@@ -238,15 +435,108 @@ class GlobalProblem:
             ("M", "H", "f", "w", "mu", "dim"), (Mm, Hm, fv, wv, muv, dim), strict=True
         ):
             object.__setattr__(self, name, value)
+        object.__setattr__(self, "digits", _check_digits(self.digits, ("M", "H", "f", "w")))
 
     @property
     def n_contacts(self) -> int:
         """Number of contacts, ``len(mu)``."""
         return int(self.mu.shape[0])
 
+    @functools.cached_property
+    def _factor(self) -> _ScaledFactor:
+        return _ScaledFactor(self.M)
+
+    @functools.cached_property
+    def _condensed(self) -> LocalProblem:
+        Mm, Hm, fv, wv, muv, dim = self.M, self.H, self.f, self.w, self.mu, self.dim
+        ndof, m = Mm.shape[0], Hm.shape[1]
+        if ndof == 0:  # no freedoms: H is empty, nothing to condense
+            W = sp.csr_matrix((m, m)) if sp.issparse(Hm) else np.zeros((m, m))
+            return LocalProblem(W, wv, muv, dim, self.title)
+        solve = self._factor.solve
+        sparse_h = sp.issparse(Hm)
+        Hc = sp.csc_matrix(Hm) if sparse_h else Hm
+        Wd = np.empty((m, m))
+        block = max(1, (1 << 24) // ndof)  # at most ~128 MB of dense right-hand sides at once
+        for start in range(0, m, block):
+            stop = min(m, start + block)
+            rhs = Hc[:, start:stop].toarray() if sparse_h else np.array(Hc[:, start:stop])
+            Wd[:, start:stop] = Hc.T @ solve(rhs)
+        qv = np.asarray(Hc.T @ solve(fv)).ravel() + wv
+        if not (np.all(np.isfinite(Wd)) and np.all(np.isfinite(qv))):
+            raise NotPositiveDefiniteError(
+                f"M ({ndof}x{ndof}) is singular: the solve is not finite")
+        if sparse_h:
+            W = sp.csr_matrix(Wd)
+            W.eliminate_zeros()
+        else:
+            W = Wd
+        return LocalProblem(W, qv, muv, dim, self.title)
+
     def condense(self) -> LocalProblem:
-        """Return the local problem, see :func:`condense_global`."""
-        return condense_global(self.M, self.H, self.f, self.w, self.mu, self.dim, self.title)
+        """Return the local problem, see :func:`condense_global` (computed once)."""
+        return self._condensed
+
+    def certify(self, r) -> GlobalCertificate:
+        """Judge reactions ``r`` (shape (m,)) on the equations as written.
+
+        ``v`` solves ``M v = H r + f`` with ``M`` as given, ``u = H^T v + w``; the error is the
+        natural-map error of ``(r, u)``, the equilibrium the relative residual of the first
+        equation, and :class:`AccuracyLimits` says how far the conditioning of ``M`` (and the
+        data's digits) limit them.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``r`` has the wrong length or is not finite.
+        NotPositiveDefiniteError
+            If ``M`` is singular.
+        """
+        local = self.condense()
+        m = self.dim * self.n_contacts
+        rv = finite_array(r, "r", 1)
+        if rv.shape != (m,):
+            raise InvalidInputError(
+                f"r must have length dim*n_contacts = {m}, got shape {rv.shape}")
+        M, H, f, w = self.M, self.H, self.f, self.w
+        Hr = np.asarray(H @ rv).ravel()
+        if M.shape[0] == 0:
+            v, equilibrium, s, condition = np.zeros(0), 0.0, np.zeros(0), 1.0
+        else:
+            factor = self._factor
+            s, condition = factor.s, factor.condition
+            v = factor.solve(Hr + f)
+            Mv = np.asarray(M @ v).ravel()
+            sizes = [np.linalg.norm(s * x) for x in (Mv, Hr, f)]
+            equilibrium = float(np.linalg.norm(s * (Mv - Hr - f)) / (max(sizes) or 1.0))
+        u = np.asarray(H.T @ v).ravel() + w
+        error = natural_map_residual(local, rv, u)[1]
+        scale = math.sqrt(max(local.q @ local.q, rv @ rv, u @ u)) or 1.0
+        # rounding: the scaled unknown y = v / s is solved to ~cond * eps relative, u = H^T S y + w
+        scaled_h = sp.diags(s) @ H if sp.issparse(H) else s[:, None] * H
+        size_h = float(np.sqrt((abs(scaled_h).power(2) if sp.issparse(H)
+                                else scaled_h ** 2).sum()))  # Frobenius: >= the 2-norm
+        size_y = float(np.linalg.norm(v / s)) if v.size else 0.0
+        transported = float(np.linalg.norm(_abs_product(H.T, v))) + float(np.linalg.norm(w))
+        rounding = (condition * _EPS * size_h * size_y + _EPS * transported) / scale
+        data = self._data_limit(rv, v) / scale
+        return GlobalCertificate(
+            v=v, u=u, error=float(error), equilibrium=equilibrium,
+            limits=AccuracyLimits(rounding=rounding, data=data, condition=condition,
+                                  digits=dict(self.digits)))
+
+    def _data_limit(self, r, v) -> float:
+        """Size of the change of ``u`` when the written values move by their rounding."""
+        rel = {name: relative_rounding(self.digits.get(name)) for name in ("M", "H", "f", "w")}
+        if not any(rel.values()):
+            return 0.0
+        # first order: M dv = -dM v + dH r + df, du = H^T dv + dH^T v + dw
+        forcing = (rel["M"] * _abs_product(self.M, v) + rel["H"] * _abs_product(self.H, r)
+                   + rel["f"] * np.abs(self.f))
+        moved = self._factor.solve(forcing) if self.M.shape[0] else forcing
+        return float(np.linalg.norm(np.asarray(self.H.T @ moved).ravel())
+                     + rel["H"] * np.linalg.norm(_abs_product(self.H.T, v))
+                     + rel["w"] * np.linalg.norm(self.w))
 
 
 def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
@@ -254,9 +544,10 @@ def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
 
     .. math::  W = H^T M^{-1} H, \qquad q = H^T M^{-1} f + w
 
-    ``M^{-1} [H, f]`` is obtained by one ``scipy.sparse.linalg.splu`` factorisation and
-    multi-right-hand-side solves (by blocks of columns to bound memory). ``W`` is returned
-    symmetrised, ``0.5 (W + W^T)``.
+    ``M^{-1} [H, f]`` is obtained by one ``scipy.sparse.linalg.splu`` factorisation (of the
+    Jacobi-scaled ``M``) and multi-right-hand-side solves (by blocks of columns to bound
+    memory). ``W`` is the problem's as given: it is not symmetrised, so an unsymmetric ``M``
+    gives the unsymmetric ``W`` of the written equations.
 
     Parameters
     ----------
@@ -282,54 +573,7 @@ def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
         If ``M`` is singular: exactly, or numerically (an LU pivot of the Jacobi-scaled
         ``M`` below ``ndof * eps`` times the largest one), or the solve is not finite.
     """
-    from scipy.sparse.linalg import splu
-
-    Mm, Hm, fv, wv, muv, dim = _check_global(M, H, f, w, mu, dim)
-    ndof = Mm.shape[0]
-    m = Hm.shape[1]
-
-    if ndof == 0:  # no freedoms: H is empty, nothing to condense
-        W = sp.csr_matrix((m, m)) if sp.issparse(Hm) else np.zeros((m, m))
-        return LocalProblem(W, wv, muv, dim, title)
-    # Jacobi scaling S M S (S = |diag M|^-1/2) makes the singularity test scale-invariant,
-    # e.g. a diagonal mass matrix with masses and inertias of very different sizes passes.
-    diag = np.abs(Mm.diagonal())
-    s = np.ones(ndof)
-    s[diag > 0] = 1.0 / np.sqrt(diag[diag > 0])
-    S = sp.diags(s)
-    try:
-        lu = splu(sp.csc_matrix(S @ sp.csc_matrix(Mm) @ S))
-    except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
-        raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: {exc}") from None
-    pivots = np.abs(lu.U.diagonal())
-    if pivots.min() <= ndof * np.finfo(float).eps * pivots.max():
-        raise NotPositiveDefiniteError(
-            f"M ({ndof}x{ndof}) is numerically singular: smallest/largest LU pivot of the "
-            f"scaled matrix = {pivots.min() / pivots.max():.3g}"
-        )
-
-    def solve(rhs):  # M^-1 rhs = S (S M S)^-1 S rhs
-        sc = s[:, None] if rhs.ndim == 2 else s
-        return sc * lu.solve(sc * rhs)
-
-    sparse_h = sp.issparse(Hm)
-    Hc = sp.csc_matrix(Hm) if sparse_h else Hm
-    Wd = np.empty((m, m))
-    block = max(1, (1 << 24) // ndof)  # at most ~128 MB of dense right-hand sides at once
-    for start in range(0, m, block):
-        stop = min(m, start + block)
-        rhs = Hc[:, start:stop].toarray() if sparse_h else np.array(Hc[:, start:stop])
-        Wd[:, start:stop] = Hc.T @ solve(rhs)
-    qv = np.asarray(Hc.T @ solve(fv)).ravel() + wv
-    Wd = 0.5 * (Wd + Wd.T)
-    if not (np.all(np.isfinite(Wd)) and np.all(np.isfinite(qv))):
-        raise NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is singular: the solve is not finite")
-    if sparse_h:
-        W = sp.csr_matrix(Wd)
-        W.eliminate_zeros()
-    else:
-        W = Wd
-    return LocalProblem(W, qv, muv, dim, title)
+    return GlobalProblem(M, H, f, w, mu, dim, title).condense()
 
 
 def projection_on_cones(x, mu, dim):

@@ -239,8 +239,12 @@ class ReducedModel:
         if (flexibility is None) == (stiffness is None):
             raise InvalidInputError("give exactly one of flexibility or stiffness")
         name = "flexibility" if flexibility is not None else "stiffness"
-        matrix, factor = checked_cholesky(flexibility if flexibility is not None else stiffness,
-                                          name, symmetry_rtol)
+        given = flexibility if flexibility is not None else stiffness
+        matrix, factor = checked_cholesky(given, name, symmetry_rtol)
+        given = finite_array(given, name, 2)  # validated above; kept when it was symmetrised
+        #: The matrix exactly as given (``flexibility`` or ``stiffness``): the certificates'
+        #: equilibrium is judged on it, not on the symmetric part the solvers use.
+        self.as_given = matrix if np.array_equal(given, matrix) else given
         self._flexibility = matrix if name == "flexibility" else None
         self._stiffness = matrix if name == "stiffness" else None
         # a stiffness always needs its factor (U = K^-1 P): keep the validation's; a flexibility

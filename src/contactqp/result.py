@@ -182,11 +182,15 @@ def _floored(scale):
 
 
 def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
-    """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model)."""
+    """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model).
+
+    ``R`` (``K``) is the matrix as the user gave it (:attr:`~contactqp.ReducedModel.as_given`),
+    not its symmetric part, which the solvers use.
+    """
     if model.given == "flexibility":
-        residual = displacements - model.flexibility @ net_load
+        residual = displacements - model.as_given @ net_load
         return _worst(np.abs(residual) / length)
-    return _worst(np.abs(model.stiffness @ displacements - net_load) / force)
+    return _worst(np.abs(model.as_given @ displacements - net_load) / force)
 
 
 @dataclass

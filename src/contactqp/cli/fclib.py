@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -15,6 +16,9 @@ from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
 STATUSES = ("open", "stick", "slip")
 COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "seconds", *STATUSES)
 
+#: ``--solution-dir`` writes the solution of ``x.dat`` to ``DIR/x.dat`` + this suffix.
+SOLUTION_SUFFIX = ".solution.hdf5"
+
 
 @cli.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
@@ -22,22 +26,36 @@ COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "secon
               show_default=True, help="Target natural-map error.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per file and line.")
 @click.option("--solution-dir", type=click.Path(file_okay=False, path_type=Path),
-              help="Write DIR/<file stem>.hdf5 with /solution/r and /solution/u (converged only).")
+              help=f"Write DIR/<file name>{SOLUTION_SUFFIX} (e.g. x.dat{SOLUTION_SUFFIX}) with "
+                   "/solution/r, /solution/u (and /solution/v for global problems), converged "
+                   "only. Refused if a target is an input, two inputs share a target, or a "
+                   "target exists and is not the solution file this command wrote for the same "
+                   "input.")
 def fclib(files, tol, as_json, solution_dir):
     """Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.
 
-    Exit status 1 when a problem is not solved to --tol (its error and the solver's stages on
-    stderr, no solution written), 2 when a file is unreadable or invalid.
-    """
-    from ..io.fclib import read_problem, write_solution
-    from ..solvers.local import solve_local
+    Each problem is solved as written: a global one is certified on M v = H r + f,
+    u = H^T v + w (M as given, not symmetrised). The JSON line's "attainable" is the
+    natural-map error that rounding (the conditioning of M) allows, "data_limit" how closely the
+    answer can meet the problem the file was written from when its values carry few digits
+    ("digits"), and "limits" the sentence, also printed under the table, naming any above --tol.
 
+    Exit status 1 when a problem is not solved to --tol (its error and the solver's stages on
+    stderr, no solution written), 2 when a file is unreadable or invalid, or a solution would
+    overwrite an input, another input's solution or a file this command did not write.
+    """
+    from ..io.fclib import read_any, write_solution
+    from ..local import GlobalProblem
+    from ..solvers.local import solve_global, solve_local
+
+    targets = _solution_targets(files, solution_dir) if solution_dir else {}
     exit_code = EXIT_OK
     rows = []
     for path in files:
         try:
-            problem = read_problem(path)
-            solution = solve_local(problem, tol=tol)
+            problem = read_any(path)
+            solve = solve_global if isinstance(problem, GlobalProblem) else solve_local
+            solution = solve(problem, tol=tol)
         except ContactError as exc:
             message = str(exc)  # the reader's messages may already name the file
             fail(message if message.startswith(str(path)) else f"{path}: {message}")
@@ -45,20 +63,64 @@ def fclib(files, tol, as_json, solution_dir):
             continue
         record = {"file": str(path), "dim": problem.dim, "contacts": problem.n_contacts,
                   "converged": solution.converged, "error": solution.error,
+                  "equilibrium": solution.equilibrium, **solution.limits.as_dict(),
                   "iterations": solution.iterations, "seconds": solution.seconds,
-                  **{s: int(np.count_nonzero(solution.status == s)) for s in STATUSES}}
+                  **{s: int(np.count_nonzero(solution.status == s)) for s in STATUSES},
+                  "limits": solution.limits.describe(tol)}
         if not solution.converged:
             fail(f"{path}: {solution.message}" + ("; no solution written" if solution_dir else ""))
             exit_code = max(exit_code, EXIT_NOT_SOLVED)
         elif solution_dir:
             solution_dir.mkdir(parents=True, exist_ok=True)
-            write_solution(solution_dir / f"{Path(path).stem}.hdf5", solution.r, solution.u)
+            write_solution(targets[path], solution.r, solution.u, solution.v, source=path)
         if as_json:
             click.echo(json.dumps(record))
         rows.append(record)
     if not as_json and rows:
         _fclib_table(rows)
+        for r in rows:
+            if r["limits"]:
+                click.echo(f"{r['file']}: {r['limits']}")
     sys.exit(exit_code)
+
+
+def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
+    """The solution file of each input; exit 2 (one line) if any would damage a file.
+
+    A target is refused when it is one of the inputs, when two different inputs share it, or
+    when it exists and is not the solution file this command wrote for the same input
+    (:func:`~contactqp.io.fclib.is_own_solution`): nothing is solved then.
+    """
+    from ..io.fclib import is_own_solution, solution_source
+
+    def key(path: Path) -> str:
+        return os.path.normcase(os.path.realpath(path))
+
+    inputs = {key(p): p for p in files}
+    targets, owners = {}, {}
+    for path in files:
+        target = solution_dir / f"{path.name}{SOLUTION_SUFFIX}"
+        where = key(target)
+        if where in inputs:
+            _refuse(f"{target}: the solution of {path} would overwrite the input "
+                    f"{inputs[where]}; choose another --solution-dir")
+        other = owners.setdefault(where, path)
+        if key(other) != key(path):
+            _refuse(f"{target}: {other} and {path} would write the same solution file; solve "
+                    f"them with different --solution-dir")
+        if target.exists() and not is_own_solution(target, path):
+            written_for = solution_source(target)
+            what = (f"the solution of another input, {written_for}" if written_for
+                    else "not a solution file written by contactqp fclib")
+            _refuse(f"{target}: exists and is {what}; not overwritten (remove it or choose "
+                    f"another --solution-dir)")
+        targets[path] = target
+    return targets
+
+
+def _refuse(message: str):
+    fail(message)
+    sys.exit(EXIT_BAD_INPUT)
 
 
 def _fclib_table(rows):

@@ -11,7 +11,9 @@ FCLIB HDF5 layout, as read and written here:
 * ``/fclib_local/vectors/{q,mu}``, ``/fclib_local/spacedim``, ``/fclib_local/info/title``.
 * ``/fclib_global/{M,H}``, ``/fclib_global/vectors/{f,w,mu}``, ``/fclib_global/spacedim``;
   ``H`` is ``ndof x (d*nc)``.
-* ``/solution/{r,u[,v]}``.
+* ``/solution/{r,u[,v]}``. A solution file written by ``contactqp fclib`` also carries the root
+  attribute ``contactqp_solution_of`` (the input's path), by which it is known as one
+  (:func:`is_own_solution`).
 
 h5py is imported only when an HDF5 file is read or written.
 """
@@ -34,7 +36,11 @@ from contactqp.errors import (
 from contactqp.io.siconos import read_dat
 from contactqp.local import GlobalProblem, LocalProblem
 
-__all__ = ["read_problem", "read_global_problem", "write_problem", "write_solution", "is_hdf5"]
+__all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
+           "is_hdf5", "is_own_solution", "solution_source", "SOLUTION_OF"]
+
+#: Root attribute of a solution file written with ``write_solution(..., source=...)``.
+SOLUTION_OF = "contactqp_solution_of"
 
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -194,7 +200,9 @@ def _group(parent, name):
 HDF5_SUFFIXES = (".hdf5", ".h5", ".hdf")
 
 
-def _read_any(path):
+def read_any(path) -> LocalProblem | GlobalProblem:
+    """Read a problem file as written: a :class:`LocalProblem` or an uncondensed
+    :class:`GlobalProblem` (formats and errors as :func:`read_problem`)."""
     p = Path(os.fspath(path))
     if not p.exists():
         raise FileFormatError(f"{p}: no such file")
@@ -215,8 +223,9 @@ def read_problem(path) -> LocalProblem:
     """Read a frictional-contact problem as a local problem.
 
     The format is found from the content: a file with the HDF5 signature is read as FCLIB
-    (``/fclib_local``, or ``/fclib_global`` condensed with
-    :func:`~contactqp.local.condense_global`), anything else as a Siconos ``.dat`` text file
+    (``/fclib_local``, or ``/fclib_global`` condensed, as given, with
+    :func:`~contactqp.local.condense_global`; :func:`read_any` keeps it global, for
+    :func:`~contactqp.solvers.local.solve_global`), anything else as a Siconos ``.dat`` text file
     (see :mod:`contactqp.io.siconos`).
 
     Parameters
@@ -239,7 +248,7 @@ def read_problem(path) -> LocalProblem:
     NotPositiveDefiniteError
         If a global problem's ``M`` is singular.
     """
-    problem = _read_any(path)
+    problem = read_any(path)
     if isinstance(problem, GlobalProblem):
         try:
             return problem.condense()
@@ -256,7 +265,7 @@ def read_global_problem(path) -> GlobalProblem:
     FileFormatError
         As :func:`read_problem`, and if the file holds a local problem.
     """
-    problem = _read_any(path)
+    problem = read_any(path)
     if not isinstance(problem, GlobalProblem):
         raise FileFormatError(f"{Path(os.fspath(path))}: holds a local problem, not a global one")
     return problem
@@ -319,11 +328,48 @@ def write_problem(path, problem: LocalProblem) -> None:
         raise FileFormatError(f"{p}: cannot be written ({exc})") from None
 
 
-def write_solution(path, r, u, v=None) -> None:
+def solution_source(path) -> str | None:
+    """The input a solution file was written for (:data:`SOLUTION_OF`), or None.
+
+    None unless ``path`` is an HDF5 file holding only ``/solution`` and marked by
+    ``write_solution(..., source=...)``.
+    """
+    if not is_hdf5(path):
+        return None
+    try:
+        with _h5py().File(path, "r") as fh:
+            if SOLUTION_OF not in fh.attrs or not set(fh.keys()) <= {"solution"}:
+                return None
+            value = fh.attrs[SOLUTION_OF]
+    except OSError:
+        return None
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
+def is_own_solution(path, source=None) -> bool:
+    """True if ``path`` is a solution file written by ``write_solution(..., source=...)``.
+
+    With ``source``, only if it was written for that input (compared as real paths).
+    """
+    written_for = solution_source(path)
+    if written_for is None or source is None:
+        return written_for is not None
+    return _same_file(written_for, source)
+
+
+def _same_file(a, b) -> bool:
+    return os.path.normcase(os.path.realpath(a)) == os.path.normcase(os.path.realpath(b))
+
+
+def write_solution(path, r, u, v=None, *, source=None) -> None:
     """Store a solution as ``/solution/{r,u[,v]}`` in an HDF5 file.
 
-    A missing file is created. An existing HDF5 file (e.g. the problem file) is opened for
-    appending and its ``/solution`` group, if any, is replaced; everything else is kept.
+    Without ``source``: a missing file is created; an existing HDF5 file (e.g. the problem
+    file) is opened for appending and its ``/solution`` group, if any, is replaced; everything
+    else is kept. With ``source`` (the input's path): a solution file of its own is written,
+    marked with the root attribute :data:`SOLUTION_OF` (the input's real path); an existing file
+    is replaced only if it is such a file written for the same input
+    (:func:`is_own_solution`), never any other.
 
     Parameters
     ----------
@@ -332,11 +378,14 @@ def write_solution(path, r, u, v=None) -> None:
         Reactions and relative velocities.
     v : array_like, shape (ndof,), optional
         Global velocities, for global problems.
+    source : str or os.PathLike, optional
+        The problem file solved.
 
     Raises
     ------
     FileFormatError
-        If ``path`` exists but is not HDF5, or cannot be written.
+        If ``path`` exists but is not HDF5 (or, with ``source``, not the solution file of that
+        input), or cannot be written.
     InvalidInputError
         If ``r`` and ``u`` are not 1-D arrays of the same length.
     """
@@ -354,8 +403,13 @@ def write_solution(path, r, u, v=None) -> None:
     p = Path(os.fspath(path))
     if p.exists() and not is_hdf5(p):
         raise FileFormatError(f"{p}: exists and is not an HDF5 file")
+    if source is not None and p.exists() and not is_own_solution(p, source):
+        raise FileFormatError(f"{p}: exists and is not the solution file of {source} written by "
+                              f"contactqp; not overwritten")
     try:
-        with h5py.File(p, "a") as fh:
+        with h5py.File(p, "a" if source is None else "w") as fh:
+            if source is not None:
+                fh.attrs[SOLUTION_OF] = os.path.realpath(source)
             if "solution" in fh:
                 del fh["solution"]
             g = fh.create_group("solution")

@@ -19,6 +19,13 @@ A matrix block is ``storage rows cols`` followed by
 * storage 2, sparse: an origin code (1 triplet, 2 compressed columns, 3 compressed rows) on its
   own line, then the text dump of CSparse's ``cs_print`` (``%g``: about 6 significant digits).
 
+Precision: the problem is the one written, digit for digit. Each array's significant digits
+(those of its longest non-integer value; a value without a decimal point or exponent is exact) are
+recorded in the problem's ``digits`` when from 4 to 15 (e.g. ``{"W": 6}`` for a ``cs_print``
+dump, 7 for ``%e``; an array whose values all have at most 3 digits, such as ``0.5 1.25``, is
+taken as written by hand, exactly), so that a solution can say how far the rounding of the data limits its
+meaning for the problem the file was written from (:func:`contactqp.local.accuracy_limits`).
+
 Local or global is decided by content, not by the file name: the tokens are first read as a
 local problem, which is accepted only if ``W`` is ``(d*nc) x (d*nc)`` and at most one integer
 token is left over; otherwise they are read as a global problem under the same end rule.
@@ -52,14 +59,38 @@ _CS_ENTRY = re.compile(r"^\s*(\d+)\s*:\s*(\S+)\s*$")
 _CS_TRIPLET_ENTRY = re.compile(r"^\s*(\d+)\s+(\d+)\s*:\s*(\S+)\s*$")
 
 
+#: Arrays written with at least this many significant digits are exact doubles; with fewer than
+#: SHORT_DIGITS everywhere, exact hand-written values.
+FULL_DIGITS, SHORT_DIGITS = 16, 4
+
+
+def _significant_digits(tokens) -> int:
+    """Largest number of significant digits among the non-integer number tokens (0 if none)."""
+    most = 0
+    for tok in tokens:
+        mantissa = tok.split("e")[0].split("E")[0]
+        if mantissa == tok and "." not in tok:
+            continue  # an integer is exact
+        most = max(most, len(mantissa.lstrip("+-").replace(".", "").lstrip("0")))
+    return most
+
+
 class _Tokens:
-    """Whitespace tokens of a text, read in order, with line-level access for CSparse dumps."""
+    """Whitespace tokens of a text, read in order, with line-level access for CSparse dumps.
+
+    ``digits`` is the largest :func:`_significant_digits` of the numbers read by
+    :meth:`floats` (or noted by :meth:`note_digits`) since it was last reset to 0.
+    """
 
     def __init__(self, text):
         self.lines = text.splitlines()
         self.li = 0  # index of the next line to split
         self.toks = []  # tokens of the current line
         self.ti = 0  # next token in self.toks
+        self.digits = 0
+
+    def note_digits(self, tokens):
+        self.digits = max(self.digits, _significant_digits(tokens))
 
     def state(self):
         return (self.li, self.toks, self.ti)
@@ -108,6 +139,7 @@ class _Tokens:
             self.ti += len(chunk)
             need -= len(chunk)
             out.extend(chunk)
+        self.note_digits(out)
         try:
             return np.array(out, dtype=float)
         except ValueError:
@@ -267,6 +299,7 @@ def _read_cs_dump(tk, rows, cols, what):
         x = np.array(X, dtype=float)
     except ValueError:
         raise _ParseError(f"{what}: a CSparse entry value is not a number") from None
+    tk.note_digits(X)
     rr = np.asarray(rr, dtype=np.int64)
     cc = np.asarray(cc, dtype=np.int64)
     if nnz and (rr.max() >= rows or cc.max() >= cols):
@@ -287,6 +320,15 @@ def _read_matrix(tk, what):
     raise _ParseError(f"{what}: unknown storage type {storage} (expected 0, 1 or 2)")
 
 
+def _read(tk, digits, name, read):
+    """``read()``'s array, recording in ``digits[name]`` its significant digits if limited."""
+    tk.digits = 0
+    value = read()
+    if SHORT_DIGITS <= tk.digits < FULL_DIGITS:
+        digits[name] = tk.digits
+    return value
+
+
 def _check_end(tk):
     rest = tk.remaining()
     if len(rest) > 1 or (rest and not re.fullmatch(r"[+-]?\d+", rest[0])):
@@ -296,29 +338,31 @@ def _check_end(tk):
 
 def _parse_local(tk, d, nc, title):
     m = d * nc
-    W = _read_matrix(tk, "W")
+    digits = {}
+    W = _read(tk, digits, "W", lambda: _read_matrix(tk, "W"))
     if W.shape != (m, m):
         raise _ParseError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, nc={nc}")
-    q = tk.floats(m, "q")
+    q = _read(tk, digits, "q", lambda: tk.floats(m, "q"))
     mu = tk.floats(nc, "mu")
     _check_end(tk)
-    return LocalProblem(W, q, mu, d, title)
+    return LocalProblem(W, q, mu, d, title, digits=digits)
 
 
 def _parse_global(tk, d, nc, title):
     m = d * nc
-    M = _read_matrix(tk, "M")
+    digits = {}
+    M = _read(tk, digits, "M", lambda: _read_matrix(tk, "M"))
     ndof = M.shape[0]
     if M.shape != (ndof, ndof):
         raise _ParseError(f"M is {M.shape[0]}x{M.shape[1]}, not square")
-    H = _read_matrix(tk, "H")
+    H = _read(tk, digits, "H", lambda: _read_matrix(tk, "H"))
     if H.shape != (ndof, m):
         raise _ParseError(f"H is {H.shape[0]}x{H.shape[1]}, expected {ndof}x{m}")
-    f = tk.floats(ndof, "f")
-    w = tk.floats(m, "w")
+    f = _read(tk, digits, "f", lambda: tk.floats(ndof, "f"))
+    w = _read(tk, digits, "w", lambda: tk.floats(m, "w"))
     mu = tk.floats(nc, "mu")
     _check_end(tk)
-    return GlobalProblem(M, H, f, w, mu, d, title)
+    return GlobalProblem(M, H, f, w, mu, d, title, digits=digits)
 
 
 def parse_dat(text, name="<string>", title=""):

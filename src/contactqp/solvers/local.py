@@ -4,19 +4,32 @@ With friction (some ``mu > 0``) :func:`solve_local` calls
 :func:`~contactqp.solvers.coulomb.solve_coulomb`. Without (every ``mu`` zero) the cones reduce to
 rays, the tangential reactions vanish and the normal part is the bound-constrained QP
 ``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``, solved by the own box-QP solver.
+
+:func:`solve_global` solves a global problem through its condensed form and certifies the answer
+on the global equations as written (:meth:`~contactqp.local.GlobalProblem.certify`).
+Every solution carries its :class:`~contactqp.local.AccuracyLimits`: how far rounding (the
+conditioning of ``M``) and the data's written digits limit its error.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..local import LocalProblem, check_positive_semidefinite, contact_status, natural_map_error
+from ..local import (
+    AccuracyLimits,
+    GlobalProblem,
+    LocalProblem,
+    accuracy_limits,
+    check_positive_semidefinite,
+    contact_status,
+    natural_map_error,
+)
 from .box_qp import solve_box_qp
 
-__all__ = ["LocalSolution", "solve_local"]
+__all__ = ["LocalSolution", "solve_global", "solve_local"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +50,13 @@ class LocalSolution:
     message : str
     status : numpy.ndarray of str, shape (n_contacts,)
         ``"open"``, ``"stick"`` or ``"slip"`` (:func:`~contactqp.local.contact_status`).
+    limits : AccuracyLimits
+        How far rounding and the data's digits limit ``error``; the message says so where a
+        limit exceeds ``tol``.
+    v : numpy.ndarray or None, shape (ndof,)
+        Global velocities (:func:`solve_global`), else None.
+    equilibrium : float or None
+        Relative residual of ``M v = H r + f`` (:func:`solve_global`), else None.
     """
 
     r: np.ndarray
@@ -47,6 +67,9 @@ class LocalSolution:
     seconds: float
     message: str
     status: np.ndarray
+    limits: AccuracyLimits = field(default_factory=lambda: AccuracyLimits(0.0, 0.0))
+    v: np.ndarray | None = None
+    equilibrium: float | None = None
 
 
 def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
@@ -130,10 +153,64 @@ def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
     error = natural_map_error(problem, r, u, per_contact=per_contact)
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
+    limits = accuracy_limits(problem, r, u)
     return LocalSolution(
         r=r, u=u, error=error, converged=converged, iterations=iterations,
         seconds=time.perf_counter() - start,
-        message=(f"{verdict}: {detail}; natural-map error {error:.2e}"
-                 + (" (largest of the problem's and each contact's)" if per_contact else "")),
-        status=contact_status(problem, r, u),
+        message=_with_limits(f"{verdict}: {detail}; natural-map error {error:.2e}"
+                             + (" (largest of the problem's and each contact's)"
+                                if per_contact else ""), limits, tol),
+        status=contact_status(problem, r, u), limits=limits,
+    )
+
+
+def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
+    notes = limits.describe(tol)
+    return f"{message}; {notes}" if notes else message
+
+
+def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
+                 max_iter: int = 500) -> LocalSolution:
+    """Solve a global problem ``M v = H r + f, u = H^T v + w`` as given, certified on it.
+
+    The problem is condensed (:meth:`~contactqp.local.GlobalProblem.condense`, ``W`` not
+    symmetrised) and solved by :func:`solve_local`; the reactions are then judged on the written
+    equations by :meth:`~contactqp.local.GlobalProblem.certify`: ``v`` solves ``M v = H r + f``,
+    ``u = H^T v + w``, and ``error`` is the natural-map error of that ``(r, u)``.
+
+    Parameters
+    ----------
+    problem : GlobalProblem
+    tol : float
+        ``converged`` is True when the certified natural-map error and the relative
+        equilibrium residual are both at most ``tol``.
+    max_iter : int
+        As :func:`solve_local`.
+
+    Returns
+    -------
+    LocalSolution
+        With ``v`` and ``equilibrium``; ``limits`` gives the attainable error set by the
+        conditioning of ``M`` and the limit set by the data's digits, and the message names
+        any above ``tol``.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        If ``M`` is singular or the condensed ``W`` is not positive semidefinite.
+    """
+    start = time.perf_counter()
+    local = solve_local(problem.condense(), tol=tol, max_iter=max_iter)
+    certificate = problem.certify(local.r)
+    error, equilibrium = certificate.error, certificate.equilibrium
+    converged = bool(error <= tol and equilibrium <= tol)
+    verdict = "converged" if converged else f"not converged to {tol:g}"
+    message = (f"{verdict} on the global equations as written: natural-map error {error:.2e}, "
+               f"equilibrium residual {equilibrium:.1e} (condensed problem: {local.message})")
+    return replace(
+        local, u=certificate.u, error=error, converged=converged,
+        seconds=time.perf_counter() - start,
+        message=_with_limits(message, certificate.limits, tol),
+        status=contact_status(problem.condense(), local.r, certificate.u),
+        limits=certificate.limits, v=certificate.v, equilibrium=equilibrium,
     )
