@@ -103,7 +103,8 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     return best
 
 
-def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500) -> LocalSolution:
+def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
+                max_iter: int | None = None) -> LocalSolution:
     """Solve a local problem to natural-map error ``tol``.
 
     Parameters
@@ -112,8 +113,10 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
     tol : float
         Target of :func:`~contactqp.local.natural_map_error`; ``converged`` is True only when the
         error, computed independently of the solver, is at most ``tol``.
-    max_iter : int
-        Iteration cap of the box-QP solver; with friction, of each Newton run (at most 100).
+    max_iter : int, optional
+        Cap on all the iterations of the route: the box-QP solver (default 500) or, with
+        friction, every Newton run and Gauss-Seidel sweep of
+        :func:`~contactqp.solvers.coulomb.solve_coulomb` together (default its ``MAX_ITER``).
 
     Raises
     ------
@@ -122,9 +125,9 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
         (:func:`~contactqp.local.check_positive_semidefinite`).
     """
     if np.any(problem.mu > 0):
-        from .coulomb import solve_coulomb
+        from .coulomb import MAX_ITER, solve_coulomb
 
-        return solve_coulomb(problem, tol=tol, max_iter=min(max_iter, 100))
+        return solve_coulomb(problem, tol=tol, max_iter=MAX_ITER if max_iter is None else max_iter)
     start = time.perf_counter()
     check_positive_semidefinite(problem.W)
     normal = np.arange(problem.n_contacts) * problem.dim
@@ -133,7 +136,7 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8, max_iter: int = 500
     W_nn = np.asarray(W_nn.toarray() if hasattr(W_nn, "toarray") else W_nn, dtype=float)
     q_n = problem.q[normal]
     solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0,
-                            tol=min(tol, 1e-10) * 1e-2, max_iter=max_iter)
+                            tol=min(tol, 1e-10) * 1e-2, max_iter=500 if max_iter is None else max_iter)
     reactions = _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
@@ -170,7 +173,7 @@ def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
 
 
 def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
-                 max_iter: int = 500) -> LocalSolution:
+                 max_iter: int | None = None) -> LocalSolution:
     """Solve a global problem ``M v = H r + f, u = H^T v + w`` as given, certified on it.
 
     The problem is condensed (:meth:`~contactqp.local.GlobalProblem.condense`, ``W`` not
