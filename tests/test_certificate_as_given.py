@@ -217,6 +217,8 @@ def test_symmetrised_model_is_certified_on_the_flexibility_given():
     assert on_given / length > 1e-7  # the certificate's tolerance
     assert result.certificate.equilibrium >= 0.99 * on_given / length
     assert not result.success
+    asymmetry = np.abs(given - given.T).max() / np.abs(given).max()
+    assert f"symmetric part (relative asymmetry {asymmetry:.1e}" in result.message
 
 
 # --- --solution-dir never writes over an input or another input's solution ----------------

@@ -316,6 +316,14 @@ class ReducedModel:
         return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms), check_finite=False)
 
     @property
+    def asymmetry(self) -> float:
+        """Relative asymmetry ``max|M - M^T| / max|M|`` of the matrix as given (0 if symmetric)."""
+        given = self.as_given
+        if given is (self._flexibility if self._flexibility is not None else self._stiffness):
+            return 0.0
+        return float(np.max(np.abs(given - given.T)) / np.max(np.abs(given)))
+
+    @property
     def flexibility(self) -> np.ndarray:
         """``R``, computed from ``K`` on first use when the model was built from a stiffness."""
         if self._flexibility is None:

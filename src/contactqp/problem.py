@@ -194,7 +194,7 @@ class ContactProblem:
         lam = np.asarray(forces, dtype=float)
         certificate = certify(self, U, lam, self.certificate_tol)
         force_scale = max(np.max(np.abs(self.loads), initial=0.0), np.max(np.abs(lam), initial=0.0))
-        status, success, message = _verdict(converged, certificate, message)
+        status, success, message = _verdict(converged, certificate, message, self.model)
         A = self.constraints.matrix
         return ContactResult(
             x=U, forces=lam, nodal_forces=-(A.T @ lam), gaps=self.constraints.gaps - A @ U,
@@ -426,7 +426,7 @@ class FrictionalProblem:
             step = self.step(previous)
         tangential = step.tangential
         certificate = certify_friction(self, U, r, step, self.certificate_tol)
-        status, success, message = _verdict(converged, certificate, message)
+        status, success, message = _verdict(converged, certificate, message, self.model)
         k, d = self.n_contacts, self.dim
         R = r.reshape(k, d)
         HU = (local.operator @ U).reshape(k, d)
@@ -498,16 +498,25 @@ class FrictionalProblem:
                 f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})")
 
 
-def _verdict(converged: bool, certificate, message: str) -> tuple[int, bool, str]:
-    """``(status, success, message)``: 0 solved, 1 not converged, 2 certificate failed."""
+def _verdict(converged: bool, certificate, message: str, model) -> tuple[int, bool, str]:
+    """``(status, success, message)``: 0 solved, 1 not converged, 2 certificate failed.
+
+    A failed certificate on a model that was symmetrised to be solved says so: the certificate
+    judges the matrix as given, so its asymmetry bounds the equilibrium residual attainable.
+    """
     if not certificate.finite:
         return 2, False, (f"{message}; certificate failed: the answer holds NaN or inf "
                           f"(overflow or a failed solve)")
     if not converged:
         return 1, False, message
     if not certificate.passed:
+        note = ""
+        if model.asymmetry > 0.0 and certificate.equilibrium > certificate.tol:
+            note = (f"; the model's matrix was solved as its symmetric part (relative asymmetry "
+                    f"{model.asymmetry:.1e} as given), which limits the equilibrium residual "
+                    f"on the matrix as given")
         return 2, False, (f"{message}; certificate failed (worst relative residual "
-                          f"{certificate.worst:.2e} > {certificate.tol:.0e})")
+                          f"{certificate.worst:.2e} > {certificate.tol:.0e}){note}")
     return 0, True, message
 
 
