@@ -126,11 +126,14 @@ other keys             Keyword options of the chosen solver, checked against its
 [solver.backend_options]
                        Only for solvers that pass extra settings on (``"qp"``): a table given
                        verbatim to the qpsolvers backend, under the backend's own names (e.g.
-                       ``eps_abs`` for piqp). These names are checked by the backend when it
-                       runs, not here, and some backends ignore unknown ones.
+                       ``eps_abs`` for piqp), checked when the file is read (below); a few
+                       backends (piqp) ignore names they do not know.
 =====================  ======================================================================
 
-Numeric solver options must be finite; ``tol``, ``max_iter`` and any ``*_tol`` must be positive.
+Numeric solver options must be finite; ``tol``, ``max_iter`` and any ``*_tol`` must be positive,
+backend settings named ``tol_*`` or ``eps_*`` >= 0. A backend setting the backend refuses (an
+unknown name, a value of the wrong type or range) is an error naming its key when the file is
+read: each is tried on a QP of one variable.
 
 Example
 -------
@@ -238,12 +241,16 @@ import inspect
 import json
 import math
 import os
+import sys
+import tempfile
 import tomllib
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse
 
 from ..contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
@@ -254,6 +261,7 @@ from ..problem import ContactProblem, FrictionalProblem, friction_route
 from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
 from .export import write_rows
+from .npz import open_npz
 
 __all__ = [
     "ProblemSpec",
@@ -408,7 +416,7 @@ def _read_csv(path: Path) -> np.ndarray:
 
 
 def _read_npz(path: Path, key: str | None) -> np.ndarray:
-    with np.load(path, allow_pickle=False) as data:
+    with open_npz(path) as data:
         names = list(data.files)
         if key is None and _SCIPY_SPARSE_NPZ <= set(names):
             import scipy.sparse
@@ -861,6 +869,8 @@ def _option(where: _Where, name: str, value, default, key: str):
             raise where.error(key, f"must be finite, got {value}")
         if (name in ("tol", "max_iter") or name.endswith("_tol")) and value <= 0:
             raise where.error(key, f"must be positive, got {value}")
+        if name.startswith(("tol_", "eps_")) and value < 0:  # backends' tolerances
+            raise where.error(key, f"must be >= 0, got {value}")
     return value
 
 
@@ -893,8 +903,59 @@ def _route_options(where: _Where, table: dict, section: str, route: str, named: 
                                   f"{_describe(value)}")
             if key in named or key in options:
                 raise where.error(f"{sub}.{key}", f"is an option of {route}: set it in {section}")
+            _option(where, key, value, None, f"{sub}.{key}")
             options[key] = value
+    if "backend" in named:
+        _check_backend(where, section, options.get("backend", named["backend"]),
+                       {key: options[key] for key in table.get("backend_options", {})})
     return options
+
+
+def _check_backend(where: _Where, section: str, backend, settings: dict) -> None:
+    """Raise, naming the key, when the qpsolvers ``backend`` is not installed or refuses one of
+    ``settings``: each is tried on a QP of one variable (a backend checks its settings only
+    when it runs; a few, e.g. piqp, ignore names they do not know)."""
+    from ..solvers.qp import _qpsolvers, available_backends, backend_options
+
+    qpsolvers = _qpsolvers()
+    if backend not in qpsolvers.available_solvers:
+        raise where.error(f"{section}.backend", f"qp backend {backend!r} is not installed "
+                                                f"(available: {', '.join(available_backends())})")
+    sparse = backend in qpsolvers.sparse_solvers
+    one = scipy.sparse.csc_matrix(np.ones((1, 1))) if sparse else np.ones((1, 1))
+    probe = qpsolvers.Problem(P=one, q=np.zeros(1), G=one, h=np.ones(1))
+    for key, value in settings.items():
+        with _captured_output() as printed, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                qpsolvers.solve_problem(probe, solver=backend,
+                                        **{**backend_options(backend), key: value})
+                continue
+            except Exception as exc:  # noqa: BLE001  (what a backend raises on a bad setting)
+                reason = f"{type(exc).__name__}: {exc}"
+        raise where.error(f"[{section[1:-1]}.backend_options].{key}",
+                          f"backend '{backend}' refuses {key} = {value!r} "
+                          f"({printed[0].splitlines()[0] if printed[0] else reason})")
+
+
+@contextmanager
+def _captured_output():
+    """Capture what C code writes to file descriptors 1 and 2 into the list yielded."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    text = [""]
+    with tempfile.TemporaryFile() as sink:
+        saved = [os.dup(fd) for fd in (1, 2)]
+        try:
+            for fd in (1, 2):
+                os.dup2(sink.fileno(), fd)
+            yield text
+        finally:
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+            sink.seek(0)
+            text[0] = sink.read().decode(errors="replace").strip()
 
 
 def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, float]:
@@ -1141,8 +1202,8 @@ def load_problem_file(path) -> ProblemSpec:
     path = Path(path)
     where = _Where(path)
     try:
-        with open(path, "rb") as handle:
-            doc = tomllib.load(handle)
+        with open(path, encoding="utf-8-sig", newline="") as handle:  # -sig: skip a BOM
+            doc = tomllib.loads(handle.read())
     except FileNotFoundError:
         raise where.error("", "problem file not found", FileFormatError) from None
     except IsADirectoryError:

@@ -1,0 +1,145 @@
+"""Bad input, tried as a new user would: one line on stderr, exit 2, never a traceback.
+
+The command line runs in-process (:func:`contactqp.cli.main` with stdout and stderr captured),
+so that the property test at the end can try hundreds of inputs in seconds.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from contactqp.cli import main
+from contactqp.errors import FileFormatError
+from contactqp.io.problem_file import load_problem_file
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples" / "problems"
+
+
+def run(*args) -> tuple[int, str, str]:
+    """``contactqp ARGS`` in-process: (exit status, stdout, stderr); warnings go to stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+            warnings.catch_warnings():
+        warnings.simplefilter("default")
+        status = main([str(arg) for arg in args])
+    return status, out.getvalue(), err.getvalue()
+
+
+def assert_one_line_error(status, err, *needles):
+    lines = err.strip().splitlines()
+    assert status == 2 and len(lines) == 1 and lines[0].startswith("contactqp: error:"), err
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+
+
+def example(tmp_path, name="two_springs.toml", edit=lambda text: text) -> Path:
+    """A copy of an example problem (with its matrix files), its text edited."""
+    for path in EXAMPLES.glob("*.csv"):
+        shutil.copy(path, tmp_path)
+    target = tmp_path / name
+    target.write_text(edit((EXAMPLES / name).read_text()))
+    return target
+
+
+def qp_problem(tmp_path, backend, settings: str) -> Path:
+    """two_springs.toml solved by the qp solver with ``backend`` and these backend settings."""
+    return example(tmp_path, edit=lambda text: text.replace(
+        'name = "active-set"\ntol = 1e-12', f'name = "qp"\nbackend = "{backend}"')
+        + f"\n[solver.backend_options]\n{settings}\n")
+
+
+# --------------------------------------------------------------------------------------------
+# qp backend settings
+
+
+@pytest.mark.parametrize("backend, settings, needle", [
+    ("clarabel", "foo = 1", "no attribute 'foo'"),
+    ("clarabel", 'max_iter = "abc"', "max_iter = 'abc'"),
+    ("osqp", "eps_abs = 1e300\neps_rel = -1.0", "eps_rel: must be >= 0"),
+    ("osqp", "polish_refine_iter = -3", "polish_refine_iter"),  # osqp's own check (C code)
+    ("quadprog", "max_iter = 50", "unexpected keyword argument 'max_iter'"),
+    ("clarabel", "max_iter = 0", "must be positive"),
+])
+def test_a_backend_setting_the_backend_refuses_is_one_line_naming_it(tmp_path, capfd, backend,
+                                                                     settings, needle):
+    problem = qp_problem(tmp_path, backend, settings)
+    status, _, err = run("solve", problem)
+    key = settings.splitlines()[-1].split(" =")[0]
+    assert_one_line_error(status, err, f"[solver.backend_options].{key}", needle)
+    assert "Traceback" not in err and capfd.readouterr().out == ""  # nothing from C code either
+
+
+def test_backend_settings_it_accepts_reach_the_solve(tmp_path):
+    problem = qp_problem(tmp_path, "clarabel", "max_iter = 300\ntol_feas = 1e-11")
+    spec = load_problem_file(problem)
+    assert spec.options == {"backend": "clarabel", "max_iter": 300, "tol_feas": 1e-11}
+    status, _, err = run("solve", problem, "--json")
+    assert status == 0 and err == ""
+
+
+def test_an_unknown_backend_is_named_when_the_file_is_read(tmp_path):
+    problem = qp_problem(tmp_path, "no-such-qp", "max_iter = 3")
+    status, _, err = run("solve", problem)
+    assert_one_line_error(status, err, "[solver].backend", "'no-such-qp' is not installed")
+
+
+@pytest.mark.parametrize("settings, needle", [
+    ("foo = 1", "[friction.backend_options].foo: backend 'clarabel' refuses foo = 1"),
+    ('tol_feas = "tight"', "[friction.backend_options].tol_feas"),
+    ("max_iter = 5", "max_iter: is an option of friction solver 'polygonal'"),
+])
+def test_friction_backend_settings_are_checked_too(tmp_path, settings, needle):
+    problem = example(tmp_path, "cyclic_block.toml", lambda text: text.replace(
+        "\nmu = 0.3\n", "\nmu = 0.3\nfacets = 8\n") + f"\n[friction.backend_options]\n{settings}\n")
+    status, _, err = run("solve", problem)
+    assert_one_line_error(status, err, needle)
+
+
+# --------------------------------------------------------------------------------------------
+# Files a problem file names, and the problem file itself
+
+
+def damaged_archives(directory: Path) -> dict[str, Path]:
+    R = np.array([[5e-7, 5e-7], [5e-7, 1.5e-6]])
+    good = directory / "good.npz"
+    np.savez(good, R=R, spare=R)
+    data = good.read_bytes()
+    files = {"truncated": data[: len(data) // 2], "tail cut": data[:-30],
+             "corrupt member": data[:100] + b"x" * 40 + data[140:], "not a zip": b"hello"}
+    paths = {}
+    for name, content in files.items():
+        paths[name] = directory / f"{name.replace(' ', '_')}.npz"
+        paths[name].write_bytes(content)
+    paths["object array"] = directory / "objects.npz"
+    np.savez(paths["object array"], R=np.array([1, "a"], dtype=object))
+    return paths
+
+
+@pytest.mark.parametrize("damage", ["truncated", "tail cut", "corrupt member", "not a zip",
+                                    "object array"])
+def test_a_damaged_npz_is_one_line_naming_the_key_and_the_file(tmp_path, damage):
+    path = damaged_archives(tmp_path)[damage]
+    problem = example(tmp_path, edit=lambda text: text.replace(
+        '"two_springs_R.csv"', f'{{ file = "{path.name}", key = "R" }}'))
+    with pytest.raises(FileFormatError, match=r"\[model\]\.flexibility \('.*\.npz'\): not a "
+                                              r"readable \.npz archive"):
+        load_problem_file(problem)
+    status, _, err = run("solve", problem)
+    assert_one_line_error(status, err, "[model].flexibility", path.name)
+
+
+def test_a_toml_file_with_a_byte_order_mark_is_read(tmp_path):
+    plain = example(tmp_path)
+    marked = tmp_path / "marked.toml"
+    marked.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    assert load_problem_file(marked).problem.loads.tolist() == [0.0, 1000.0]
+    status, out, err = run("solve", marked, "--json")
+    assert status == 0 and err == "" and '"success": true' in out
