@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import shutil
+import sys
 import warnings
 from pathlib import Path
 
@@ -143,3 +145,92 @@ def test_a_toml_file_with_a_byte_order_mark_is_read(tmp_path):
     assert load_problem_file(marked).problem.loads.tolist() == [0.0, 1000.0]
     status, out, err = run("solve", marked, "--json")
     assert status == 0 and err == "" and '"success": true' in out
+
+
+# --------------------------------------------------------------------------------------------
+# Sizes: load steps, bodies
+
+
+@pytest.mark.parametrize("steps, total", [("100000000000000000000", "300000000000000000001"),
+                                          ("50000", "150001")])
+def test_an_absurd_number_of_load_steps_is_one_line(tmp_path, steps, total):
+    problem = example(tmp_path, "cyclic_block.toml",
+                      lambda text: text.replace("\nsteps = 4\n", f"\nsteps = {steps}\n"))
+    status, _, err = run("solve", problem)
+    assert_one_line_error(status, err, "[loading].steps", f"gives {total} load steps",
+                          "more than the 100000 allowed")
+
+
+def test_a_long_history_shows_its_progress_on_stderr(tmp_path, monkeypatch):
+    from contactqp.cli import app
+    from contactqp.cli import solve as solve_command
+
+    # as if every step took longer than the delay before progress is shown
+    monkeypatch.setattr(solve_command, "progress",
+                        lambda what: app.progress(what, after=0.0, every=0.0))
+    problem = example(tmp_path, "cyclic_block.toml")  # 13 steps
+    status, out, err = run("solve", problem, "--json")
+    assert status == 0 and '"steps": 13' in out
+    assert err.splitlines() == [f"contactqp: step {k} of 13 ({100 * k // 13} %), 0 s"
+                                for k in range(1, 14)]
+
+
+def test_a_short_run_shows_no_progress(tmp_path):
+    status, _, err = run("solve", example(tmp_path, "cyclic_block.toml"), "--json")
+    assert status == 0 and err == ""
+
+
+def test_a_hundred_thousand_springs_from_the_command_line():
+    n, F, limit = 100_000, 3.0e5, 0.2 * 2.0 * 10.0
+    status, out, err = run("springs", "--n", n, "--force", F, "--json")
+    assert status == 0 and err == ""
+    x = np.array(json.loads(out)["x"])
+    i = np.arange(1, n + 1)  # closed form: body i slides once F > (n + 1 - i) mu m g
+    np.testing.assert_allclose(x, np.cumsum(np.maximum(F - (n + 1 - i) * limit, 0.0)),
+                               rtol=0, atol=1e-9 * x.max())
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("springs", "--n", "1000001"), "--n"), (("springs", "--n", "10" * 40), "--n"),
+    (("layers", "--steps", "100000"), "--steps"),
+])
+def test_sizes_beyond_what_is_offered_are_one_line(args, needle):
+    status, _, err = run(*args)
+    assert_one_line_error(status, err, needle)
+
+
+# --------------------------------------------------------------------------------------------
+# Optional dependencies
+
+
+def without(monkeypatch, module: str) -> None:
+    """Make ``import module`` fail, as after an install without its extra; modules of contactqp
+    that import it at their top are dropped too, so that they are imported again."""
+    for name in list(sys.modules):
+        if name == module or name.startswith(module + ".") or (
+                module == "skfem" and name.startswith("contactqp.compliance.fem")):
+            monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, module, None)
+
+
+def op4_problem(tmp_path) -> Path:
+    (tmp_path / "R.op4").write_text("not read: pyNastran is missing\n")
+    return example(tmp_path, edit=lambda text: text.replace(
+        '"two_springs_R.csv"', '{ file = "R.op4", key = "KAA" }'))
+
+
+@pytest.mark.parametrize("module, extra, command", [
+    ("skfem", "fem", lambda tmp: ["layers", "--steps", "2"]),
+    ("matplotlib", "plot", lambda tmp: ["layers", "--steps", "2", "--plot", tmp / "l.png"]),
+    ("matplotlib", "plot", lambda tmp: ["springs", "--plot", tmp / "s.png"]),
+    ("qpsolvers", "qp", lambda tmp: ["solve", qp_problem(tmp, "clarabel", "max_iter = 99")]),
+    ("qpsolvers", "qp", lambda tmp: ["solve", example(tmp, "cyclic_block.toml", lambda text:
+                                                      text.replace("\nmu = 0.3\n",
+                                                                   "\nmu = 0.3\nfacets = 6\n"))]),
+    ("pyNastran", "importers", lambda tmp: ["solve", op4_problem(tmp)]),
+])
+def test_a_missing_optional_dependency_names_its_extra(tmp_path, monkeypatch, module, extra,
+                                                       command):
+    without(monkeypatch, module)
+    status, _, err = run(*command(tmp_path))
+    assert_one_line_error(status, err, f"pip install 'contactqp[{extra}]'")

@@ -112,7 +112,8 @@ over. Its turning points are given by exactly one of
 =============  ===========================================================================
 
 Step 0 is the first turning point, then ``steps`` increments lead to each next one:
-``1 + steps (j - 1)`` steps for ``j`` turning points, numbered from 0 in the results.
+``1 + steps (j - 1)`` steps for ``j`` turning points, numbered from 0 in the results; at most
+100000 (:data:`contactqp.loading.MAX_STEPS`: each step is a full solve whose result is kept).
 
 **[solver]** (optional): how to solve a frictionless problem (with ``[friction]``: only
 ``certificate_tol``).
@@ -1132,8 +1133,13 @@ class ProblemSpec:
         """True when the problem has friction."""
         return isinstance(self.problem, FrictionalProblem)
 
-    def solve(self) -> ContactResult | FrictionalResult | HistoryResult:
+    def solve(self, progress=None) -> ContactResult | FrictionalResult | HistoryResult:
         """Solve :attr:`problem` (along :attr:`history` when given) with :attr:`solver`.
+
+        Parameters
+        ----------
+        progress : callable, optional
+            For a history, called as ``progress(done, total)`` after each step.
 
         Returns
         -------
@@ -1141,7 +1147,8 @@ class ProblemSpec:
             Frictionless, with friction, or one certified result per step of the history.
         """
         if self.history is not None:
-            return solve_history(self.problem, self.history, solver=self.solver, **self.options)
+            return solve_history(self.problem, self.history, solver=self.solver,
+                                 progress=progress, **self.options)
         if self.frictional:
             return self.problem.solve(solver=self.solver, **self.options)
         return solve(self.problem, solver=self.solver, **self.options)
