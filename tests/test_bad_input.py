@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import math
 import shutil
 import sys
 import warnings
@@ -16,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from contactqp.cli import main
 from contactqp.errors import FileFormatError
@@ -234,3 +237,233 @@ def test_a_missing_optional_dependency_names_its_extra(tmp_path, monkeypatch, mo
     without(monkeypatch, module)
     status, _, err = run(*command(tmp_path))
     assert_one_line_error(status, err, f"pip install 'contactqp[{extra}]'")
+
+
+# --------------------------------------------------------------------------------------------
+# Property test: broken problem files and command lines
+
+
+def toml_value(value) -> str:
+    """``value`` written as a TOML value (inline arrays and tables, nan and inf included)."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, float):
+        return ("nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+                if math.isinf(value) else repr(value))
+    if isinstance(value, (int, str)):
+        return str(value) if isinstance(value, int) else json.dumps(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(toml_value(item) for item in value) + "]"
+    return "{ " + ", ".join(f"{json.dumps(k)} = {toml_value(v)}" for k, v in value.items()) + " }"
+
+
+def toml_text(doc: dict) -> str:
+    """A problem file's text: scalars first, then one [table] or [[table]] per entry."""
+    lines = [f"{key} = {toml_value(value)}" for key, value in doc.items()
+             if not isinstance(value, dict) and not (
+                 isinstance(value, list) and value and all(isinstance(v, dict) for v in value))]
+    for key, value in doc.items():
+        if isinstance(value, dict):
+            lines += [f"[{key}]"] + [f"{json.dumps(k)} = {toml_value(v)}" for k, v in value.items()]
+        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            for table in value:
+                lines += [f"[[{key}]]"] + [f"{json.dumps(k)} = {toml_value(v)}"
+                                           for k, v in table.items()]
+    return "\n".join(lines) + "\n"
+
+
+MISSING = object()  # a key removed from the file
+
+#: Values a new user might type by mistake: wrong types and shapes, non-finite and huge
+#: numbers, negative and empty ones, files that are missing, empty or damaged.
+BAD_VALUES = [
+    math.nan, math.inf, -math.inf, 1e300, -1e300, -1, 0, -0.5, 1.5, 10**30, True, "", "abc",
+    [], [[]], [1, "a"], [math.nan, 1.0], [1e300, 1e300], [[1.0, 2.0], [3.0]], [[1e300]],
+    [-1, 0], [0, 0], {}, {"file": "R.csv", "key": "R"}, {"file": "good.npz"},
+    "missing.csv", "empty.csv", "commas.csv", "text.csv", "corrupt.npz", "good.npz",
+    "two_springs_R.csv", MISSING,
+]
+
+BASES = {
+    "two_springs.toml": ["name", "model.flexibility", "model.dofs_per_node", "model.stiffness",
+                         "model.coordinates", "loads.values", "loads.entries", "obstacle",
+                         "obstacle.0.type", "obstacle.0.nodes", "obstacle.0.gaps",
+                         "obstacle.0.direction", "obstacle.0.directions", "solver",
+                         "solver.name", "solver.tol", "solver.max_iter",
+                         "solver.certificate_tol", "model"],
+    "cyclic_block.toml": ["friction.mu", "friction.cohesion", "friction.facets",
+                          "friction.solver", "friction.tol", "friction.max_iter",
+                          "friction.backend", "friction.backend_options", "loading.factors",
+                          "loading.steps", "loading.points", "loads.entries",
+                          "loads.entries.0.value", "loads.entries.1.node", "obstacle.0.gaps",
+                          "friction", "loading", "model.flexibility"],
+    "qp.toml": ["solver.backend", "solver.backend_options", "solver.backend_options.max_iter",
+                "solver.backend_options.tol_feas", "loads.values", "obstacle.0.gaps"],
+}
+
+
+#: Findings of this test in modules other work owns (issue 11), left out of the draws until
+#: that work lands; each is (base file, key, value) and what the user sees.
+FOUND_ELSEWHERE = {
+    # overflow: RuntimeWarnings on stderr, exit 0 with a huge or NaN answer ("silently wrong",
+    # result.py / problem.py / box_qp.py certificates)
+    ("two_springs.toml", "loads.values", 1e300), ("qp.toml", "loads.values", 1e300),
+    ("cyclic_block.toml", "friction.cohesion", 1e300),
+    ("cyclic_block.toml", "loading.factors", 1e300),
+    ("cyclic_block.toml", "loads.entries.0.value", 1e300),
+    ("cyclic_block.toml", "loads.entries.0.value", -1e300),
+    # contact.py: a direction of 1e300 overflows its norm (RuntimeWarning) before the one line
+    ("two_springs.toml", "obstacle.0.direction", 1e300),
+    # friction.py / solvers/polygonal.py: facets = 1e30 is numpy's ValueError
+    ("cyclic_block.toml", "friction.facets", 10**30),
+    # result.py: zero initial gaps with friction, RuntimeWarning: invalid value in divide
+    ("cyclic_block.toml", "obstacle.0.gaps", 0),
+    # solvers/qp.py: a backend's own warnings reach stderr (Clarabel.rs terminated ...)
+    ("qp.toml", "solver.backend_options.tol_feas", 0),
+}
+
+
+def found_elsewhere(base: str, key: str, value) -> bool:
+    """Whether (key, value) is one of :data:`FOUND_ELSEWHERE`, also as an array's entry."""
+    for known_base, known_key, known in FOUND_ELSEWHERE:
+        if (base, key) == (known_base, known_key):
+            entries = value if isinstance(value, list) else [value]
+            if any(entry == known and type(entry) is type(known) for entry in entries):
+                return True
+            if any(isinstance(entry, list) and known in entry for entry in entries):
+                return True
+    return False
+
+
+def property_files(directory: Path) -> None:
+    """The base problems of the property test and the files their broken values name."""
+    example(directory, "cyclic_block.toml")
+    qp = qp_problem(directory, "clarabel", "max_iter = 200\ntol_feas = 1e-10")
+    qp.rename(directory / "qp.toml")
+    example(directory)
+    damaged_archives(directory)["corrupt member"].rename(directory / "corrupt.npz")
+    (directory / "empty.csv").write_text("")
+    (directory / "commas.csv").write_text(",,\n,,\n")
+    (directory / "text.csv").write_text("a,b\nc,d\n")
+
+
+def mutated(doc: dict, path: str, value) -> dict:
+    """``doc`` with the entry at ``path`` (dotted, list indices as numbers) set or removed;
+    unchanged when an earlier mutation replaced a table on the way by something else."""
+    *keys, last = path.split(".")
+    parent = doc
+    for key in keys:
+        if isinstance(parent, list) and key.isdigit() and int(key) < len(parent):
+            parent = parent[int(key)]
+        elif isinstance(parent, dict) and not key.isdigit():
+            parent = parent.setdefault(key, {})
+        else:
+            return doc
+    if isinstance(parent, list) and last.isdigit() and int(last) < len(parent):
+        if value is not MISSING:
+            parent[int(last)] = value
+    elif isinstance(parent, dict) and value is MISSING:
+        parent.pop(last, None)
+    elif isinstance(parent, dict):
+        parent[last] = value
+    return doc
+
+
+def assert_clean_exit(status, err):
+    """Exit 0, 1 or 2, no traceback, no warning; exit 2 with exactly one line on stderr."""
+    assert status in (0, 1, 2), (status, err)
+    assert "Traceback" not in err and "Warning" not in err, err
+    if status == 2:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("contactqp: error:"), err
+
+
+@pytest.fixture(scope="module")
+def property_dir(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("broken")
+    property_files(directory)
+    return directory
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_broken_problem_files_give_one_line_and_the_right_exit_code(property_dir, data):
+    import tomllib
+
+    base = data.draw(st.sampled_from(sorted(BASES)), label="base")
+    doc = tomllib.loads((property_dir / base).read_text())
+    for _ in range(data.draw(st.integers(1, 3), label="mutations")):
+        path = data.draw(st.sampled_from(BASES[base]), label="key")
+        value = data.draw(st.sampled_from([value for value in BAD_VALUES
+                                           if not found_elsewhere(base, path, value)]),
+                          label="value")
+        doc = mutated(doc, path, value)
+    problem = property_dir / "broken.toml"
+    problem.write_text(toml_text(doc))
+    try:
+        status, _, err = run("solve", problem, "--json")
+    except BaseException as exc:  # noqa: BLE001  (what the user would see as a traceback)
+        pytest.fail(f"traceback: {type(exc).__name__}: {exc}\n{problem.read_text()}")
+    assert_clean_exit(status, err)
+
+
+BAD_OPTION_VALUES = ["nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "", "abc", "1.5",
+                     "1" + "0" * 30, "1,,2", "missing.npy"]
+
+COMMANDS = {  # command, options that take a value, options fixed to keep a run cheap
+    "springs": (["--n", "--stiffness", "--mu", "--mass", "--g", "--force"], []),
+    "layers": (["--mu", "--cohesion", "--steps"], ["--steps", "2"]),
+    "rod": (["--elements"], []),
+    "fclib": (["--tol"], []),
+    "riveting": (["--samples", "--seed", "--workers", "--mean-gap", "--amplitude",
+                  "--correlation-length", "--method", "--gaps"], ["--samples", "1"]),
+}
+
+
+#: Findings of the command-line test in commands other work owns (issue 11), left out of the
+#: draws until that work lands: (command, option, value).
+OPTIONS_FOUND_ELSEWHERE = {
+    # riveting / batch.py: tracebacks (OverflowError from h5py, from the gap field)
+    ("riveting", "--samples", "1" + "0" * 30), ("riveting", "--amplitude", "1e300"),
+    ("riveting", "--correlation-length", "1e300"),
+    # riveting: RuntimeWarnings on stderr and exit 0 (gaps of 1e300 m, or none)
+    ("riveting", "--mean-gap", "1e300"), ("riveting", "--mean-gap", "-1e300"),
+    ("riveting", "--mean-gap", "0"),
+    # rod.py: RuntimeWarning (invalid value in cast) before the one line
+    ("rod", "--elements", "1" + "0" * 30),
+}
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_broken_command_lines_give_one_line_and_the_right_exit_code(property_dir, tmp_path_factory,
+                                                                     data):
+    command = data.draw(st.sampled_from(sorted(COMMANDS)), label="command")
+    options, fixed = COMMANDS[command]
+    option = data.draw(st.sampled_from(options), label="option")
+    value = data.draw(st.sampled_from([value for value in BAD_OPTION_VALUES if (
+        command, option, value) not in OPTIONS_FOUND_ELSEWHERE]), label="value")
+    args = [command, *fixed, option, value]
+    if command == "fclib":
+        args.append(str(property_dir / "corrupt.npz"))
+    if command == "riveting":
+        args += ["--out", str(tmp_path_factory.mktemp("study"))]
+    try:
+        status, _, err = run(*args)
+    except BaseException as exc:  # noqa: BLE001  (what the user would see as a traceback)
+        pytest.fail(f"traceback: {type(exc).__name__}: {exc} for {args}")
+    assert_clean_exit(status, err)
+
+
+@pytest.mark.parametrize("content", ["", "\n\n", "# only a comment\n", ",,\n", " , \n"])
+def test_an_empty_csv_is_one_line_and_no_warning(tmp_path, content):
+    from contactqp.compliance.importers import read_unit_load_csv
+
+    (tmp_path / "empty.csv").write_text(content)
+    problem = example(tmp_path, edit=lambda text: text.replace("two_springs_R.csv", "empty.csv"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status, _, err = run("solve", problem)
+        with pytest.raises(FileFormatError, match="empty.csv"):
+            read_unit_load_csv(tmp_path / "empty.csv")
+    assert_one_line_error(status, err, "[model].flexibility ('empty.csv')")

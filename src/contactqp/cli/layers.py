@@ -13,10 +13,10 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
 
 
 @cli.command()
-@click.option("--mu", type=click.FloatRange(min=0, min_open=True), default=0.5,
-              show_default=True, help="Friction coefficient of the interface.")
-@click.option("--cohesion", type=click.FloatRange(min=0), default=5e3, show_default=True,
-              help="Cohesion of the interface (Pa).")
+@click.option("--mu", type=click.FloatRange(min=0, max=10, min_open=True), default=0.5,
+              show_default=True, help="Friction coefficient of the interface (soils: below 1.5).")
+@click.option("--cohesion", type=click.FloatRange(min=0, max=1e8), default=5e3,
+              show_default=True, help="Cohesion of the interface (Pa; strong rock: 1e7 to 1e8).")
 @click.option("--steps", type=click.IntRange(min=2, max=MAX_STEPS - 1), default=40,
               show_default=True, help="Steps of the actuator travel.")
 @click.option("--json", "as_json", is_flag=True,

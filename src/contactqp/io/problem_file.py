@@ -865,6 +865,10 @@ def _option(where: _Where, name: str, value, default, key: str):
         ok = True
     if not ok:
         raise where.error(key, f"must be {kind} (default {default!r}), got {_describe(value)}")
+    bounded = name in ("tol", "max_iter") or name.endswith("_tol") or name.startswith(
+        ("tol_", "eps_"))
+    if bounded and (isinstance(value, bool) or not isinstance(value, (int, float))):
+        raise where.error(key, f"must be a number, got {_describe(value)}")
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         if not math.isfinite(value):
             raise where.error(key, f"must be finite, got {value}")
@@ -977,6 +981,8 @@ def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, floa
                                   "certificate_tol; solver options go in [friction]")
         return "", {}, certificate_tol
     name = table.get("name", "active-set")
+    if not isinstance(name, str):
+        raise where.error("[solver].name", f"must be a string, got {_describe(name)}")
     if name not in SOLVERS:
         expected = ", ".join(SOLVERS)
         raise where.error("[solver].name", f"unknown solver {name!r} (expected one of {expected})")
