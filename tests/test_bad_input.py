@@ -67,7 +67,8 @@ def qp_problem(tmp_path, backend, settings: str) -> Path:
 
 @pytest.mark.parametrize("backend, settings, needle", [
     ("clarabel", "foo = 1", "no attribute 'foo'"),
-    ("clarabel", 'max_iter = "abc"', "max_iter = 'abc'"),
+    ("clarabel", 'max_iter = "abc"', "must be a number, got the string 'abc'"),
+    ("clarabel", 'verbose = "abc"', "refuses verbose = 'abc'"),
     ("osqp", "eps_abs = 1e300\neps_rel = -1.0", "eps_rel: must be >= 0"),
     ("osqp", "polish_refine_iter = -3", "polish_refine_iter"),  # osqp's own check (C code)
     ("quadprog", "max_iter = 50", "unexpected keyword argument 'max_iter'"),
@@ -80,6 +81,18 @@ def test_a_backend_setting_the_backend_refuses_is_one_line_naming_it(tmp_path, c
     key = settings.splitlines()[-1].split(" =")[0]
     assert_one_line_error(status, err, f"[solver.backend_options].{key}", needle)
     assert "Traceback" not in err and capfd.readouterr().out == ""  # nothing from C code either
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda text: text.replace('name = "active-set"', "name = []"),
+     "[solver].name: must be a string, got an array of 0 entries"),
+    (lambda text: text.replace('name = "active-set"\ntol = 1e-12', 'name = "qp"')
+     + "\n[solver.backend_options]\nmax_iter = true\n",
+     "[solver.backend_options].max_iter: must be a number, got the boolean true"),
+])
+def test_solver_entries_of_the_wrong_type_are_one_line(tmp_path, edit, needle):
+    status, _, err = run("solve", example(tmp_path, edit=edit))
+    assert_one_line_error(status, err, needle)
 
 
 def test_backend_settings_it_accepts_reach_the_solve(tmp_path):
@@ -195,7 +208,8 @@ def test_a_hundred_thousand_springs_from_the_command_line():
 
 @pytest.mark.parametrize("args, needle", [
     (("springs", "--n", "1000001"), "--n"), (("springs", "--n", "10" * 40), "--n"),
-    (("layers", "--steps", "100000"), "--steps"),
+    (("layers", "--steps", "100000"), "--steps"), (("layers", "--mu", "1e300"), "--mu"),
+    (("layers", "--cohesion", "1e300"), "--cohesion"),
 ])
 def test_sizes_beyond_what_is_offered_are_one_line(args, needle):
     status, _, err = run(*args)
