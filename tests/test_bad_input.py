@@ -12,6 +12,7 @@ import json
 import math
 import shutil
 import sys
+import tomllib
 import warnings
 from pathlib import Path
 
@@ -402,8 +403,6 @@ def property_dir(tmp_path_factory):
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_broken_problem_files_give_one_line_and_the_right_exit_code(property_dir, data):
-    import tomllib
-
     base = data.draw(st.sampled_from(sorted(BASES)), label="base")
     doc = tomllib.loads((property_dir / base).read_text())
     for _ in range(data.draw(st.integers(1, 3), label="mutations")):

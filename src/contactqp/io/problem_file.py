@@ -246,6 +246,7 @@ import sys
 import tempfile
 import tomllib
 import warnings
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -420,8 +421,6 @@ def _read_npz(path: Path, key: str | None) -> np.ndarray:
     with open_npz(path) as data:
         names = list(data.files)
         if key is None and _SCIPY_SPARSE_NPZ <= set(names):
-            import scipy.sparse
-
             return scipy.sparse.load_npz(path).toarray()
         if key is None:
             if len(names) != 1:
@@ -865,16 +864,17 @@ def _option(where: _Where, name: str, value, default, key: str):
         ok = True
     if not ok:
         raise where.error(key, f"must be {kind} (default {default!r}), got {_describe(value)}")
-    bounded = name in ("tol", "max_iter") or name.endswith("_tol") or name.startswith(
-        ("tol_", "eps_"))
-    if bounded and (isinstance(value, bool) or not isinstance(value, (int, float))):
+    positive = name in ("tol", "max_iter") or name.endswith("_tol")
+    nonnegative = name.startswith(("tol_", "eps_"))  # backends' tolerances
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if (positive or nonnegative) and not number:
         raise where.error(key, f"must be a number, got {_describe(value)}")
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    if number:
         if not math.isfinite(value):
             raise where.error(key, f"must be finite, got {value}")
-        if (name in ("tol", "max_iter") or name.endswith("_tol")) and value <= 0:
+        if positive and value <= 0:
             raise where.error(key, f"must be positive, got {value}")
-        if name.startswith(("tol_", "eps_")) and value < 0:  # backends' tolerances
+        if nonnegative and value < 0:
             raise where.error(key, f"must be >= 0, got {value}")
     return value
 
@@ -1139,7 +1139,8 @@ class ProblemSpec:
         """True when the problem has friction."""
         return isinstance(self.problem, FrictionalProblem)
 
-    def solve(self, progress=None) -> ContactResult | FrictionalResult | HistoryResult:
+    def solve(self, progress: Callable[[int, int], None] | None = None
+              ) -> ContactResult | FrictionalResult | HistoryResult:
         """Solve :attr:`problem` (along :attr:`history` when given) with :attr:`solver`.
 
         Parameters
