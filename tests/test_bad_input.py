@@ -192,6 +192,18 @@ def test_a_long_history_shows_its_progress_on_stderr(tmp_path, monkeypatch):
                                 for k in range(1, 14)]
 
 
+def test_many_forces_on_a_long_chain_show_their_progress(monkeypatch):
+    from contactqp.cli import app
+    from contactqp.cli import springs as springs_command
+
+    monkeypatch.setattr(springs_command, "progress",
+                        lambda what: app.progress(what, after=0.0, every=0.0))
+    status, out, err = run("springs", "--n", "1000", "--force", "1,2,3", "--json")
+    assert status == 0 and len(out.splitlines()) == 3
+    assert err.splitlines() == [f"contactqp: force {k} of 3 ({100 * k // 3} %), 0 s"
+                                for k in (1, 2, 3)]
+
+
 def test_a_short_run_shows_no_progress(tmp_path):
     status, _, err = run("solve", example(tmp_path, "cyclic_block.toml"), "--json")
     assert status == 0 and err == ""

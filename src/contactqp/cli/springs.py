@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail, float_list
+from .app import EXIT_NOT_SOLVED, cli, console, fail, float_list, progress
 
 #: Largest chain offered: solved in about a second per force (the output then holds 1e6 numbers
 #: per force).
@@ -35,11 +35,13 @@ def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
 
     chain = SpringChain(n=n, stiffness=stiffness, mu=mu, mass=mass, g=gravity)
     results = []
-    for force in forces:
-        result = chain.solve(force)
-        results.append(result)
-        if as_json:
-            click.echo(json.dumps({"force": result.force, "x": result.x.tolist()}))
+    with progress("force") as report:
+        for force in forces:
+            result = chain.solve(force)
+            results.append(result)
+            if as_json:
+                click.echo(json.dumps({"force": result.force, "x": result.x.tolist()}))
+            report(len(results), len(forces))
     if not as_json:
         _springs_table(chain, results)
     if plot:
