@@ -70,6 +70,7 @@ def qp_problem(tmp_path, backend, settings: str) -> Path:
     ("clarabel", "foo = 1", "no attribute 'foo'"),
     ("clarabel", 'max_iter = "abc"', "must be a number, got the string 'abc'"),
     ("clarabel", 'verbose = "abc"', "refuses verbose = 'abc'"),
+    ("piqp", "foo = 1", "undefined solver setting foo"),  # piqp warns, when verbose only
     ("osqp", "eps_abs = 1e300\neps_rel = -1.0", "eps_rel: must be >= 0"),
     ("osqp", "polish_refine_iter = -3", "polish_refine_iter"),  # osqp's own check (C code)
     ("quadprog", "max_iter = 50", "unexpected keyword argument 'max_iter'"),

@@ -127,8 +127,7 @@ other keys             Keyword options of the chosen solver, checked against its
 [solver.backend_options]
                        Only for solvers that pass extra settings on (``"qp"``): a table given
                        verbatim to the qpsolvers backend, under the backend's own names (e.g.
-                       ``eps_abs`` for piqp), checked when the file is read (below); a few
-                       backends (piqp) ignore names they do not know.
+                       ``eps_abs`` for piqp), checked when the file is read (below).
 =====================  ======================================================================
 
 Numeric solver options must be finite; ``tol``, ``max_iter`` and any ``*_tol`` must be positive,
@@ -919,7 +918,7 @@ def _route_options(where: _Where, table: dict, section: str, route: str, named: 
 def _check_backend(where: _Where, section: str, backend, settings: dict) -> None:
     """Raise, naming the key, when the qpsolvers ``backend`` is not installed or refuses one of
     ``settings``: each is tried on a QP of one variable (a backend checks its settings only
-    when it runs; a few, e.g. piqp, ignore names they do not know)."""
+    when it runs)."""
     from ..solvers.qp import _qpsolvers, available_backends, backend_options
 
     qpsolvers = _qpsolvers()
@@ -930,17 +929,31 @@ def _check_backend(where: _Where, section: str, backend, settings: dict) -> None
     one = scipy.sparse.csc_matrix(np.ones((1, 1))) if sparse else np.ones((1, 1))
     probe = qpsolvers.Problem(P=one, q=np.zeros(1), G=one, h=np.ones(1))
     for key, value in settings.items():
-        with _captured_output() as printed, warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        tried = {**backend_options(backend), key: value}
+        reason = _refusal(qpsolvers, probe, backend, tried, key)
+        if reason:
+            raise where.error(f"[{section[1:-1]}.backend_options].{key}",
+                              f"backend '{backend}' refuses {key} = {value!r} ({reason})")
+
+
+def _refusal(qpsolvers, probe, backend: str, settings: dict, key: str) -> str | None:
+    """Why ``backend`` refuses ``settings`` on ``probe``, or None: what it raises or prints
+    (C code), or a warning naming ``key`` (piqp warns of unknown names only when verbose)."""
+    for verbose in (False, True):
+        with _captured_output() as printed, warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
             try:
-                qpsolvers.solve_problem(probe, solver=backend,
-                                        **{**backend_options(backend), key: value})
-                continue
+                qpsolvers.solve_problem(probe, solver=backend, **{"verbose": verbose, **settings})
+                raised = None
             except Exception as exc:  # noqa: BLE001  (what a backend raises on a bad setting)
-                reason = f"{type(exc).__name__}: {exc}"
-        raise where.error(f"[{section[1:-1]}.backend_options].{key}",
-                          f"backend '{backend}' refuses {key} = {value!r} "
-                          f"({printed[0].splitlines()[0] if printed[0] else reason})")
+                raised = f"{type(exc).__name__}: {exc}"
+        if raised:
+            said = [line for line in printed[0].splitlines() if "error" in line.lower()]
+            return " ".join((said[0] if said else raised).split())
+        named = [str(warning.message) for warning in caught if key in str(warning.message)]
+        if named:
+            return " ".join(named[0].split())
+    return None
 
 
 @contextmanager
