@@ -85,4 +85,4 @@ def test_cli_infinite_cohesion_is_one_line(capsys):
 
     assert main(["layers", "--cohesion", "inf"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "cohesion must be finite" in err
+    assert err.count("\n") == 1 and "'--cohesion': inf is not in the range" in err

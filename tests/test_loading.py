@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import contactqp as cq
+from contactqp.loading import MAX_STEPS
 from contactqp.springs import SpringChain
 
 EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "examples" / "cyclic_shear.py"
@@ -155,3 +156,22 @@ def test_bad_histories_are_clear_errors(example):
         with pytest.raises(cq.InvalidInputError, match="steps"):
             cq.linear_path(np.zeros((2, 4)), steps)
     assert cq.linear_path(np.zeros((2, 4)), np.int64(3)).shape == (4, 4)
+
+
+def test_a_path_of_more_steps_than_the_cap_is_refused_before_it_is_built():
+    with pytest.raises(cq.InvalidInputError, match="gives 300000000000000000001 load steps"):
+        cq.linear_path(np.zeros((4, 2)), 10**20)  # used to raise numpy's ValueError
+    with pytest.raises(cq.InvalidInputError, match="more than the 7 allowed"):
+        cq.linear_path(np.zeros((3, 2)), 4, max_steps=7)
+    assert cq.linear_path(np.zeros((3, 2)), 3, max_steps=7).shape == (7, 2)
+    assert cq.linear_path(np.zeros((2, 1)), 2 * MAX_STEPS, max_steps=None).shape == (
+        2 * MAX_STEPS + 1, 1)
+
+
+def test_progress_is_reported_after_every_step(example):
+    problem = example.chain_problem(2, 1.0, 0.2)
+    loads = cq.linear_path([[0.0, -20.0, 0.0, -20.0], [7.0, -20.0, 7.0, -20.0]], 4)
+    calls = []
+    history = cq.solve_history(problem, loads,
+                               progress=lambda done, total: calls.append((done, total)))
+    assert history.success and calls == [(k, 5) for k in range(1, 6)]

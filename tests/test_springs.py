@@ -1,11 +1,16 @@
 """The spring chain with friction against the published table and the analytic solution."""
 
+import warnings
+
 import numpy as np
 import pytest
 import qpsolvers
-from hypothesis import given, settings, strategies as st
+import scipy.sparse
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from contactqp.springs import SpringChain
+from contactqp.solvers.box_qp import solve_box_qp
+from contactqp.springs import SpringChain, chain_flexibility
 
 
 def analytic(n, c, mu, m, g, F):
@@ -66,3 +71,44 @@ def test_bad_parameters(kwargs, message):
     params = {"n": 3, "stiffness": 1.0, "mu": 0.2, "mass": 2.0, "g": 10.0, **kwargs}
     with pytest.raises(InvalidInputError, match=message):
         SpringChain(**params)
+
+
+def test_a_hundred_thousand_bodies_against_the_closed_form_and_equilibrium():
+    # the dense flexibility of this chain would take 74.5 GiB; the truth is the closed form and
+    # the equilibrium on a stiffness assembled here, independently of the module
+    n, c, mu, m, g, F = 100_000, 2.5, 0.3, 1.5, 9.81, 2e5
+    result = SpringChain(n, c, mu, m, g).solve(F)
+    expected = analytic(n, c, mu, m, g, F)
+    assert result.converged and 0 < result.sliding.sum() < n
+    np.testing.assert_allclose(result.x, expected, rtol=0, atol=1e-9 * np.max(expected))
+    K = scipy.sparse.diags([-np.ones(n - 1), np.r_[2 * np.ones(n - 1), 1.0], -np.ones(n - 1)],
+                           [-1, 0, 1])
+    pull = np.zeros(n)
+    pull[-1] = F
+    np.testing.assert_allclose(c * (K @ result.x), pull - result.friction, rtol=0,
+                               atol=1e-9 * F)
+    limit = mu * m * g  # friction forces are differences of spring forces up to F: 1e-12 F
+    assert np.all(np.abs(result.friction) <= limit + 1e-12 * F)
+    np.testing.assert_allclose(result.friction[result.x > 0], limit, rtol=0, atol=1e-12 * F)
+
+
+@pytest.mark.parametrize("n, F", [(40, 50.0), (200, 1500.0), (200, -30.0)])
+def test_the_box_qp_of_the_method_agrees(n, F):
+    # the method's statement solved by the project's active-set solver on the dense flexibility
+    c, mu, m, g = 1.5, 0.25, 2.0, 9.81
+    R = chain_flexibility(n, c)
+    pull = np.zeros(n)
+    pull[-1] = F
+    limit = mu * m * g
+    solution = solve_box_qp(R, -(R @ pull), lower=-limit, upper=limit, tol=1e-13)
+    result = SpringChain(n, c, mu, m, g).solve(F)
+    assert solution.converged and result.converged
+    scale = np.max(np.abs(R @ pull))
+    np.testing.assert_allclose(result.x, R @ (pull - solution.x), rtol=0, atol=1e-9 * scale)
+
+
+def test_an_overflowing_chain_is_not_converged_and_says_why():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = SpringChain(1000, 1e-305, 0.2, 2.0, 10.0).solve(1e300)
+    assert not result.converged and "overflow" in result.message

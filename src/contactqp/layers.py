@@ -38,7 +38,7 @@ import scipy.sparse
 
 from .contact import NodePairs
 from .errors import ContactError, InvalidInputError
-from .loading import solve_history
+from .loading import MAX_STEPS, solve_history
 from .model import ReducedModel
 from .problem import FrictionalProblem
 
@@ -89,6 +89,8 @@ class Layers:
                                    or n < 1 for n in counts):
             raise InvalidInputError(f"cells must be 3 integers >= 1 and steps an integer >= 1, "
                                     f"got {self.cells!r}, {self.steps!r}")
+        if self.steps >= MAX_STEPS:  # the history has steps + 1 load steps
+            raise InvalidInputError(f"steps must be below {MAX_STEPS}, got {self.steps}")
 
     @property
     def area(self) -> float:
@@ -106,9 +108,8 @@ class Layers:
         return self.cohesion * self.area + self.mu * self.weight
 
     def _layer(self, height: float, rows: int):
+        from .compliance.fem import ElasticModel, plate  # noqa: I001  (first: names the extra)
         import skfem
-
-        from .compliance.fem import ElasticModel, plate
 
         body = ElasticModel(plate(self.length, height, self.cells[0], rows), self.young,
                             self.poisson, plane="strain", thickness=self.depth)
@@ -175,7 +176,8 @@ class Layers:
         ``d_max`` (m) defaults to twice the travel that brings the load to the analytic limit
         when the spring and the upper layer stretched over its length act in series,
         ``2 H_lim (1 / k_a + length / (E h_upper depth))``: beyond the onset of sliding.
-        ``options`` go to :meth:`~contactqp.FrictionalProblem.solve`.
+        ``options`` go to :func:`~contactqp.loading.solve_history` (``progress``) and
+        :meth:`~contactqp.FrictionalProblem.solve`.
 
         Raises
         ------

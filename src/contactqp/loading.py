@@ -25,6 +25,7 @@ started from :math:`r_{k-1}`. The energy dissipated in step ``k`` is :math:`-r_{
 from __future__ import annotations
 
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,10 +35,15 @@ from .model import finite_array
 from .problem import FrictionalProblem
 from .result import FrictionalResult
 
-__all__ = ["HistoryResult", "linear_path", "solve_history"]
+__all__ = ["MAX_STEPS", "HistoryResult", "linear_path", "solve_history"]
+
+#: Default cap on the steps of :func:`linear_path`: each step is a full solve whose result is
+#: kept, a few milliseconds and a few kilobytes each for small models, so 100000 steps are
+#: minutes and hundreds of megabytes.
+MAX_STEPS = 100_000
 
 
-def linear_path(points, steps: int) -> np.ndarray:
+def linear_path(points, steps: int, max_steps: int | None = MAX_STEPS) -> np.ndarray:
     """Loads along straight segments between turning points.
 
     Parameters
@@ -46,15 +52,27 @@ def linear_path(points, steps: int) -> np.ndarray:
         Turning points of the load history (N), e.g. loading, unloading, reversal.
     steps : int
         Increments per segment, >= 1.
+    max_steps : int or None
+        Largest number of load steps (rows) accepted; None for no cap.
 
     Returns
     -------
     ndarray, shape (1 + steps * (j - 1), n)
         ``points[0]``, then ``steps`` equal increments towards each next point.
+
+    Raises
+    ------
+    InvalidInputError
+        ``steps`` is not an integer >= 1, or the path would have more than ``max_steps`` steps.
     """
     P = finite_array(points, "points", 2)
     if isinstance(steps, bool) or not isinstance(steps, numbers.Integral) or steps < 1:
         raise InvalidInputError(f"steps must be an integer >= 1, got {steps!r}")
+    total = 1 + int(steps) * (P.shape[0] - 1)
+    if max_steps is not None and total > max_steps:
+        raise InvalidInputError(
+            f"steps = {steps} gives {total} load steps for {P.shape[0]} turning points, more "
+            f"than the {max_steps} allowed (each step is a full solve, and its result is kept)")
     fractions = np.arange(1, int(steps) + 1) / int(steps)
     segments = [P[:1]] + [a + fractions[:, None] * (b - a) for a, b in zip(P[:-1], P[1:])]
     return np.vstack(segments)
@@ -115,6 +133,7 @@ class HistoryResult:
 
 
 def solve_history(problem: FrictionalProblem, loads, previous: FrictionalResult | None = None,
+                  *, progress: Callable[[int, int], None] | None = None,
                   **options) -> HistoryResult:
     """Solve a frictional problem along a history of loads, step by step.
 
@@ -126,6 +145,8 @@ def solve_history(problem: FrictionalProblem, loads, previous: FrictionalResult 
         Total loads of each step (N); see :func:`linear_path`.
     previous : FrictionalResult, optional
         State before the first step; rest by default.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each step (e.g. to show a progress bar).
     **options
         Passed to :meth:`~contactqp.FrictionalProblem.solve` (``solver``, ``tol``, ...).
 
@@ -146,4 +167,6 @@ def solve_history(problem: FrictionalProblem, loads, previous: FrictionalResult 
     for P in history:
         previous = problem.with_loads(P).solve(previous, **options)
         steps.append(previous)
+        if progress is not None:
+            progress(len(steps), len(history))
     return HistoryResult(steps)

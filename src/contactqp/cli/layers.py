@@ -8,16 +8,17 @@ from pathlib import Path
 
 import click
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail
+from ..loading import MAX_STEPS
+from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
 
 
 @cli.command()
-@click.option("--mu", type=click.FloatRange(min=0, min_open=True), default=0.5,
-              show_default=True, help="Friction coefficient of the interface.")
-@click.option("--cohesion", type=click.FloatRange(min=0), default=5e3, show_default=True,
-              help="Cohesion of the interface (Pa).")
-@click.option("--steps", type=click.IntRange(min=2), default=40, show_default=True,
-              help="Steps of the actuator travel.")
+@click.option("--mu", type=click.FloatRange(min=0, max=10, min_open=True), default=0.5,
+              show_default=True, help="Friction coefficient of the interface (soils: below 1.5).")
+@click.option("--cohesion", type=click.FloatRange(min=0, max=1e8), default=5e3,
+              show_default=True, help="Cohesion of the interface (Pa; strong rock: 1e7 to 1e8).")
+@click.option("--steps", type=click.IntRange(min=2, max=MAX_STEPS - 1), default=40,
+              show_default=True, help="Steps of the actuator travel.")
 @click.option("--json", "as_json", is_flag=True,
               help="End with one JSON line (SI units): mu, cohesion, area, normal_force, "
                    "onset_force, curve [[load, relative displacement], ...].")
@@ -33,7 +34,8 @@ def layers(mu, cohesion, steps, as_json, plot):
 
     model = Layers(mu=mu, cohesion=cohesion, steps=steps)
     try:
-        result = model.solve()
+        with progress("step") as report:
+            result = model.solve(progress=report)
     except LayersError as exc:
         fail(str(exc))
         sys.exit(EXIT_NOT_SOLVED)

@@ -16,7 +16,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail
+from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
 
 
 @cli.command()
@@ -30,7 +30,8 @@ def solve(problem_file, as_json, out):
     from ..io.problem_file import load_problem_file, write_results
 
     spec = load_problem_file(problem_file)
-    result = spec.solve()
+    with progress("step") as report:
+        result = spec.solve(progress=report)
     written = write_results(spec, result, out) if out else []
     summary = spec.summary(result)
     if as_json:

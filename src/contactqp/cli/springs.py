@@ -8,12 +8,16 @@ from pathlib import Path
 
 import click
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail, float_list
+from .app import EXIT_NOT_SOLVED, cli, console, fail, float_list, progress
+
+#: Largest chain offered: solved in about a second per force (the output then holds 1e6 numbers
+#: per force).
+MAX_BODIES = 1_000_000
 
 
 @cli.command()
-@click.option("--n", "n", type=click.IntRange(min=1), default=3, show_default=True,
-              help="Number of bodies.")
+@click.option("--n", "n", type=click.IntRange(min=1, max=MAX_BODIES), default=3,
+              show_default=True, help="Number of bodies.")
 @click.option("--stiffness", type=float, default=1.0, show_default=True,
               help="Spring stiffness c (N/m).")
 @click.option("--mu", type=float, default=0.2, show_default=True, help="Friction coefficient.")
@@ -31,11 +35,13 @@ def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
 
     chain = SpringChain(n=n, stiffness=stiffness, mu=mu, mass=mass, g=gravity)
     results = []
-    for force in forces:
-        result = chain.solve(force)
-        results.append(result)
-        if as_json:
-            click.echo(json.dumps({"force": result.force, "x": result.x.tolist()}))
+    with progress("force") as report:
+        for force in forces:
+            result = chain.solve(force)
+            results.append(result)
+            if as_json:
+                click.echo(json.dumps({"force": result.force, "x": result.x.tolist()}))
+            report(len(results), len(forces))
     if not as_json:
         _springs_table(chain, results)
     if plot:
@@ -44,9 +50,10 @@ def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
         plot_spring_chain(results, plot)
         if not as_json:
             click.echo(f"figure written to {plot}")
-    if not all(r.converged for r in results):
+    failed = [r for r in results if not r.converged]
+    if failed:
         fail("the spring chain did not converge for force(s) "
-              + ", ".join(f"{r.force:g}" for r in results if not r.converged))
+             + ", ".join(f"{r.force:g}" for r in failed) + f" ({failed[0].message})")
         sys.exit(EXIT_NOT_SOLVED)
 
 

@@ -112,7 +112,8 @@ over. Its turning points are given by exactly one of
 =============  ===========================================================================
 
 Step 0 is the first turning point, then ``steps`` increments lead to each next one:
-``1 + steps (j - 1)`` steps for ``j`` turning points, numbered from 0 in the results.
+``1 + steps (j - 1)`` steps for ``j`` turning points, numbered from 0 in the results; at most
+100000 (:data:`contactqp.loading.MAX_STEPS`: each step is a full solve whose result is kept).
 
 **[solver]** (optional): how to solve a frictionless problem (with ``[friction]``: only
 ``certificate_tol``).
@@ -126,11 +127,13 @@ other keys             Keyword options of the chosen solver, checked against its
 [solver.backend_options]
                        Only for solvers that pass extra settings on (``"qp"``): a table given
                        verbatim to the qpsolvers backend, under the backend's own names (e.g.
-                       ``eps_abs`` for piqp). These names are checked by the backend when it
-                       runs, not here, and some backends ignore unknown ones.
+                       ``eps_abs`` for piqp), checked when the file is read (below).
 =====================  ======================================================================
 
-Numeric solver options must be finite; ``tol``, ``max_iter`` and any ``*_tol`` must be positive.
+Numeric solver options must be finite; ``tol``, ``max_iter`` and any ``*_tol`` must be positive,
+backend settings named ``tol_*`` or ``eps_*`` >= 0. A backend setting the backend refuses (an
+unknown name, a value of the wrong type or range) is an error naming its key when the file is
+read: each is tried on a QP of one variable.
 
 Example
 -------
@@ -238,12 +241,17 @@ import inspect
 import json
 import math
 import os
+import sys
+import tempfile
 import tomllib
 import warnings
+from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse
 
 from ..contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
@@ -254,6 +262,7 @@ from ..problem import ContactProblem, FrictionalProblem, friction_route
 from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
 from .export import write_rows
+from .npz import open_npz
 
 __all__ = [
     "ProblemSpec",
@@ -408,11 +417,9 @@ def _read_csv(path: Path) -> np.ndarray:
 
 
 def _read_npz(path: Path, key: str | None) -> np.ndarray:
-    with np.load(path, allow_pickle=False) as data:
+    with open_npz(path) as data:
         names = list(data.files)
         if key is None and _SCIPY_SPARSE_NPZ <= set(names):
-            import scipy.sparse
-
             return scipy.sparse.load_npz(path).toarray()
         if key is None:
             if len(names) != 1:
@@ -856,11 +863,18 @@ def _option(where: _Where, name: str, value, default, key: str):
         ok = True
     if not ok:
         raise where.error(key, f"must be {kind} (default {default!r}), got {_describe(value)}")
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    positive = name in ("tol", "max_iter") or name.endswith("_tol")
+    nonnegative = name.startswith(("tol_", "eps_"))  # backends' tolerances
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if (positive or nonnegative) and not number:
+        raise where.error(key, f"must be a number, got {_describe(value)}")
+    if number:
         if not math.isfinite(value):
             raise where.error(key, f"must be finite, got {value}")
-        if (name in ("tol", "max_iter") or name.endswith("_tol")) and value <= 0:
+        if positive and value <= 0:
             raise where.error(key, f"must be positive, got {value}")
+        if nonnegative and value < 0:
+            raise where.error(key, f"must be >= 0, got {value}")
     return value
 
 
@@ -893,8 +907,73 @@ def _route_options(where: _Where, table: dict, section: str, route: str, named: 
                                   f"{_describe(value)}")
             if key in named or key in options:
                 raise where.error(f"{sub}.{key}", f"is an option of {route}: set it in {section}")
+            _option(where, key, value, None, f"{sub}.{key}")
             options[key] = value
+    if "backend" in named:
+        _check_backend(where, section, options.get("backend", named["backend"]),
+                       {key: options[key] for key in table.get("backend_options", {})})
     return options
+
+
+def _check_backend(where: _Where, section: str, backend, settings: dict) -> None:
+    """Raise, naming the key, when the qpsolvers ``backend`` is not installed or refuses one of
+    ``settings``: each is tried on a QP of one variable (a backend checks its settings only
+    when it runs)."""
+    from ..solvers.qp import _qpsolvers, available_backends, backend_options
+
+    qpsolvers = _qpsolvers()
+    if backend not in qpsolvers.available_solvers:
+        raise where.error(f"{section}.backend", f"qp backend {backend!r} is not installed "
+                                                f"(available: {', '.join(available_backends())})")
+    sparse = backend in qpsolvers.sparse_solvers
+    one = scipy.sparse.csc_matrix(np.ones((1, 1))) if sparse else np.ones((1, 1))
+    probe = qpsolvers.Problem(P=one, q=np.zeros(1), G=one, h=np.ones(1))
+    for key, value in settings.items():
+        tried = {**backend_options(backend), key: value}
+        reason = _refusal(qpsolvers, probe, backend, tried, key)
+        if reason:
+            raise where.error(f"[{section[1:-1]}.backend_options].{key}",
+                              f"backend '{backend}' refuses {key} = {value!r} ({reason})")
+
+
+def _refusal(qpsolvers, probe, backend: str, settings: dict, key: str) -> str | None:
+    """Why ``backend`` refuses ``settings`` on ``probe``, or None: what it raises or prints
+    (C code), or a warning naming ``key`` (piqp warns of unknown names only when verbose)."""
+    for verbose in (False, True):
+        with _captured_output() as printed, warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                qpsolvers.solve_problem(probe, solver=backend, **{"verbose": verbose, **settings})
+                raised = None
+            except Exception as exc:  # noqa: BLE001  (what a backend raises on a bad setting)
+                raised = f"{type(exc).__name__}: {exc}"
+        if raised:
+            said = [line for line in printed[0].splitlines() if "error" in line.lower()]
+            return " ".join((said[0] if said else raised).split())
+        named = [str(warning.message) for warning in caught if key in str(warning.message)]
+        if named:
+            return " ".join(named[0].split())
+    return None
+
+
+@contextmanager
+def _captured_output():
+    """Capture what C code writes to file descriptors 1 and 2 into the list yielded."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    text = [""]
+    with tempfile.TemporaryFile() as sink:
+        saved = [os.dup(fd) for fd in (1, 2)]
+        try:
+            for fd in (1, 2):
+                os.dup2(sink.fileno(), fd)
+            yield text
+        finally:
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+            sink.seek(0)
+            text[0] = sink.read().decode(errors="replace").strip()
 
 
 def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, float]:
@@ -915,6 +994,8 @@ def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, floa
                                   "certificate_tol; solver options go in [friction]")
         return "", {}, certificate_tol
     name = table.get("name", "active-set")
+    if not isinstance(name, str):
+        raise where.error("[solver].name", f"must be a string, got {_describe(name)}")
     if name not in SOLVERS:
         expected = ", ".join(SOLVERS)
         raise where.error("[solver].name", f"unknown solver {name!r} (expected one of {expected})")
@@ -1071,8 +1152,14 @@ class ProblemSpec:
         """True when the problem has friction."""
         return isinstance(self.problem, FrictionalProblem)
 
-    def solve(self) -> ContactResult | FrictionalResult | HistoryResult:
+    def solve(self, progress: Callable[[int, int], None] | None = None
+              ) -> ContactResult | FrictionalResult | HistoryResult:
         """Solve :attr:`problem` (along :attr:`history` when given) with :attr:`solver`.
+
+        Parameters
+        ----------
+        progress : callable, optional
+            For a history, called as ``progress(done, total)`` after each step.
 
         Returns
         -------
@@ -1080,7 +1167,8 @@ class ProblemSpec:
             Frictionless, with friction, or one certified result per step of the history.
         """
         if self.history is not None:
-            return solve_history(self.problem, self.history, solver=self.solver, **self.options)
+            return solve_history(self.problem, self.history, solver=self.solver,
+                                 progress=progress, **self.options)
         if self.frictional:
             return self.problem.solve(solver=self.solver, **self.options)
         return solve(self.problem, solver=self.solver, **self.options)
@@ -1141,8 +1229,8 @@ def load_problem_file(path) -> ProblemSpec:
     path = Path(path)
     where = _Where(path)
     try:
-        with open(path, "rb") as handle:
-            doc = tomllib.load(handle)
+        with open(path, encoding="utf-8-sig", newline="") as handle:  # -sig: skip a BOM
+            doc = tomllib.loads(handle.read())
     except FileNotFoundError:
         raise where.error("", "problem file not found", FileFormatError) from None
     except IsADirectoryError:
