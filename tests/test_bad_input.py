@@ -330,9 +330,9 @@ BASES = {
 }
 
 
-#: Findings of this test in modules other work owns (issue 11), left out of the draws until
-#: that work lands; each is (base file, key, value) and what the user sees.
-FOUND_ELSEWHERE = {
+#: Cases the property test found (each once a traceback, a leaked warning or a silently wrong
+#: exit 0), kept as regressions: (base file, key, value).
+FOUND = {
     # overflow: RuntimeWarnings on stderr, exit 0 with a huge or NaN answer ("silently wrong",
     # result.py / problem.py / box_qp.py certificates)
     ("two_springs.toml", "loads.values", 1e300), ("qp.toml", "loads.values", 1e300),
@@ -349,18 +349,6 @@ FOUND_ELSEWHERE = {
     # solvers/qp.py: a backend's own warnings reach stderr (Clarabel.rs terminated ...)
     ("qp.toml", "solver.backend_options.tol_feas", 0),
 }
-
-
-def found_elsewhere(base: str, key: str, value) -> bool:
-    """Whether (key, value) is one of :data:`FOUND_ELSEWHERE`, also as an array's entry."""
-    for known_base, known_key, known in FOUND_ELSEWHERE:
-        if (base, key) == (known_base, known_key):
-            entries = value if isinstance(value, list) else [value]
-            if any(entry == known and type(entry) is type(known) for entry in entries):
-                return True
-            if any(isinstance(entry, list) and known in entry for entry in entries):
-                return True
-    return False
 
 
 def property_files(directory: Path) -> None:
@@ -420,11 +408,21 @@ def test_broken_problem_files_give_one_line_and_the_right_exit_code(property_dir
     doc = tomllib.loads((property_dir / base).read_text())
     for _ in range(data.draw(st.integers(1, 3), label="mutations")):
         path = data.draw(st.sampled_from(BASES[base]), label="key")
-        value = data.draw(st.sampled_from([value for value in BAD_VALUES
-                                           if not found_elsewhere(base, path, value)]),
-                          label="value")
+        value = data.draw(st.sampled_from(BAD_VALUES), label="value")
         doc = mutated(doc, path, value)
-    problem = property_dir / "broken.toml"
+    assert_solve_exits_clean(property_dir, doc)
+
+
+@pytest.mark.parametrize(("base", "path", "value"), sorted(FOUND, key=repr))
+def test_broken_values_found_give_one_line_and_the_right_exit_code(property_dir, base, path,
+                                                                    value):
+    doc = tomllib.loads((property_dir / base).read_text())
+    assert_solve_exits_clean(property_dir, mutated(doc, path, value))
+
+
+def assert_solve_exits_clean(directory: Path, doc: dict) -> None:
+    """``contactqp solve`` of ``doc`` written as a file exits cleanly (:func:`assert_clean_exit`)."""
+    problem = directory / "broken.toml"
     problem.write_text(toml_text(doc))
     try:
         status, _, err = run("solve", problem, "--json")
@@ -446,9 +444,8 @@ COMMANDS = {  # command, options that take a value, options fixed to keep a run 
 }
 
 
-#: Findings of the command-line test in commands other work owns (issue 11), left out of the
-#: draws until that work lands: (command, option, value).
-OPTIONS_FOUND_ELSEWHERE = {
+#: Command lines the property test found, kept as regressions: (command, option, value).
+OPTIONS_FOUND = {
     # riveting / batch.py: tracebacks (OverflowError from h5py, from the gap field)
     ("riveting", "--samples", "1" + "0" * 30), ("riveting", "--amplitude", "1e300"),
     ("riveting", "--correlation-length", "1e300"),
@@ -467,8 +464,19 @@ def test_broken_command_lines_give_one_line_and_the_right_exit_code(property_dir
     command = data.draw(st.sampled_from(sorted(COMMANDS)), label="command")
     options, fixed = COMMANDS[command]
     option = data.draw(st.sampled_from(options), label="option")
-    value = data.draw(st.sampled_from([value for value in BAD_OPTION_VALUES if (
-        command, option, value) not in OPTIONS_FOUND_ELSEWHERE]), label="value")
+    value = data.draw(st.sampled_from(BAD_OPTION_VALUES), label="value")
+    assert_command_exits_clean(property_dir, tmp_path_factory, command, option, value)
+
+
+@pytest.mark.parametrize(("command", "option", "value"), sorted(OPTIONS_FOUND))
+def test_broken_command_lines_found_give_one_line_and_the_right_exit_code(
+        property_dir, tmp_path_factory, command, option, value):
+    assert_command_exits_clean(property_dir, tmp_path_factory, command, option, value)
+
+
+def assert_command_exits_clean(property_dir, tmp_path_factory, command, option, value) -> None:
+    """``contactqp COMMAND ... OPTION VALUE`` exits cleanly (:func:`assert_clean_exit`)."""
+    _, fixed = COMMANDS[command]
     args = [command, *fixed, option, value]
     if command == "fclib":
         args.append(str(property_dir / "corrupt.npz"))

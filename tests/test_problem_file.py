@@ -954,9 +954,9 @@ FRICTION_CASES = {
         FRICTION.replace("gaps = [0.0, 0.0]", "gaps = [0.0, 1e-6]") + "cohesion = 5.0\n",
         ["[friction]: cohesion models a bonded interface", "contact 1"]),
     "facets below 3": (FRICTION + "facets = 2\n",
-                       ["[friction].facets: facets must be an integer >= 3, got 2"]),
+                       ["[friction].facets: facets must be an integer from 3 to 1024", "got 2"]),
     "facets not an integer": (FRICTION + "facets = 6.5\n",
-                              ["[friction].facets: facets must be an integer >= 3"]),
+                              ["[friction].facets: facets must be an integer from 3"]),
     "facets with the coulomb route": (
         FRICTION + "facets = 8\nsolver = 'coulomb'\n",
         ["[friction].solver: facets=8 asks for the polygonal cone", "got 'coulomb'"]),

@@ -45,7 +45,11 @@ from .qp import _qpsolvers, available_backends, backend_options
 from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
                      run_fixed_point)
 
-__all__ = ["solve_polygonal", "polygon_normals"]
+__all__ = ["solve_polygonal", "polygon_normals", "MAX_FACETS"]
+
+#: Most sides of a polygonal cone: 1024 sides are within 5e-6 of the circle, and more would only
+#: add rows to every cone program; the exact cone (``facets=None``) is the route beyond that.
+MAX_FACETS = 1024
 
 
 def polygon_normals(facets: int) -> np.ndarray:
@@ -54,8 +58,10 @@ def polygon_normals(facets: int) -> np.ndarray:
     Side ``k`` is orthogonal to the angle ``2 pi k / facets`` (side 0 across the first tangent
     axis) at the distance ``cos(pi / facets)`` from the centre of the unit circle.
     """
-    if isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3:
-        raise InvalidInputError(f"facets must be an integer >= 3, got {facets!r}")
+    if (isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3
+            or facets > MAX_FACETS):
+        raise InvalidInputError(f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
+                                f"the exact cone), got {facets!r}")
     angles = 2.0 * np.pi * np.arange(int(facets)) / int(facets)
     return np.column_stack([np.cos(angles), np.sin(angles)])
 
