@@ -204,15 +204,31 @@ def test_a_store_refuses_the_same_delassus_operator_with_another_free_deformatio
         run_batch(GapVariation(strict), samples, 4, tmp_path / "c.h5")
 
 
-def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path):
-    import dask
+def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path, monkeypatch):
+    import socket
 
+    import distributed
+
+    def slow_client(*args, **kwargs):  # what a Client does when its IO loop is slow to start
+        raise AssertionError("the IO loop did not start within 10 s")
+
+    # told before any Dask client (no IO loop, no timer) and before any store is made
+    monkeypatch.setattr(distributed, "Client", slow_client)
+    with socket.socket() as free:  # a port nobody listens on
+        free.bind(("127.0.0.1", 0))
+        closed = free.getsockname()[1]
     case = FasteningCase(riveted)
-    with pytest.raises(InvalidInputError, match="Dask scheduler 'no-port'"):
-        run_batch(case, source, 2, tmp_path / "a.h5", scheduler="no-port")
-    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
-        with pytest.raises(InvalidInputError, match="cannot reach the Dask scheduler"):
-            run_batch(case, source, 2, tmp_path / "b.h5", scheduler="tcp://127.0.0.1:1")
+    for address, message in [
+            ("no-port", "Dask scheduler 'no-port' is not an address like tcp://host:port: "
+                        "missing port number"),
+            ("tcp://127.0.0.1:99999", "port 99999 out of range"),
+            ("foo://host:1", "unknown scheme 'foo'"),
+            (f"tcp://127.0.0.1:{closed}", f"cannot reach the Dask scheduler "
+                                          f"'tcp://127.0.0.1:{closed}'")]:
+        with pytest.raises(InvalidInputError, match=message):
+            run_batch(case, source, 2, tmp_path / "a.h5", scheduler=address)
+        assert not (tmp_path / "a.h5").exists(), address
+    monkeypatch.undo()
     import subprocess
     import sys
 

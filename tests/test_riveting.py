@@ -195,6 +195,7 @@ def test_cli_bad_scheduler_is_one_line_exit_2(tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Dask scheduler" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []  # refused before a store or nominal file is written
 
 
 def test_cli_bad_gap_file(tmp_path, capsys):

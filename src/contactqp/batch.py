@@ -36,7 +36,7 @@ from .problem import ContactProblem
 from .solvers import solve
 
 __all__ = ["GapVariation", "GaussianGapField", "GapSamples", "load_gap_samples",
-           "run_batch", "BatchSummary", "load_batch", "BatchData", "GapStatistics",
+           "check_scheduler", "run_batch", "BatchSummary", "load_batch", "BatchData", "GapStatistics",
            "plot_statistics"]
 
 FORMAT = "contactqp-batch/1"
@@ -395,22 +395,75 @@ def _process_pool(state, tasks, workers):
         executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _dask(state, tasks, scheduler):
+def _distributed():
     try:
-        from distributed import Client, as_completed
+        import distributed
     except ImportError:
         raise MissingDependencyError("a Dask scheduler needs distributed: pip install "
                                      "'contactqp[cluster]'") from None
+    return distributed
+
+
+_SOCKET_SCHEMES = ("tcp", "tls", "ws", "wss")
+
+
+def check_scheduler(scheduler: str) -> str:
+    """The Dask scheduler address ``scheduler``, checked before any client or store is made.
+
+    The form is checked by Dask's own parser; a TCP-based address (``tcp://``, ``tls://``,
+    ``ws://``, ``wss://``, or ``host:port``) must also accept a connection. A plain socket does
+    that, so a malformed or refused address is told at once, whatever the load: a Dask client
+    first starts an IO loop, and gives up with an ``AssertionError`` when that takes over 10 s.
+
+    Raises
+    ------
+    InvalidInputError
+        Malformed, unresolvable or refusing address.
+    """
+    import socket
+
+    distributed = _distributed()
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    if not isinstance(scheduler, str):
+        raise InvalidInputError("scheduler must be an address string like tcp://host:port, got "
+                                f"{type(scheduler).__name__}")
     try:
-        client = Client(scheduler)
-    except (OSError, ValueError, TypeError) as exc:  # unreachable or malformed address
+        scheme, location = parse_address(scheduler)
+        if scheme in _SOCKET_SCHEMES:
+            host, port = parse_host_port(location)
+            if not 0 < port < 65536:
+                raise ValueError(f"port {port} out of range")
+        elif scheme not in distributed.comm.registry.backends:
+            raise ValueError(f"unknown scheme {scheme!r}")
+    except (ValueError, TypeError) as exc:
+        raise InvalidInputError(f"Dask scheduler {scheduler!r} is not an address like "
+                                f"tcp://host:port: {exc}") from None
+    if scheme in _SOCKET_SCHEMES:
+        import dask
+
+        timeout = dask.utils.parse_timedelta(
+            dask.config.get("distributed.comm.timeouts.connect"), default="seconds")
+        try:
+            socket.create_connection((host, port), timeout=timeout).close()
+        except OSError as exc:
+            raise InvalidInputError(f"cannot reach the Dask scheduler {scheduler!r}: "
+                                    f"{exc.strerror or exc}") from None
+    return scheduler
+
+
+def _dask(state, tasks, scheduler):
+    distributed = _distributed()
+    try:
+        client = distributed.Client(scheduler)
+    except (OSError, ValueError, TypeError) as exc:  # gone since check_scheduler
         raise InvalidInputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
     with client:
         shared = client.scatter(state, broadcast=True)
         futures = [client.submit(_solve_chunk, shared, indices, warm, pure=False)
                    for indices, warm in tasks]
         try:
-            for future in as_completed(futures):
+            for future in distributed.as_completed(futures):
                 yield future.result()
         finally:
             client.cancel(futures)
@@ -434,7 +487,8 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
     workers : int
         Local worker processes (1: in this process).
     scheduler : str, optional
-        Address of a Dask distributed scheduler; ``workers`` is then ignored.
+        Address of a Dask distributed scheduler (see :func:`check_scheduler`); ``workers`` is
+        then ignored.
     chunk_size : int
         Samples per task, for a new store (a resumed store keeps its own).
     limit : int, optional
@@ -455,6 +509,8 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
                                 f"{source.n_available}")
     if int(workers) < 1 or int(chunk_size) < 1:
         raise InvalidInputError(f"workers and chunk_size must be >= 1, got {workers}, {chunk_size}")
+    if scheduler is not None:
+        check_scheduler(scheduler)
     width = np.shape(source.realisations([0]))[-1]
     if width != case.n_contacts:  # before a store is made for a study that cannot run
         raise InvalidInputError(f"gap fields have {width} values, the case has "
@@ -476,7 +532,9 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
                 if resumed else None
             tasks.append((run, warm))
         state = (case, source)
-        if scheduler is not None:
+        if not tasks:
+            results = []
+        elif scheduler is not None:
             results = _dask(state, tasks, scheduler)
         elif int(workers) > 1 and len(tasks) > 1:
             results = _process_pool(state, tasks, int(workers))

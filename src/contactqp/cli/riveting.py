@@ -65,8 +65,9 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
                                  f"{nominal_gaps.shape[0]}", param_hint="--gaps")
     out.mkdir(parents=True, exist_ok=True)
     case = FasteningCase(model, method=method)
-    # a store of another study in --out is refused before its nominal files are overwritten
-    run_batch(case, source, samples, out / "samples.h5", limit=0)
+    # a bad scheduler, or a store of another study in --out, is refused before the nominal
+    # files are written
+    run_batch(case, source, samples, out / "samples.h5", scheduler=scheduler, limit=0)
     sequence = model.fasten(nominal_gaps, method=method)
     final = sequence.final
     xy = model.points
