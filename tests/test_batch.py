@@ -219,12 +219,12 @@ def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path, monkeypa
         closed = free.getsockname()[1]
     case = FasteningCase(riveted)
     for address, message in [
-            ("no-port", "Dask scheduler 'no-port' is not an address like tcp://host:port: "
-                        "missing port number"),
+            ("no-port", ("Dask scheduler 'no-port' is not an address like tcp://host:port: "
+                         "missing port number")),
             ("tcp://127.0.0.1:99999", "port 99999 out of range"),
             ("foo://host:1", "unknown scheme 'foo'"),
-            (f"tcp://127.0.0.1:{closed}", f"cannot reach the Dask scheduler "
-                                          f"'tcp://127.0.0.1:{closed}'")]:
+            (f"tcp://127.0.0.1:{closed}",
+             f"cannot reach the Dask scheduler 'tcp://127.0.0.1:{closed}'")]:
         with pytest.raises(InvalidInputError, match=message):
             run_batch(case, source, 2, tmp_path / "a.h5", scheduler=address)
         assert not (tmp_path / "a.h5").exists(), address

@@ -35,9 +35,9 @@ from .model import finite_array
 from .problem import ContactProblem
 from .solvers import solve
 
-__all__ = ["GapVariation", "GaussianGapField", "GapSamples", "load_gap_samples",
-           "check_scheduler", "run_batch", "BatchSummary", "load_batch", "BatchData", "GapStatistics",
-           "plot_statistics"]
+__all__ = ["BatchData", "BatchSummary", "GapSamples", "GapStatistics", "GapVariation",
+           "GaussianGapField", "check_scheduler", "load_batch", "load_gap_samples",
+           "plot_statistics", "run_batch"]
 
 FORMAT = "contactqp-batch/1"
 DEFAULT_CHUNK = 50
