@@ -319,7 +319,8 @@ class SlowField(GaussianGapField):  # the same study, 50 ms per sample: time to 
 model = Assembly(grid=(11, 7), refine=1, fasteners=((1, 3), (5, 3), (9, 3))).build()
 field = SlowField(model.points, 1e-4, 0.03, mean=1.5e-4, seed=11)
 print("started", flush=True)
-run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], chunk_size=5)
+run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], chunk_size=5,
+          progress=lambda done, total: print("stored", done, flush=True))
 """
 
 
@@ -331,7 +332,6 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
     import signal
     import subprocess
     import sys
-    import time
 
     path = tmp_path / "k.h5"
     child = subprocess.Popen(
@@ -339,7 +339,7 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
         stderr=subprocess.PIPE, start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert child.stdout.readline().strip() == b"started"
-    time.sleep(0.6)  # about 2 of the 5 chunks (each 5 x 50 ms)
+    assert child.stdout.readline().split()[0] == b"stored"  # (a fixed delay may come sooner)
     os.killpg(child.pid, getattr(signal, how))
     _, err = child.communicate(timeout=30)
     assert child.returncode != 0, err.decode()
@@ -351,14 +351,15 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
 
 
 POOL_CHILD = """
-import sys, time
+import multiprocessing, sys, time
 from contactqp.batch import GaussianGapField, run_batch
 from contactqp.riveting import Assembly, FasteningCase
 
 class LoggedField(GaussianGapField):  # 50 ms per sample; logs each chunk a worker starts
     def realisations(self, indices):
-        with open(sys.argv[3], "a") as log:
-            log.write(" ".join(str(int(k)) for k in indices) + "\\n")
+        if multiprocessing.parent_process() is not None:  # not the parent's check of sample 0
+            with open(sys.argv[3], "a") as log:
+                log.write(" ".join(str(int(k)) for k in indices) + "\\n")
         time.sleep(0.05 * len(indices))
         return super().realisations(indices)
 
@@ -377,7 +378,6 @@ def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, so
     import signal
     import subprocess
     import sys
-    import time
 
     path, log = tmp_path / "p.h5", tmp_path / "started.txt"
     child = subprocess.Popen(
@@ -385,13 +385,63 @@ def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, so
         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert child.stdout.readline().strip() == b"started"
-    time.sleep(0.8)
+    wait_for_lines(log, 1)  # a worker runs a chunk (a fixed delay may pass before the pool runs)
     os.kill(child.pid, signal.SIGINT)
     _, err = child.communicate(timeout=60)
     assert child.returncode != 0 and b"KeyboardInterrupt" in err, err.decode()
     started = sorted(int(k) for line in log.read_text().split("\n") for k in line.split())
     stored = load_batch(path).indices.tolist()
     assert 0 < len(stored) < 4 * N and set(started) <= set(stored), (started, stored)
+    rest = run_batch(FasteningCase(riveted), source, 4 * N, path)
+    assert (rest.reused, rest.computed) == (len(stored), 4 * N - len(stored))
+    assert_same(load_batch(path, N), serial)
+
+
+def wait_for_lines(path, count):
+    """Until the file ``path`` has ``count`` lines (a bounded wait: 60 s)."""
+    import time
+
+    for _ in range(6000):
+        if path.exists() and path.read_text().count("\n") >= count:
+            return
+        time.sleep(0.01)
+    raise AssertionError(f"{path} did not get {count} lines in 60 s")
+
+
+class LoggedField(GaussianGapField):
+    """Logs the samples of each chunk a pool worker starts to the file ``log``."""
+
+    def __init__(self, *args, log, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.log = log
+
+    def realisations(self, indices):
+        import multiprocessing
+
+        if multiprocessing.parent_process() is not None:  # not the parent's check of sample 0
+            with open(self.log, "a") as log:
+                log.write(" ".join(str(int(k)) for k in indices) + "\n")
+        return super().realisations(indices)
+
+
+def test_ctrl_c_while_a_pool_study_stores_a_chunk_keeps_the_chunks_its_workers_run(
+        riveted, source, serial, tmp_path):
+    # Ctrl-C while the parent stores the first chunk and a worker runs another: that chunk
+    # was computed and thrown away, and the pool went on with the whole study until exit
+    path, log = tmp_path / "s.h5", tmp_path / "started.txt"
+    field = LoggedField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=11, log=log)
+
+    def interrupt(done, total):
+        wait_for_lines(log, 2)  # another chunk is running
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(FasteningCase(riveted), field, 4 * N, path, workers=2, chunk_size=5,
+                  progress=interrupt)
+    started = sorted(int(k) for line in log.read_text().split("\n") for k in line.split())
+    stored = load_batch(path).indices.tolist()
+    assert len(started) >= 10 and set(started) <= set(stored) and len(stored) < 4 * N, (
+        started, stored)
     rest = run_batch(FasteningCase(riveted), source, 4 * N, path)
     assert (rest.reused, rest.computed) == (len(stored), 4 * N - len(stored))
     assert_same(load_batch(path, N), serial)

@@ -24,7 +24,9 @@ from __future__ import annotations
 import errno
 import hashlib
 import json
+import signal
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -362,6 +364,7 @@ _WORKER_STATE = None
 def _init_worker(state):
     global _WORKER_STATE
     _WORKER_STATE = state
+    _sigint_unblocked()  # a worker forked while the pool was starting inherits the block
 
 
 def _pool_chunk(indices, warm):
@@ -373,26 +376,80 @@ def _serial(state, tasks):
         yield _solve_chunk(state, indices, warm)
 
 
+@contextmanager
+def _sigint_blocked():
+    """Hold Ctrl-C (SIGINT) back until the end of the block, where it is raised if it came.
+
+    An executor interrupted while it starts can be left half made (a manager thread never
+    started, which its shutdown cannot join); held back, the interrupt comes once it runs.
+    """
+    if not hasattr(signal, "pthread_sigmask"):  # Windows
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _sigint_unblocked():
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _process_pool(state, tasks, workers):
+    """Chunks solved by ``workers`` local processes, as they finish.
+
+    On Ctrl-C, raised here or thrown in by the consumer while it stores a chunk, the chunks
+    not started are cancelled, and every chunk finished or still running is given (once more
+    for those given before: the consumer skips what it stored) before the interrupt goes on.
+    """
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    executor = ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(state,))
+    executor, futures = None, []
     try:
-        futures = [executor.submit(_pool_chunk, indices, warm) for indices, warm in tasks]
-        waiting = set(futures)
-        try:
-            for future in as_completed(futures):
-                waiting.discard(future)
-                yield future.result()
-        except KeyboardInterrupt:  # Ctrl-C: start nothing new, store what the workers finish
-            for future in waiting:
-                future.cancel()
-            for future in waiting:
-                if not future.cancelled() and future.exception() is None:
-                    yield future.result()  # (a worker interrupted too has an exception)
-            raise
+        with _sigint_blocked():  # a Ctrl-C meanwhile is raised at its end, inside this try
+            executor = ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(state,))
+            futures = [executor.submit(_pool_chunk, indices, warm) for indices, warm in tasks]
+        for future in as_completed(futures):
+            yield future.result()
+    except KeyboardInterrupt:
+        for future in futures:
+            future.cancel()
+        for future in futures:
+            if not future.cancelled() and future.exception() is None:
+                yield future.result()  # (a worker interrupted too has an exception)
+        raise
     finally:
-        executor.shutdown(wait=True, cancel_futures=True)
+        if executor is not None:
+            executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _store_all(results, store_chunk):
+    """``store_chunk(indices, records)`` for each result of the generator ``results``.
+
+    Ctrl-C while a chunk is stored (not only while waiting for the next) is thrown into
+    ``results``, so an executor gives what its workers finish; the chunk being stored is stored
+    again, whole. ``store_chunk`` must skip a chunk already stored.
+    """
+    current = None
+    try:
+        for current in results:
+            store_chunk(*current)
+            current = None
+    except KeyboardInterrupt as interrupt:
+        if current is not None:
+            store_chunk(*current, report=False)
+        try:
+            store_chunk(*results.throw(interrupt), report=False)
+            for current in results:
+                store_chunk(*current, report=False)
+        except StopIteration:
+            pass
+        raise
+    finally:  # on any error: stop the executor now, not when the generator is collected
+        results.close()
 
 
 def _distributed():
@@ -465,6 +522,12 @@ def _dask(state, tasks, scheduler):
         try:
             for future in distributed.as_completed(futures):
                 yield future.result()
+        except KeyboardInterrupt:  # give what the cluster finished (see _process_pool)
+            finished = [future for future in futures if future.status == "finished"]
+            client.cancel([future for future in futures if future not in finished])
+            for future in finished:
+                yield future.result()
+            raise
         finally:
             client.cancel(futures)
 
@@ -533,24 +596,30 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
             tasks.append((run, warm))
         state = (case, source)
         if not tasks:
-            results = []
+            results = _serial(state, tasks)
         elif scheduler is not None:
             results = _dask(state, tasks, scheduler)
         elif int(workers) > 1 and len(tasks) > 1:
             results = _process_pool(state, tasks, int(workers))
         else:
             results = _serial(state, tasks)
-        computed = 0
-        for indices, records in results:
+        stored = {}  # first sample of each chunk stored by this call: its length
+
+        def store_chunk(indices, records, report=True):
             first, last = int(indices[0]), int(indices[-1]) + 1
+            if first in stored:
+                return
             for name, values in records.items():
                 store[name][first:last] = values
             store.flush()
             store["done"][first:last] = True
             store.flush()
-            computed += len(indices)
-            if progress is not None:
-                progress(reused + computed, n_samples)
+            stored[first] = last - first
+            if progress is not None and report:
+                progress(reused + sum(stored.values()), n_samples)
+
+        _store_all(results, store_chunk)
+        computed = sum(stored.values())
         finished = store["done"][:n_samples]
         failed = int(np.count_nonzero(finished & ~store["success"][:n_samples]))
     return BatchSummary(n_samples, computed, reused, failed, time.perf_counter() - start, path)
