@@ -297,12 +297,38 @@ def test_bad_sources(tmp_path):
     (tmp_path / "g.h5").write_text("1,2\n")
     with pytest.raises(FileFormatError) as info:
         load_gap_samples(tmp_path / "g.h5")
-    assert str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy or .csv (or .txt)"
+    assert str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy, .npz or .csv " \
+                              "(or .txt)"
     (tmp_path / "g.txt").write_text("1,2\n3,x\n")
     with pytest.raises(FileFormatError, match="unreadable"):
         load_gap_samples(tmp_path / "g.txt")
     with pytest.raises(InvalidInputError, match="correlation_length"):
         GaussianGapField(np.zeros((3, 2)), 1e-4, 0.0)
+
+
+def test_corrupt_or_truncated_numpy_gap_files_are_one_line_format_errors(tmp_path):
+    gaps = np.full((4, 6), 1e-4)
+    np.savez_compressed(tmp_path / "g.npz", gaps=gaps)
+    np.save(tmp_path / "g.npy", gaps)
+    np.testing.assert_array_equal(load_gap_samples(tmp_path / "g.npz").samples, gaps)
+    whole = (tmp_path / "g.npz").read_bytes()
+    broken = {"cut.npz": whole[:len(whole) // 2],   # truncated: BadZipFile
+              "crc.npz": whole[:60] + bytes(b ^ 0xFF for b in whole[60:90]) + whole[90:],
+              "junk.npz": b"PK\x03\x04 not really a zip",
+              "cut.npy": (tmp_path / "g.npy").read_bytes()[:100],   # EOF in the data
+              "zip.npy": whole[:len(whole) // 2]}   # np.load goes by content, not name
+    for name, data in broken.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(FileFormatError) as info:
+            load_gap_samples(tmp_path / name)
+        assert str(info.value).startswith(f"{tmp_path / name}: ") and "\n" not in str(
+            info.value), name
+    np.savez(tmp_path / "two.npz", a=gaps, b=gaps)
+    with pytest.raises(InvalidInputError, match=r"two\.npz: the archive holds 2 arrays"):
+        load_gap_samples(tmp_path / "two.npz")
+    np.save(tmp_path / "objects.npy", np.array([{}, 1], dtype=object), allow_pickle=True)
+    with pytest.raises(FileFormatError, match=r"objects\.npy: not a readable"):
+        load_gap_samples(tmp_path / "objects.npy")
 
 
 CHILD = """

@@ -206,6 +206,19 @@ def test_cli_bad_gap_file(tmp_path, capsys):
     assert "525 columns" in capsys.readouterr().err
 
 
+def test_cli_corrupt_gap_file_is_one_line_exit_2(tmp_path, capsys):
+    from contactqp.cli import main
+
+    np.savez_compressed(tmp_path / "g.npz", gaps=np.full((3, 525), 2e-4))
+    whole = (tmp_path / "g.npz").read_bytes()
+    (tmp_path / "cut.npz").write_bytes(whole[:len(whole) // 2])
+    out = tmp_path / "study"
+    assert main(["riveting", "--gaps", str(tmp_path / "cut.npz"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cut.npz: not a readable .npy / .npz file" in err
+    assert not out.exists()
+
+
 def test_cli_every_sample_failing_exits_1(tmp_path, capsys, monkeypatch):
     from contactqp.cli import main
     from contactqp.riveting import FasteningCase

@@ -231,24 +231,30 @@ class GapSamples:
 
 
 def load_gap_samples(path) -> GapSamples:
-    """Realisations from a file: ``.npy``, or ``.csv`` / ``.txt`` (comma-separated, one row per
-    sample).
+    """Realisations from a file: ``.npy``, ``.npz`` (its only array), or ``.csv`` / ``.txt``
+    (comma-separated, one row per sample).
 
-    Values in metres, shape (N, m).
+    Values in metres, shape (N, m). A missing, truncated or corrupt file is a one-line
+    :class:`~contactqp.errors.FileFormatError`.
     """
+    from .io.arrays import read_numpy_array
+
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: gap samples file not found")
-    if path.suffix not in (".npy", ".csv", ".txt"):
-        raise FileFormatError(f"{path}: gap samples must be .npy or .csv (or .txt)")
-    try:
-        if path.suffix == ".npy":
-            data = np.load(path, allow_pickle=False)
-        else:
+    if path.suffix not in (".npy", ".npz", ".csv", ".txt"):
+        raise FileFormatError(f"{path}: gap samples must be .npy, .npz or .csv (or .txt)")
+    if path.suffix in (".npy", ".npz"):
+        data = read_numpy_array(path)
+    else:
+        try:
             data = np.loadtxt(path, delimiter=",", ndmin=2)
-    except ValueError as exc:
-        raise FileFormatError(f"{path}: unreadable gap samples ({exc})") from None
-    return GapSamples(data)
+        except ValueError as exc:
+            raise FileFormatError(f"{path}: unreadable gap samples ({exc})") from None
+    try:
+        return GapSamples(data)
+    except InvalidInputError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
 
 
 @dataclass(frozen=True)
