@@ -252,13 +252,37 @@ def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source
                                                                   tmp_path):
     import h5py
 
+    from contactqp.batch import FORMAT
+
     path = tmp_path / "half.h5"
-    with h5py.File(path, "w") as store:  # killed while creating the datasets
+    with h5py.File(path, "w") as store:  # killed while creating the datasets (marked first)
+        store.attrs["format"] = FORMAT
         store.create_dataset("initial_gap", shape=(0, riveted.n_pairs),
                              maxshape=(None, riveted.n_pairs), dtype="f8")
     summary = run_batch(FasteningCase(riveted), source, N, path, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(path), serial)
+
+
+def test_a_store_refuses_an_hdf5_file_that_is_not_a_store_and_leaves_it_as_it_is(
+        riveted, source, tmp_path):
+    # was: any HDF5 file without a 'done' dataset was wiped and reused
+    import h5py
+
+    case = FasteningCase(riveted)
+    with h5py.File(tmp_path / "mine.h5", "w") as other:
+        other["results"] = np.arange(5.0)
+    with h5py.File(tmp_path / "tagged.h5", "w") as other:
+        other.attrs["author"] = "someone"
+    for name in ("mine.h5", "tagged.h5"):
+        before = (tmp_path / name).read_bytes()
+        with pytest.raises(FileFormatError) as info:
+            run_batch(case, source, 2, tmp_path / name)
+        assert str(info.value) == (f"{tmp_path / name} is not a contactqp batch store (it "
+                                   "holds other HDF5 data, left as it is): give another output")
+        assert (tmp_path / name).read_bytes() == before
+    h5py.File(tmp_path / "empty.h5", "w").close()  # an empty file holds nothing to lose
+    assert run_batch(case, source, 2, tmp_path / "empty.h5").computed == 2
 
 
 def test_a_store_whose_growth_was_interrupted_grows_on_resume(riveted, source, serial,

@@ -316,10 +316,15 @@ def _open_store(path: Path, case, source, n_samples: int, chunk: int):
         busy = " (in use by another run?)" if exc.errno == errno.EAGAIN else ""
         raise FileFormatError(f"{path}: cannot open the batch store{busy}: {exc}") from None
     try:
+        ours = store.attrs.get("format") == FORMAT  # written first when a store is made
+        if not ours and (len(store) or len(store.attrs)):
+            raise FileFormatError(f"{path} is not a contactqp batch store (it holds other "
+                                  "HDF5 data, left as it is): give another output")
         if "done" not in store:  # new, or its creation was interrupted: nothing stored yet
             for name in list(store):
                 del store[name]
             store.attrs.update({"format": FORMAT, "identity": identity, "chunk": chunk})
+            store.flush()
             for name, (shape, dtype) in fields.items():
                 store.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
                                      dtype=dtype, chunks=(chunk, *shape))
