@@ -149,6 +149,37 @@ def test_bad_fastening(small, rough_gaps):
         small.problem(rough_gaps[:-1])
 
 
+def test_an_overlap_deeper_than_a_plate_is_refused(small, rough_gaps):
+    # plates of 2 and 1.6 mm: 1.5 mm of interference is a (severe) press fit, 1.7 mm is absurd
+    assert small.thickness == 0.0016
+    assert small.fasten(np.full(small.n_pairs, -1.5e-3)).success
+    with pytest.raises(InvalidInputError, match=r"^gaps: an overlap of 1\.7 mm is deeper than "
+                                                r"the 1\.6 mm plates"):
+        small.fasten(np.where(np.arange(small.n_pairs) == 3, -1.7e-3, rough_gaps))
+    with pytest.raises(InvalidInputError, match="gaps contains NaN"):
+        small.fasten(np.full(small.n_pairs, np.nan))
+
+
+@pytest.mark.parametrize("args, code, message", [
+    (["--mean-gap", "-1"], 2, "contactqp: error: --mean-gap: an overlap of 1000 mm is deeper "
+                              "than the 2 mm plates (a negative gap is interference)\n"),
+    (["--mean-gap", "-1e-3", "--amplitude", "0"], 0,
+     "contactqp: warning: --mean-gap -0.001 m is negative: the plates overlap by 1 mm at rest "
+     "(interference)\n"),
+    (["--mean-gap", "5e-3", "--amplitude", "0"], 0,
+     "contactqp: warning: nominal gap 5 mm exceeds the 2 mm plate thickness: far beyond small "
+     "deflections, where the linear plate model holds\n"),
+])
+def test_cli_absurd_gaps_are_refused_and_unusual_ones_warned(tmp_path, capsys, args, code,
+                                                             message):
+    from contactqp.cli import main
+
+    out = tmp_path / "study"
+    assert main(["riveting", "--samples", "1", "--out", str(out), "--json", *args]) == code
+    assert capsys.readouterr().err == message
+    assert out.exists() == (code == 0)  # refused before anything is written
+
+
 def test_cli_json_resume_and_outputs(tmp_path, capsys):
     import json
 
