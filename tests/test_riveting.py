@@ -161,14 +161,14 @@ def test_an_overlap_deeper_than_a_plate_is_refused(small, rough_gaps):
 
 
 @pytest.mark.parametrize("args, code, message", [
-    (["--mean-gap", "-1"], 2, "contactqp: error: --mean-gap: an overlap of 1000 mm is deeper "
-                              "than the 2 mm plates (a negative gap is interference)\n"),
+    (["--mean-gap", "-1"], 2, ("contactqp: error: --mean-gap: an overlap of 1000 mm is deeper "
+                               "than the 2 mm plates (a negative gap is interference)\n")),
     (["--mean-gap", "-1e-3", "--amplitude", "0"], 0,
-     "contactqp: warning: --mean-gap -0.001 m is negative: the plates overlap by 1 mm at rest "
-     "(interference)\n"),
+     ("contactqp: warning: --mean-gap -0.001 m is negative: the plates overlap by 1 mm at rest "
+      "(interference)\n")),
     (["--mean-gap", "5e-3", "--amplitude", "0"], 0,
-     "contactqp: warning: nominal gap 5 mm exceeds the 2 mm plate thickness: far beyond small "
-     "deflections, where the linear plate model holds\n"),
+     ("contactqp: warning: nominal gap 5 mm exceeds the 2 mm plate thickness: far beyond small "
+      "deflections, where the linear plate model holds\n")),
 ])
 def test_cli_absurd_gaps_are_refused_and_unusual_ones_warned(tmp_path, capsys, args, code,
                                                              message):
