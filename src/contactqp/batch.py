@@ -200,7 +200,7 @@ class GaussianGapField:
 def _fixed_order_product(matrix: np.ndarray, vector: np.ndarray, rows: int = 256) -> np.ndarray:
     """``matrix @ vector`` summed in an order fixed by the shapes alone.
 
-    Each entry is numpy's pairwise sum of one row's exact products, independent of BLAS (its
+    Each entry is numpy's pairwise sum of one row's products, independent of BLAS (its
     kernel, threads and the alignment of the arrays); blocks of ``rows`` bound the temporary.
     """
     out = np.empty(len(matrix))
