@@ -41,8 +41,14 @@ def test_gaussian_field_has_its_target_amplitude_and_correlation():
 
 
 def test_sample_k_does_not_depend_on_who_draws_it(source):
-    np.testing.assert_array_equal(source.realisations([5, 17])[1],
-                                  source.realisations(range(18))[17])
+    # alone, in batches of 2, 7 and 64, in any order: a product of the whole batch with the
+    # factor made BLAS pick another kernel (gemv for one sample, gemm for more) and sum in
+    # another order, 1 ulp apart
+    alone = np.array([source.realisations([k])[0] for k in range(64)])
+    np.testing.assert_array_equal(source.realisations(range(64)), alone)
+    np.testing.assert_array_equal(source.realisations(range(63, -1, -1)), alone[::-1])
+    for batch in ([5, 17], [0, 5, 17, 40, 41, 2, 63], list(range(7))):
+        np.testing.assert_array_equal(source.realisations(batch), alone[batch])
     other = GaussianGapField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=12)
     assert not np.allclose(other.realisations([5]), source.realisations([5]))
 
@@ -61,7 +67,7 @@ def test_sample_k_does_not_depend_on_blas_threads_or_pickling(source):
         single = fields[0].realisations(range(8))
     with threadpool_limits(None):
         many = fields[1].realisations(range(8))
-    np.testing.assert_allclose(many, single, rtol=0, atol=1e-14 * 1e-4)
+    np.testing.assert_array_equal(many, single)
     fresh = GaussianGapField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=11)
     shipped = pickle.loads(pickle.dumps(fresh))
     assert shipped._factor is not None and fresh._factor is not None
@@ -198,15 +204,31 @@ def test_a_store_refuses_the_same_delassus_operator_with_another_free_deformatio
         run_batch(GapVariation(strict), samples, 4, tmp_path / "c.h5")
 
 
-def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path):
-    import dask
+def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path, monkeypatch):
+    import socket
 
+    import distributed
+
+    def slow_client(*args, **kwargs):  # what a Client does when its IO loop is slow to start
+        raise AssertionError("the IO loop did not start within 10 s")
+
+    # told before any Dask client (no IO loop, no timer) and before any store is made
+    monkeypatch.setattr(distributed, "Client", slow_client)
+    with socket.socket() as free:  # a port nobody listens on
+        free.bind(("127.0.0.1", 0))
+        closed = free.getsockname()[1]
     case = FasteningCase(riveted)
-    with pytest.raises(InvalidInputError, match="Dask scheduler 'no-port'"):
-        run_batch(case, source, 2, tmp_path / "a.h5", scheduler="no-port")
-    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
-        with pytest.raises(InvalidInputError, match="cannot reach the Dask scheduler"):
-            run_batch(case, source, 2, tmp_path / "b.h5", scheduler="tcp://127.0.0.1:1")
+    for address, message in [
+            ("no-port", ("Dask scheduler 'no-port' is not an address like tcp://host:port: "
+                         "missing port number")),
+            ("tcp://127.0.0.1:99999", "port 99999 out of range"),
+            ("foo://host:1", "unknown scheme 'foo'"),
+            (f"tcp://127.0.0.1:{closed}",
+             f"cannot reach the Dask scheduler 'tcp://127.0.0.1:{closed}'")]:
+        with pytest.raises(InvalidInputError, match=message):
+            run_batch(case, source, 2, tmp_path / "a.h5", scheduler=address)
+        assert not (tmp_path / "a.h5").exists(), address
+    monkeypatch.undo()
     import subprocess
     import sys
 
@@ -230,13 +252,37 @@ def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source
                                                                   tmp_path):
     import h5py
 
+    from contactqp.batch import FORMAT
+
     path = tmp_path / "half.h5"
-    with h5py.File(path, "w") as store:  # killed while creating the datasets
+    with h5py.File(path, "w") as store:  # killed while creating the datasets (marked first)
+        store.attrs["format"] = FORMAT
         store.create_dataset("initial_gap", shape=(0, riveted.n_pairs),
                              maxshape=(None, riveted.n_pairs), dtype="f8")
     summary = run_batch(FasteningCase(riveted), source, N, path, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(path), serial)
+
+
+def test_a_store_refuses_an_hdf5_file_that_is_not_a_store_and_leaves_it_as_it_is(
+        riveted, source, tmp_path):
+    # was: any HDF5 file without a 'done' dataset was wiped and reused
+    import h5py
+
+    case = FasteningCase(riveted)
+    with h5py.File(tmp_path / "mine.h5", "w") as other:
+        other["results"] = np.arange(5.0)
+    with h5py.File(tmp_path / "tagged.h5", "w") as other:
+        other.attrs["author"] = "someone"
+    for name in ("mine.h5", "tagged.h5"):
+        before = (tmp_path / name).read_bytes()
+        with pytest.raises(FileFormatError) as info:
+            run_batch(case, source, 2, tmp_path / name)
+        assert str(info.value) == (f"{tmp_path / name} is not a contactqp batch store (it "
+                                   "holds other HDF5 data, left as it is): give another output")
+        assert (tmp_path / name).read_bytes() == before
+    h5py.File(tmp_path / "empty.h5", "w").close()  # an empty file holds nothing to lose
+    assert run_batch(case, source, 2, tmp_path / "empty.h5").computed == 2
 
 
 def test_a_store_whose_growth_was_interrupted_grows_on_resume(riveted, source, serial,
@@ -275,12 +321,38 @@ def test_bad_sources(tmp_path):
     (tmp_path / "g.h5").write_text("1,2\n")
     with pytest.raises(FileFormatError) as info:
         load_gap_samples(tmp_path / "g.h5")
-    assert str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy or .csv (or .txt)"
+    assert str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy, .npz or .csv " \
+                              "(or .txt)"
     (tmp_path / "g.txt").write_text("1,2\n3,x\n")
     with pytest.raises(FileFormatError, match="unreadable"):
         load_gap_samples(tmp_path / "g.txt")
     with pytest.raises(InvalidInputError, match="correlation_length"):
         GaussianGapField(np.zeros((3, 2)), 1e-4, 0.0)
+
+
+def test_corrupt_or_truncated_numpy_gap_files_are_one_line_format_errors(tmp_path):
+    gaps = np.full((4, 6), 1e-4)
+    np.savez_compressed(tmp_path / "g.npz", gaps=gaps)
+    np.save(tmp_path / "g.npy", gaps)
+    np.testing.assert_array_equal(load_gap_samples(tmp_path / "g.npz").samples, gaps)
+    whole = (tmp_path / "g.npz").read_bytes()
+    broken = {"cut.npz": whole[:len(whole) // 2],   # truncated: BadZipFile
+              "crc.npz": whole[:60] + bytes(b ^ 0xFF for b in whole[60:90]) + whole[90:],
+              "junk.npz": b"PK\x03\x04 not really a zip",
+              "cut.npy": (tmp_path / "g.npy").read_bytes()[:100],   # EOF in the data
+              "zip.npy": whole[:len(whole) // 2]}   # np.load goes by content, not name
+    for name, data in broken.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(FileFormatError) as info:
+            load_gap_samples(tmp_path / name)
+        assert str(info.value).startswith(f"{tmp_path / name}: ") and "\n" not in str(
+            info.value), name
+    np.savez(tmp_path / "two.npz", a=gaps, b=gaps)
+    with pytest.raises(InvalidInputError, match=r"two\.npz: the archive holds 2 arrays"):
+        load_gap_samples(tmp_path / "two.npz")
+    np.save(tmp_path / "objects.npy", np.array([{}, 1], dtype=object), allow_pickle=True)
+    with pytest.raises(FileFormatError, match=r"objects\.npy: not a readable"):
+        load_gap_samples(tmp_path / "objects.npy")
 
 
 CHILD = """
@@ -297,7 +369,8 @@ class SlowField(GaussianGapField):  # the same study, 50 ms per sample: time to 
 model = Assembly(grid=(11, 7), refine=1, fasteners=((1, 3), (5, 3), (9, 3))).build()
 field = SlowField(model.points, 1e-4, 0.03, mean=1.5e-4, seed=11)
 print("started", flush=True)
-run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], chunk_size=5)
+run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], chunk_size=5,
+          progress=lambda done, total: print("stored", done, flush=True))
 """
 
 
@@ -309,7 +382,6 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
     import signal
     import subprocess
     import sys
-    import time
 
     path = tmp_path / "k.h5"
     child = subprocess.Popen(
@@ -317,7 +389,7 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
         stderr=subprocess.PIPE, start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert child.stdout.readline().strip() == b"started"
-    time.sleep(0.6)  # about 2 of the 5 chunks (each 5 x 50 ms)
+    assert child.stdout.readline().split()[0] == b"stored"  # (a fixed delay may come sooner)
     os.killpg(child.pid, getattr(signal, how))
     _, err = child.communicate(timeout=30)
     assert child.returncode != 0, err.decode()
@@ -329,14 +401,15 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
 
 
 POOL_CHILD = """
-import sys, time
+import multiprocessing, sys, time
 from contactqp.batch import GaussianGapField, run_batch
 from contactqp.riveting import Assembly, FasteningCase
 
 class LoggedField(GaussianGapField):  # 50 ms per sample; logs each chunk a worker starts
     def realisations(self, indices):
-        with open(sys.argv[3], "a") as log:
-            log.write(" ".join(str(int(k)) for k in indices) + "\\n")
+        if multiprocessing.parent_process() is not None:  # not the parent's check of sample 0
+            with open(sys.argv[3], "a") as log:
+                log.write(" ".join(str(int(k)) for k in indices) + "\\n")
         time.sleep(0.05 * len(indices))
         return super().realisations(indices)
 
@@ -355,7 +428,6 @@ def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, so
     import signal
     import subprocess
     import sys
-    import time
 
     path, log = tmp_path / "p.h5", tmp_path / "started.txt"
     child = subprocess.Popen(
@@ -363,13 +435,63 @@ def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, so
         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert child.stdout.readline().strip() == b"started"
-    time.sleep(0.8)
+    wait_for_lines(log, 1)  # a worker runs a chunk (a fixed delay may pass before the pool runs)
     os.kill(child.pid, signal.SIGINT)
     _, err = child.communicate(timeout=60)
     assert child.returncode != 0 and b"KeyboardInterrupt" in err, err.decode()
     started = sorted(int(k) for line in log.read_text().split("\n") for k in line.split())
     stored = load_batch(path).indices.tolist()
     assert 0 < len(stored) < 4 * N and set(started) <= set(stored), (started, stored)
+    rest = run_batch(FasteningCase(riveted), source, 4 * N, path)
+    assert (rest.reused, rest.computed) == (len(stored), 4 * N - len(stored))
+    assert_same(load_batch(path, N), serial)
+
+
+def wait_for_lines(path, count):
+    """Until the file ``path`` has ``count`` lines (a bounded wait: 60 s)."""
+    import time
+
+    for _ in range(6000):
+        if path.exists() and path.read_text().count("\n") >= count:
+            return
+        time.sleep(0.01)
+    raise AssertionError(f"{path} did not get {count} lines in 60 s")
+
+
+class LoggedField(GaussianGapField):
+    """Logs the samples of each chunk a pool worker starts to the file ``log``."""
+
+    def __init__(self, *args, log, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.log = log
+
+    def realisations(self, indices):
+        import multiprocessing
+
+        if multiprocessing.parent_process() is not None:  # not the parent's check of sample 0
+            with open(self.log, "a") as log:
+                log.write(" ".join(str(int(k)) for k in indices) + "\n")
+        return super().realisations(indices)
+
+
+def test_ctrl_c_while_a_pool_study_stores_a_chunk_keeps_the_chunks_its_workers_run(
+        riveted, source, serial, tmp_path):
+    # Ctrl-C while the parent stores the first chunk and a worker runs another: that chunk
+    # was computed and thrown away, and the pool went on with the whole study until exit
+    path, log = tmp_path / "s.h5", tmp_path / "started.txt"
+    field = LoggedField(source.coordinates, 1e-4, 0.03, mean=1.5e-4, seed=11, log=log)
+
+    def interrupt(done, total):
+        wait_for_lines(log, 2)  # another chunk is running
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(FasteningCase(riveted), field, 4 * N, path, workers=2, chunk_size=5,
+                  progress=interrupt)
+    started = sorted(int(k) for line in log.read_text().split("\n") for k in line.split())
+    stored = load_batch(path).indices.tolist()
+    assert len(started) >= 10 and set(started) <= set(stored) and len(stored) < 4 * N, (
+        started, stored)
     rest = run_batch(FasteningCase(riveted), source, 4 * N, path)
     assert (rest.reused, rest.computed) == (len(stored), 4 * N - len(stored))
     assert_same(load_batch(path, N), serial)

@@ -768,7 +768,7 @@ def test_three_d_exact_cone_slips_along_the_push(tmp_path):
     # floor's tangential force is -mu N T/|T|, whatever the tangent basis.
     kt, N, mu, T = 1e6, 1000.0, 0.3, 500.0
     direction = np.array([np.cos(np.pi / 6), np.sin(np.pi / 6)])
-    Tx, Ty = T * direction
+    Tx, Ty = map(float, T * direction)  # plain floats: repr(np.float64) is not TOML
     spec = load_problem_file(write_toml(tmp_path, THREE_D.format(Tx=Tx, Ty=Ty,
                                                                  extra="tol = 1e-12")))
     result = spec.solve()
@@ -789,7 +789,7 @@ def test_three_d_square_cone_slips_below_the_round_one(tmp_path, facets):
     T = 0.85 * mu * N
     probe = load_problem_file(write_toml(tmp_path, THREE_D.format(Tx=0.0, Ty=0.0, extra="")))
     t1 = probe.problem.frames.tangents[0, 0]
-    Tx, Ty = T * t1[:2]
+    Tx, Ty = map(float, T * t1[:2])  # plain floats: repr(np.float64) is not TOML
     extra = "tol = 1e-12" if facets is None else f"facets = {facets}"
     spec = load_problem_file(write_toml(tmp_path, THREE_D.format(Tx=Tx, Ty=Ty, extra=extra)))
     assert spec.solver == ("coulomb" if facets is None else "polygonal")

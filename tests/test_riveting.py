@@ -149,6 +149,37 @@ def test_bad_fastening(small, rough_gaps):
         small.problem(rough_gaps[:-1])
 
 
+def test_an_overlap_deeper_than_a_plate_is_refused(small, rough_gaps):
+    # plates of 2 and 1.6 mm: 1.5 mm of interference is a (severe) press fit, 1.7 mm is absurd
+    assert small.thickness == 0.0016
+    assert small.fasten(np.full(small.n_pairs, -1.5e-3)).success
+    with pytest.raises(InvalidInputError, match=r"^gaps: an overlap of 1\.7 mm is deeper than "
+                                                r"the 1\.6 mm plates"):
+        small.fasten(np.where(np.arange(small.n_pairs) == 3, -1.7e-3, rough_gaps))
+    with pytest.raises(InvalidInputError, match="gaps contains NaN"):
+        small.fasten(np.full(small.n_pairs, np.nan))
+
+
+@pytest.mark.parametrize("args, code, message", [
+    (["--mean-gap", "-1"], 2, ("contactqp: error: --mean-gap: an overlap of 1000 mm is deeper "
+                               "than the 2 mm plates (a negative gap is interference)\n")),
+    (["--mean-gap", "-1e-3", "--amplitude", "0"], 0,
+     ("contactqp: warning: --mean-gap -0.001 m is negative: the plates overlap by 1 mm at rest "
+      "(interference)\n")),
+    (["--mean-gap", "5e-3", "--amplitude", "0"], 0,
+     ("contactqp: warning: nominal gap 5 mm exceeds the 2 mm plate thickness: far beyond small "
+      "deflections, where the linear plate model holds\n")),
+])
+def test_cli_absurd_gaps_are_refused_and_unusual_ones_warned(tmp_path, capsys, args, code,
+                                                             message):
+    from contactqp.cli import main
+
+    out = tmp_path / "study"
+    assert main(["riveting", "--samples", "1", "--out", str(out), "--json", *args]) == code
+    assert capsys.readouterr().err == message
+    assert out.exists() == (code == 0)  # refused before anything is written
+
+
 def test_cli_json_resume_and_outputs(tmp_path, capsys):
     import json
 
@@ -195,6 +226,7 @@ def test_cli_bad_scheduler_is_one_line_exit_2(tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Dask scheduler" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []  # refused before a store or nominal file is written
 
 
 def test_cli_bad_gap_file(tmp_path, capsys):
@@ -203,6 +235,19 @@ def test_cli_bad_gap_file(tmp_path, capsys):
     np.save(tmp_path / "g.npy", np.zeros((3, 10)))
     assert main(["riveting", "--gaps", str(tmp_path / "g.npy"), "--out", str(tmp_path)]) == 2
     assert "525 columns" in capsys.readouterr().err
+
+
+def test_cli_corrupt_gap_file_is_one_line_exit_2(tmp_path, capsys):
+    from contactqp.cli import main
+
+    np.savez_compressed(tmp_path / "g.npz", gaps=np.full((3, 525), 2e-4))
+    whole = (tmp_path / "g.npz").read_bytes()
+    (tmp_path / "cut.npz").write_bytes(whole[:len(whole) // 2])
+    out = tmp_path / "study"
+    assert main(["riveting", "--gaps", str(tmp_path / "cut.npz"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cut.npz: not a readable .npy / .npz file" in err
+    assert not out.exists()
 
 
 def test_cli_every_sample_failing_exits_1(tmp_path, capsys, monkeypatch):

@@ -251,6 +251,31 @@ class RivetingModel:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return self.base_problem.variant(gaps=gaps)
 
+    @property
+    def thickness(self) -> float:
+        """The thinner plate's thickness (m): the scale of a plausible gap or overlap."""
+        return min(self.assembly.lower.thickness, self.assembly.upper.thickness)
+
+    def check_gaps(self, gaps, what: str = "gaps") -> np.ndarray:
+        """``gaps`` (m) as a finite array of shape (k,); an overlap (negative gap) deeper than
+        the thinner plate is physically absurd and refused.
+
+        Raises
+        ------
+        InvalidInputError
+            Wrong shape, NaN or inf, or an overlap beyond the plate thickness; ``what`` names
+            the input in the message.
+        """
+        gaps = finite_array(gaps, what, 1)
+        if gaps.shape != (self.n_pairs,):
+            raise InvalidInputError(f"{what} must have {self.n_pairs} values, got {gaps.size}")
+        deepest = float(gaps.min())
+        if deepest < -self.thickness:
+            raise InvalidInputError(
+                f"{what}: an overlap of {-deepest * 1e3:.4g} mm is deeper than the "
+                f"{self.thickness * 1e3:.4g} mm plates (a negative gap is interference)")
+        return gaps
+
     def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
                tol: float = 1e-10) -> "FasteningSequence":
         """Install the fasteners one after another on the gap field ``gaps`` (m, shape (k,)).
@@ -273,7 +298,7 @@ class RivetingModel:
         order = np.arange(len(self.fasteners)) if order is None else np.asarray(order, dtype=int)
         if sorted(order.tolist()) != list(range(len(self.fasteners))):
             raise InvalidInputError(f"order must be a permutation of 0..{len(self.fasteners) - 1}")
-        problem = self.problem(gaps)
+        problem = self.problem(self.check_gaps(gaps))
         steps, forces = [], None
         for count in range(1, len(order) + 1):
             step = solve_fastened(problem, self.fasteners[order[:count]], method=method,

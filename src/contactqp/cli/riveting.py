@@ -12,6 +12,10 @@ import numpy as np
 from .app import EXIT_NOT_SOLVED, cli, console, fail
 
 
+def warn(message: str) -> None:
+    click.echo(f"contactqp: warning: {message}", err=True)
+
+
 @cli.command()
 @click.option("--samples", type=click.IntRange(min=1),
               help="Gap-field samples of the variation study  [default: 1000, or every row "
@@ -63,10 +67,22 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     if nominal_gaps.shape != (model.n_pairs,):
         raise click.BadParameter(f"gap realisations must have {model.n_pairs} columns, got "
                                  f"{nominal_gaps.shape[0]}", param_hint="--gaps")
+    # absurd before anything is written; merely unusual (a user could mean it): a warning
+    model.check_gaps(nominal_gaps, "--mean-gap" if gap_file is None else "the mean of --gaps")
+    thickness = model.thickness
+    for name, value in [("nominal gap", float(nominal_gaps.max())),
+                        ("--amplitude", amplitude if gap_file is None else 0.0)]:
+        if value > thickness:
+            warn(f"{name} {value * 1e3:.4g} mm exceeds the {thickness * 1e3:.4g} mm plate "
+                 "thickness: far beyond small deflections, where the linear plate model holds")
+    if gap_file is None and mean_gap < 0:
+        warn(f"--mean-gap {mean_gap:g} m is negative: the plates overlap by "
+             f"{-mean_gap * 1e3:.4g} mm at rest (interference)")
     out.mkdir(parents=True, exist_ok=True)
     case = FasteningCase(model, method=method)
-    # a store of another study in --out is refused before its nominal files are overwritten
-    run_batch(case, source, samples, out / "samples.h5", limit=0)
+    # a bad scheduler, or a store of another study in --out, is refused before the nominal
+    # files are written
+    run_batch(case, source, samples, out / "samples.h5", scheduler=scheduler, limit=0)
     sequence = model.fasten(nominal_gaps, method=method)
     final = sequence.final
     xy = model.points

@@ -16,11 +16,12 @@ freedoms by one sparse factorisation (static condensation, exact for a linear mo
 free freedom is kept the model holds the stiffness itself. :func:`load_compliance` picks the
 reader from the file's extension.
 
-The ANSYS and NASTRAN readers need ``pip install 'contactqp[importers]'`` (ansys-mapdl-reader,
-pyNastran); they are imported when a file is read. Every error is one line that starts with the
-file's path: :class:`~contactqp.errors.FileFormatError` for a missing, foreign, truncated or
-malformed file, :class:`~contactqp.errors.InvalidInputError` for a selection the file cannot
-satisfy or an inconsistent matrix, :class:`~contactqp.errors.NotPositiveDefiniteError` (and
+The ANSYS reader needs ``pip install 'contactqp[ansys]'`` (ansys-mapdl-reader), the NASTRAN
+readers ``pip install 'contactqp[nastran]'`` (pyNastran, which requires numpy < 2);
+``contactqp[importers]`` is both. They are imported when a file is read. Every error is one line
+that starts with the file's path: :class:`~contactqp.errors.FileFormatError` for a missing,
+foreign, truncated or malformed file, :class:`~contactqp.errors.InvalidInputError` for a
+selection the file cannot satisfy or an inconsistent matrix, :class:`~contactqp.errors.NotPositiveDefiniteError` (and
 :class:`~contactqp.compliance.condensation.RigidBodyModeError`) for a model that is not fixed
 enough.
 """

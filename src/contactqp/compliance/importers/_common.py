@@ -47,13 +47,14 @@ def about(path: Path):
         raise type(exc)(one_line(f"{path}: {exc}")) from None
 
 
-def backend(module: str, distribution: str, what: str):
-    """Import an optional backend; :class:`MissingDependencyError` names the fix when absent."""
+def backend(module: str, distribution: str, what: str, extra: str):
+    """Import an optional backend; :class:`MissingDependencyError` names the fix when absent:
+    ``pip install 'contactqp[extra]'``."""
     try:
         return importlib.import_module(module)
     except ImportError:
         raise MissingDependencyError(
-            f"reading {what} needs {distribution}: pip install 'contactqp[importers]'"
+            f"reading {what} needs {distribution}: pip install 'contactqp[{extra}]'"
         ) from None
 
 

@@ -86,7 +86,8 @@ class _Layout:
 def _read(path):
     """Stiffness (full symmetric, CSC), ``(node, label)`` of each equation, constrained mask,
     the number of DOFs of each node and the size of the file's DOF set."""
-    full_module = backend("ansys.mapdl.reader.full", "ansys-mapdl-reader", "ANSYS full files")
+    full_module = backend("ansys.mapdl.reader.full", "ansys-mapdl-reader", "ANSYS full files",
+                          "ansys")
     from ansys.mapdl.reader.common import two_ints_to_long
 
     layout = _Layout(path)

@@ -55,7 +55,7 @@ def op4_matrix(path, name: str | None = None):
         No matrix of that name, several matrices and no name, or a complex matrix.
     """
     path = existing_file(path)
-    op4 = backend("pyNastran.op4.op4", "pyNastran", "NASTRAN OP4 files")
+    op4 = backend("pyNastran.op4.op4", "pyNastran", "NASTRAN OP4 files", "nastran")
     try:
         with contextlib.redirect_stdout(io.StringIO()):
             matrices = op4.read_op4(str(path), precision="double", log=_log())
@@ -145,7 +145,7 @@ def _bulk_only(path: Path, lines: list[str]):
 
 def _bulk(path: Path):
     """The BDF model of a bulk-data file, with or without executive and case control."""
-    bdf = backend("pyNastran.bdf.bdf", "pyNastran", "NASTRAN bulk-data files")
+    bdf = backend("pyNastran.bdf.bdf", "pyNastran", "NASTRAN bulk-data files", "nastran")
     try:
         with open(path, encoding="utf-8", errors="replace") as handle:
             lines = handle.readlines()

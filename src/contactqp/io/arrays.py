@@ -1,0 +1,85 @@
+"""Arrays from numpy's own files (``.npy``, ``.npz``), read safely: every failure is one line.
+
+``np.load`` of a truncated or corrupt file raises whatever its layers meet (``BadZipFile``,
+``zlib.error``, ``EOFError``, ``OSError``, ``ValueError``, ``KeyError``), some only when an
+array of the archive is read; :func:`read_numpy_array` turns each into a
+:class:`~contactqp.errors.FileFormatError` that names the file.
+"""
+
+from __future__ import annotations
+
+import zipfile
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FileFormatError, InvalidInputError
+
+__all__ = ["read_numpy_array"]
+
+#: The arrays of an archive written by :func:`scipy.sparse.save_npz`.
+SCIPY_SPARSE_NPZ = frozenset({"format", "shape", "data"})
+
+_UNREADABLE = (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError)
+
+
+def read_numpy_array(path, key: str | None = None) -> np.ndarray:
+    """The array of a ``.npy`` file, or the array ``key`` of a ``.npz`` archive.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.npy`` or ``.npz`` file (told apart by content, as :func:`numpy.load` does).
+    key : str, optional
+        The array to take from an archive; default its only array. An archive written by
+        :func:`scipy.sparse.save_npz` is, without ``key``, read as one (densified) matrix.
+
+    Raises
+    ------
+    FileFormatError
+        Missing, truncated, corrupt or foreign file, or one that needs pickle.
+    InvalidInputError
+        ``key`` not in the archive, no ``key`` for an archive of several arrays, or ``key``
+        given for a ``.npy`` file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileFormatError(f"{path}: file not found")
+    try:
+        with open(path, "rb") as stream:
+            loaded = np.load(stream, allow_pickle=False)
+            if isinstance(loaded, np.ndarray):
+                if key is not None:
+                    raise InvalidInputError(f"{path}: a .npy file holds one array; key {key!r} "
+                                            "applies to .npz archives")
+                return loaded
+            with loaded as archive:
+                return _archive_array(path, archive, key)
+    except InvalidInputError:
+        raise
+    except _UNREADABLE as exc:
+        kind = "zlib.error" if isinstance(exc, zlib.error) else type(exc).__name__
+        raise FileFormatError(f"{path}: not a readable .npy / .npz file "
+                              f"({kind}: {_one_line(exc)})") from None
+
+
+def _archive_array(path: Path, archive, key: str | None) -> np.ndarray:
+    names = list(archive.files)
+    if key is None and SCIPY_SPARSE_NPZ <= set(names):
+        import scipy.sparse
+
+        return scipy.sparse.load_npz(path).toarray()
+    if key is None:
+        if len(names) != 1:
+            raise InvalidInputError(f"{path}: the archive holds {len(names)} arrays "
+                                    f"({', '.join(names) or 'none'}); name the one to read")
+        key = names[0]
+    if key not in names:
+        raise InvalidInputError(f"{path}: the archive has no array {key!r} (it holds "
+                                f"{', '.join(names) or 'none'})")
+    return archive[key]
+
+
+def _one_line(exc) -> str:
+    return "; ".join(part.strip() for part in str(exc).splitlines() if part.strip())
