@@ -149,8 +149,8 @@ def test_a_damaged_npz_is_one_line_naming_the_key_and_the_file(tmp_path, damage)
     path = damaged_archives(tmp_path)[damage]
     problem = example(tmp_path, edit=lambda text: text.replace(
         '"two_springs_R.csv"', f'{{ file = "{path.name}", key = "R" }}'))
-    with pytest.raises(FileFormatError, match=r"\[model\]\.flexibility \('.*\.npz'\): not a "
-                                              r"readable \.npz archive"):
+    with pytest.raises(FileFormatError, match=r"\[model\]\.flexibility \('.*\.npz'\): .*npz: "
+                                              r"not a readable \.npy / \.npz file"):
         load_problem_file(problem)
     status, _, err = run("solve", problem)
     assert_one_line_error(status, err, "[model].flexibility", path.name)

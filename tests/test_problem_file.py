@@ -447,10 +447,10 @@ CASES = {
         InvalidInputError, ["[solver].backend_options: not an option of solver 'active-set'"]),
     "npz with several arrays and no key": (
         GOOD.replace("R.csv", "R.npz"), {"R.npz": "several"}, InvalidInputError,
-        ["[model].flexibility ('R.npz'): the archive holds 2 arrays (A, B)"]),
+        ["[model].flexibility ('R.npz'): ", "the archive holds 2 arrays (A, B)"]),
     "npz key not found": (
         GOOD.replace('"R.csv"', '{ file = "R.npz", key = "C" }'), {"R.npz": "several"},
-        InvalidInputError, ["[model].flexibility ('R.npz'): the archive has no array 'C'"]),
+        InvalidInputError, ["[model].flexibility ('R.npz'): ", "the archive has no array 'C'"]),
     "missing loads file": (
         BASE_MODEL + "[loads]\nvalues = 'P.csv'\n" + BASE_OBSTACLE, {"R.csv": SPD},
         FileFormatError, ["[loads].values: file 'P.csv' not found"]),

@@ -262,7 +262,7 @@ from ..problem import ContactProblem, FrictionalProblem, friction_route
 from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
 from .export import write_rows
-from .npz import open_npz
+from .arrays import read_numpy_array
 
 __all__ = [
     "ProblemSpec",
@@ -304,7 +304,6 @@ _OBSTACLE_KEYS = {
     "plane": ("type", "point", "normal", "nodes"),
     "pairs": ("type", "pairs", "gaps", "direction", "directions"),
 }
-_SCIPY_SPARSE_NPZ = {"format", "shape", "data"}
 
 
 # --------------------------------------------------------------------------------------------
@@ -416,25 +415,6 @@ def _read_csv(path: Path) -> np.ndarray:
         raise FileFormatError(f"not a table of numbers: {exc}") from None
 
 
-def _read_npz(path: Path, key: str | None) -> np.ndarray:
-    with open_npz(path) as data:
-        names = list(data.files)
-        if key is None and _SCIPY_SPARSE_NPZ <= set(names):
-            return scipy.sparse.load_npz(path).toarray()
-        if key is None:
-            if len(names) != 1:
-                raise InvalidInputError(
-                    f"the archive holds {len(names)} arrays ({', '.join(names) or 'none'}); "
-                    "choose one with { file = ..., key = \"...\" }"
-                )
-            key = names[0]
-        if key not in names:
-            raise InvalidInputError(
-                f"the archive has no array {key!r} (it holds {', '.join(names) or 'none'})"
-            )
-        return data[key]
-
-
 def _read_mtx(path: Path) -> np.ndarray:
     import scipy.io
 
@@ -481,10 +461,8 @@ def read_array(path, key: str | None = None, format: str | None = None) -> np.nd
     try:
         if fmt == "csv":
             array = _read_csv(path)
-        elif fmt == "npz":
-            array = _read_npz(path, key)
-        elif fmt == "npy":
-            array = np.load(path, allow_pickle=False)
+        elif fmt in ("npz", "npy"):
+            array = read_numpy_array(path, key)
         elif fmt == "op4":
             from ..compliance.importers import op4_matrix
 
