@@ -258,7 +258,7 @@ def op4_problem(tmp_path) -> Path:
     ("qpsolvers", "qp", lambda tmp: ["solve", example(tmp, "cyclic_block.toml", lambda text:
                                                       text.replace("\nmu = 0.3\n",
                                                                    "\nmu = 0.3\nfacets = 6\n"))]),
-    ("pyNastran", "importers", lambda tmp: ["solve", op4_problem(tmp)]),
+    ("pyNastran", "nastran", lambda tmp: ["solve", op4_problem(tmp)]),
 ])
 def test_a_missing_optional_dependency_names_its_extra(tmp_path, monkeypatch, module, extra,
                                                        command):

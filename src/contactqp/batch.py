@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import FileFormatError, InvalidInputError, MissingDependencyError
-from .model import finite_array
+from .model import MAX_MAGNITUDE, finite_array
 from .problem import ContactProblem
 from .solvers import solve
 
@@ -134,10 +134,12 @@ class GaussianGapField:
                  seed: int = 0):
         self.coordinates = finite_array(coordinates, "coordinates", 2)
         m = len(self.coordinates)
-        if not (np.isfinite(amplitude) and amplitude >= 0):
-            raise InvalidInputError(f"amplitude must be finite and >= 0, got {amplitude!r}")
-        if not (np.isfinite(correlation_length) and correlation_length > 0):
-            raise InvalidInputError(f"correlation_length must be > 0, got {correlation_length!r}")
+        if not (np.isfinite(amplitude) and 0 <= amplitude <= MAX_MAGNITUDE):
+            raise InvalidInputError(f"amplitude must be >= 0 and at most {MAX_MAGNITUDE:g} m, "
+                                    f"got {amplitude!r}")
+        if not (np.isfinite(correlation_length) and 0 < correlation_length <= MAX_MAGNITUDE):
+            raise InvalidInputError(f"correlation_length must be > 0 and at most "
+                                    f"{MAX_MAGNITUDE:g} m, got {correlation_length!r}")
         self.amplitude, self.correlation_length = float(amplitude), float(correlation_length)
         self.mean = np.broadcast_to(finite_array(np.atleast_1d(mean), "mean", 1), (m,)).copy()
         if isinstance(seed, bool) or int(seed) != seed or seed < 0:
@@ -543,6 +545,11 @@ def _dask(state, tasks, scheduler):
             client.cancel(futures)
 
 
+#: Most samples of one study: 10^7 samples of tens of milliseconds each are days of work on
+#: a workstation, and their store already holds 10^7 rows per field.
+MAX_SAMPLES = 10**7
+
+
 def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler=None,
               chunk_size: int = DEFAULT_CHUNK, limit: int | None = None,
               progress=None) -> BatchSummary:
@@ -575,8 +582,10 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
     BatchSummary
     """
     start = time.perf_counter()
-    if isinstance(n_samples, bool) or int(n_samples) != n_samples or n_samples < 1:
-        raise InvalidInputError(f"n_samples must be an integer >= 1, got {n_samples!r}")
+    if (isinstance(n_samples, bool) or int(n_samples) != n_samples
+            or not 1 <= n_samples <= MAX_SAMPLES):
+        raise InvalidInputError(f"n_samples must be an integer from 1 to {MAX_SAMPLES:g}, got "
+                                f"{n_samples!r}")
     n_samples = int(n_samples)
     if source.n_available is not None and n_samples > source.n_available:
         raise InvalidInputError(f"asked for {n_samples} samples, the source has "

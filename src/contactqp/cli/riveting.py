@@ -17,7 +17,7 @@ def warn(message: str) -> None:
 
 
 @cli.command()
-@click.option("--samples", type=click.IntRange(min=1),
+@click.option("--samples", type=click.IntRange(min=1, max=10**7),
               help="Gap-field samples of the variation study  [default: 1000, or every row "
                    "of --gaps]")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
@@ -30,10 +30,12 @@ def warn(message: str) -> None:
 @click.option("--gaps", "gap_file", type=click.Path(dir_okay=False, path_type=Path),
               help="Gap realisations (m), one per row (.npy or .csv), instead of random fields; "
                    "the nominal gap is then their mean.")
-@click.option("--mean-gap", type=float, default=2e-4, show_default=True, help="Nominal gap (m).")
-@click.option("--amplitude", type=click.FloatRange(min=0), default=1e-4, show_default=True,
+@click.option("--mean-gap", type=click.FloatRange(max=1.0), default=2e-4, show_default=True,
+              help="Nominal gap (m); negative: interference.")
+@click.option("--amplitude", type=click.FloatRange(min=0, max=1.0), default=1e-4, show_default=True,
               help="Standard deviation of the gap field (m).")
-@click.option("--correlation-length", type=click.FloatRange(min=0, min_open=True), default=0.04,
+@click.option("--correlation-length", type=click.FloatRange(min=0, min_open=True, max=1e3),
+              default=0.04,
               show_default=True, help="Correlation length of the gap field (m).")
 @click.option("--method", type=click.Choice(["lawson-hanson", "active-set", "nnls"]),
               default="lawson-hanson", show_default=True,
@@ -69,6 +71,13 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
                                  f"{nominal_gaps.shape[0]}", param_hint="--gaps")
     # absurd before anything is written; merely unusual (a user could mean it): a warning
     model.check_gaps(nominal_gaps, "--mean-gap" if gap_file is None else "the mean of --gaps")
+    out.mkdir(parents=True, exist_ok=True)
+    case = FasteningCase(model, method=method)
+    # a bad scheduler, or a store of another study in --out, is refused before the nominal
+    # files are written
+    run_batch(case, source, samples, out / "samples.h5", scheduler=scheduler, limit=0)
+    sequence = model.fasten(nominal_gaps, method=method)
+    # warnings once the input is known to be valid, so that bad input stays one line
     thickness = model.thickness
     for name, value in [("nominal gap", float(nominal_gaps.max())),
                         ("--amplitude", amplitude if gap_file is None else 0.0)]:
@@ -78,12 +87,6 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     if gap_file is None and mean_gap < 0:
         warn(f"--mean-gap {mean_gap:g} m is negative: the plates overlap by "
              f"{-mean_gap * 1e3:.4g} mm at rest (interference)")
-    out.mkdir(parents=True, exist_ok=True)
-    case = FasteningCase(model, method=method)
-    # a bad scheduler, or a store of another study in --out, is refused before the nominal
-    # files are written
-    run_batch(case, source, samples, out / "samples.h5", scheduler=scheduler, limit=0)
-    sequence = model.fasten(nominal_gaps, method=method)
     final = sequence.final
     xy = model.points
     write_vtu(model, final, out / "nominal.vtu", nominal_gaps)
