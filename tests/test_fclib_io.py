@@ -483,7 +483,7 @@ def test_format_found_from_content_not_suffix(tmp_path):
 
 def test_missing_h5py(monkeypatch):
     monkeypatch.setitem(__import__("sys").modules, "h5py", None)
-    with pytest.raises(MissingDependencyError, match="pip install h5py"):
+    with pytest.raises(MissingDependencyError, match=r"pip install 'contactqp\[hdf5\]'"):
         read_problem(DATA / "CubeH8.hdf5")
 
 

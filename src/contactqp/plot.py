@@ -4,22 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import InvalidInputError, MissingDependencyError
+from .errors import InvalidInputError
+from .optional import require
 
 __all__ = ["plot_spring_chain", "plot_rod", "pyplot", "save_figure"]
 
 
 def pyplot():
     """matplotlib.pyplot on the non-interactive Agg backend (figures are written, not shown)."""
-    try:
-        import matplotlib
+    require("matplotlib", "figures", "plot").use("Agg")
+    import matplotlib.pyplot as plt
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise MissingDependencyError(
-            "figures need matplotlib: pip install 'contactqp[plot]'"
-        ) from None
     return plt
 
 

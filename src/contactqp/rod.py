@@ -46,10 +46,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .compliance.beam import Frame2D
-from .io import export
 from .contact import GapObstacle
-from .errors import ContactError, InvalidInputError, MissingDependencyError
+from .errors import ContactError, InvalidInputError
+from .io import export
 from .model import ReducedModel
+from .optional import require
 from .problem import ContactProblem
 from .result import ContactResult
 from .solvers import solve
@@ -285,14 +286,10 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     ReferenceSolveError
         Clarabel fails or the polished solution violates a contact condition.
     """
-    try:
-        import qpsolvers
+    qpsolvers = require("qpsolvers", "the reference solve", "qp")
+    require("clarabel", "the reference solve", "qp")
+    from .solvers.qp import backend_options
 
-        from .solvers.qp import backend_options
-    except ImportError:
-        raise MissingDependencyError(
-            "the reference solve needs qpsolvers and clarabel: pip install 'contactqp[qp]'"
-        ) from None
     if contact not in ("mesh", "nodes"):
         raise InvalidInputError(f"contact must be 'mesh' or 'nodes', got {contact!r}")
     frame = rod.frame

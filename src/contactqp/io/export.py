@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError, MissingDependencyError
+from ..errors import InvalidInputError
+from ..optional import require
 
 __all__ = ["write_vtu", "write_csv", "write_rows"]
 
@@ -29,11 +30,7 @@ def write_vtu(path, points, cells, point_data) -> Path:
     -------
     Path
     """
-    try:
-        import meshio
-    except ImportError:
-        raise MissingDependencyError(
-            "VTU output needs meshio: pip install 'contactqp[fem]'") from None
+    meshio = require("meshio", "VTU output", "fem")
     xyz = np.asarray(points, dtype=float)
     if xyz.ndim != 2 or xyz.shape[1] not in (2, 3):
         raise InvalidInputError(f"points must have shape (n, 2) or (n, 3), got {xyz.shape}")

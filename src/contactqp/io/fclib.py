@@ -30,11 +30,11 @@ from contactqp.errors import (
     ContactError,
     FileFormatError,
     InvalidInputError,
-    MissingDependencyError,
     UnsupportedProblemError,
 )
 from contactqp.io.siconos import read_dat
 from contactqp.local import GlobalProblem, LocalProblem
+from contactqp.optional import require
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
            "is_hdf5", "is_own_solution", "solution_source", "SOLUTION_OF"]
@@ -46,13 +46,7 @@ _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 
 def _h5py():
-    try:
-        import h5py
-    except ImportError:
-        raise MissingDependencyError(
-            "reading or writing FCLIB HDF5 files needs h5py: pip install h5py"
-        ) from None
-    return h5py
+    return require("h5py", "reading or writing FCLIB HDF5 files", "hdf5")
 
 
 def is_hdf5(path) -> bool:

@@ -70,7 +70,7 @@ class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
 
     def __init__(self, data: FixedPointData, facets: int, backend: str, options: dict):
-        self.qpsolvers = _qpsolvers()
+        self.qpsolvers = _qpsolvers("the polygonal cone")
         if backend not in self.qpsolvers.available_solvers:
             raise InvalidInputError(
                 f"backend {backend!r} is not installed; available: "

@@ -41,9 +41,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
-from ..errors import InvalidInputError, MissingDependencyError
+from ..errors import InvalidInputError
 from ..local import LocalProblem, contact_status, natural_map_error
 from ..model import iteration_cap, positive_tolerance
+from ..optional import require
 from .local import LocalSolution
 
 __all__ = ["solve_tresca_fixed_point"]
@@ -306,17 +307,12 @@ class _ClarabelTresca:
     """
 
     def __init__(self, data: FixedPointData):
-        try:
-            import clarabel
-        except ImportError:
-            raise MissingDependencyError(
-                "the Tresca fixed point needs Clarabel: pip install clarabel") from None
-        self._clarabel = clarabel
+        self._clarabel = require("clarabel", "the Tresca fixed point", "qp")
         self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
         self.W = data.W_sym / self.w  # scaled, full (for the polish)
         self.P = sp.triu(sp.csc_matrix(self.W), format="csc")
         self.d, self.nc = data.dim, data.n_contacts
-        settings = clarabel.DefaultSettings()
+        settings = self._clarabel.DefaultSettings()
         settings.verbose = False
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = _CLARABEL_TOL
         settings.tol_ktratio = 1e-9
@@ -337,6 +333,7 @@ class _ClarabelTresca:
         A = sp.csc_matrix((-np.ones(rows.size), (rows, cols)), shape=(nc + d * n_slide, keep.size))
         b = np.zeros(nc + d * n_slide)
         b[nc::d] = s[sliding] / f
+        clarabel = self._clarabel
         cones = [clarabel.NonnegativeConeT(nc)] + [clarabel.SecondOrderConeT(d)] * n_slide
         P = self.P[keep][:, keep]
         solver = clarabel.DefaultSolver(P, q[keep] / (f * self.w), A, b, cones,

@@ -10,12 +10,9 @@ Units are SI throughout: metres, pascals, newtons. This package needs scikit-fem
 read files): ``pip install 'contactqp[fem]'``.
 """
 
-from importlib.util import find_spec
+from ...optional import require
 
-from ...errors import MissingDependencyError
-
-if find_spec("skfem") is None:  # checked once here: every module of the package imports it
-    raise MissingDependencyError("finite elements need scikit-fem: pip install 'contactqp[fem]'")
+require("skfem", "finite elements", "fem", "scikit-fem")  # here once: every module imports it
 
 from .elastic import ElasticModel, NodeSelection, elastic_compliance
 from .meshes import bar, block, plate, read_mesh

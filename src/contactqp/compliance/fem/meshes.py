@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import skfem
 
-from ...errors import (FileFormatError, InvalidInputError, MissingDependencyError,
-                       UnsupportedProblemError)
+from ...errors import FileFormatError, InvalidInputError, UnsupportedProblemError
+from ...optional import require
 
 __all__ = ["plate", "block", "bar", "read_mesh", "straight_sided", "SUPPORTED_MESHES"]
 
@@ -172,12 +172,8 @@ def read_mesh(source):
     UnsupportedProblemError
         A mesh of lines only, or of cells the elastic models do not support.
     """
-    try:
-        import meshio
-        from skfem.io.meshio import from_meshio
-    except ImportError:
-        raise MissingDependencyError("reading meshes needs meshio: pip install "
-                                     "'contactqp[fem]'") from None
+    meshio = require("meshio", "reading meshes", "fem")
+    from_meshio = require("skfem.io.meshio", "reading meshes", "fem", "scikit-fem").from_meshio
 
     if not isinstance(source, meshio.Mesh):
         try:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Hashable, Sequence
@@ -10,8 +9,9 @@ from typing import Hashable, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from ...errors import FileFormatError, InvalidInputError, MissingDependencyError
+from ...errors import FileFormatError, InvalidInputError
 from ...model import SYMMETRY_RTOL, ReducedModel
+from ...optional import require
 from ..condensation import condense
 
 __all__ = ["KINDS", "existing_file", "about", "one_line", "backend", "node_major",
@@ -50,12 +50,7 @@ def about(path: Path):
 def backend(module: str, distribution: str, what: str, extra: str):
     """Import an optional backend; :class:`MissingDependencyError` names the fix when absent:
     ``pip install 'contactqp[extra]'``."""
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise MissingDependencyError(
-            f"reading {what} needs {distribution}: pip install 'contactqp[{extra}]'"
-        ) from None
+    return require(module, f"reading {what}", extra, distribution)
 
 
 def node_major(nodes, components) -> list[tuple]:
