@@ -32,8 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import FileFormatError, InvalidInputError, MissingDependencyError
+from .errors import FileFormatError, InvalidInputError
 from .model import MAX_MAGNITUDE, finite_array
+from .optional import require
 from .problem import ContactProblem
 from .solvers import solve
 
@@ -239,20 +240,14 @@ def load_gap_samples(path) -> GapSamples:
     Values in metres, shape (N, m). A missing, truncated or corrupt file is a one-line
     :class:`~contactqp.errors.FileFormatError`.
     """
-    from .io.arrays import read_numpy_array
+    from .io.arrays import read_csv_array, read_numpy_array
 
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: gap samples file not found")
     if path.suffix not in (".npy", ".npz", ".csv", ".txt"):
         raise FileFormatError(f"{path}: gap samples must be .npy, .npz or .csv (or .txt)")
-    if path.suffix in (".npy", ".npz"):
-        data = read_numpy_array(path)
-    else:
-        try:
-            data = np.loadtxt(path, delimiter=",", ndmin=2)
-        except ValueError as exc:
-            raise FileFormatError(f"{path}: unreadable gap samples ({exc})") from None
+    data = read_numpy_array(path) if path.suffix in (".npy", ".npz") else read_csv_array(path)
     try:
         return GapSamples(data)
     except InvalidInputError as exc:
@@ -297,12 +292,7 @@ class BatchSummary:
 
 
 def _h5py():
-    try:
-        import h5py
-    except ImportError:
-        raise MissingDependencyError(
-            "batch stores need h5py: pip install 'contactqp[hdf5]'") from None
-    return h5py
+    return require("h5py", "batch stores", "hdf5")
 
 
 def _open_store(path: Path, case, source, n_samples: int, chunk: int):
@@ -466,12 +456,7 @@ def _store_all(results, store_chunk):
 
 
 def _distributed():
-    try:
-        import distributed
-    except ImportError:
-        raise MissingDependencyError("a Dask scheduler needs distributed: pip install "
-                                     "'contactqp[cluster]'") from None
-    return distributed
+    return require("distributed", "a Dask scheduler", "cluster")
 
 
 _SOCKET_SCHEMES = ("tcp", "tls", "ws", "wss")

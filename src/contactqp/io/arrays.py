@@ -1,4 +1,5 @@
-"""Arrays from numpy's own files (``.npy``, ``.npz``), read safely: every failure is one line.
+"""Arrays from files (CSV tables, numpy's ``.npy`` and ``.npz``), read safely: every failure is
+one line that names the file.
 
 ``np.load`` of a truncated or corrupt file raises whatever its layers meet (``BadZipFile``,
 ``zlib.error``, ``EOFError``, ``OSError``, ``ValueError``, ``KeyError``), some only when an
@@ -8,6 +9,7 @@ array of the archive is read; :func:`read_numpy_array` turns each into a
 
 from __future__ import annotations
 
+import warnings
 import zipfile
 import zlib
 from pathlib import Path
@@ -16,7 +18,7 @@ import numpy as np
 
 from ..errors import FileFormatError, InvalidInputError
 
-__all__ = ["read_numpy_array"]
+__all__ = ["read_csv_array", "read_numpy_array"]
 
 #: The arrays of an archive written by :func:`scipy.sparse.save_npz`.
 SCIPY_SPARSE_NPZ = frozenset({"format", "shape", "data"})
@@ -62,6 +64,38 @@ def read_numpy_array(path, key: str | None = None) -> np.ndarray:
         kind = "zlib.error" if isinstance(exc, zlib.error) else type(exc).__name__
         raise FileFormatError(f"{path}: not a readable .npy / .npz file "
                               f"({kind}: {_one_line(exc)})") from None
+
+
+def read_csv_array(path) -> np.ndarray:
+    """The numbers of a CSV table (commas or blanks between them; ``#`` starts a comment).
+
+    Returns
+    -------
+    ndarray of float, 2-D
+        One row per line.
+
+    Raises
+    ------
+    FileFormatError
+        A file that is not text, holds no numbers or not a table of numbers; numpy's warnings
+        stay inside.
+    """
+    path = Path(path)
+    try:
+        with open(path, encoding="utf-8-sig") as handle:
+            text = handle.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise FileFormatError(f"{path}: not a readable text file ({_one_line(exc)})") from None
+    body = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
+    if not body.strip():
+        raise FileFormatError(f"{path}: the file holds no numbers")
+    delimiter = "," if "," in body else None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # an empty row's warning: the error says it
+            return np.loadtxt(body.splitlines(), delimiter=delimiter, ndmin=2, dtype=float)
+    except ValueError as exc:
+        raise FileFormatError(f"{path}: not a table of numbers: {_one_line(exc)}") from None
 
 
 def _archive_array(path: Path, archive, key: str | None) -> np.ndarray:

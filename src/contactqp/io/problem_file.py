@@ -261,8 +261,8 @@ from ..model import ReducedModel
 from ..problem import ContactProblem, FrictionalProblem, friction_route
 from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
 from ..solvers import SOLVERS, solve
+from .arrays import read_csv_array, read_numpy_array
 from .export import write_rows
-from .arrays import read_numpy_array
 
 __all__ = [
     "ProblemSpec",
@@ -402,19 +402,6 @@ def _format_of(path: Path, fmt: str | None) -> str:
     )
 
 
-def _read_csv(path: Path) -> np.ndarray:
-    with open(path, encoding="utf-8-sig") as handle:
-        text = handle.read()
-    body = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
-    if not body.strip():
-        raise FileFormatError("the file holds no numbers")
-    delimiter = "," if "," in body else None
-    try:
-        return np.loadtxt(body.splitlines(), delimiter=delimiter, ndmin=2, dtype=float)
-    except ValueError as exc:
-        raise FileFormatError(f"not a table of numbers: {exc}") from None
-
-
 def _read_mtx(path: Path) -> np.ndarray:
     import scipy.io
 
@@ -460,7 +447,7 @@ def read_array(path, key: str | None = None, format: str | None = None) -> np.nd
         raise FileFormatError(f"'{path}' is not a file")
     try:
         if fmt == "csv":
-            array = _read_csv(path)
+            array = read_csv_array(path)
         elif fmt in ("npz", "npy"):
             array = read_numpy_array(path, key)
         elif fmt == "op4":
@@ -508,7 +495,9 @@ def _load_ref(where: _Where, value, key: str) -> tuple[np.ndarray, str]:
     try:
         return read_array(path, npz_key, fmt), label
     except InvalidInputError as exc:
-        raise where.rewrap(label, exc) from None
+        # the readers start their messages with the path, which the label already names
+        message = str(exc).removeprefix(f"{path}: ")
+        raise where.rewrap(label, type(exc)(message)) from None
 
 
 def _numeric_leaves(value, integer: bool = False) -> bool:
