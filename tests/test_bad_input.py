@@ -27,6 +27,7 @@ from contactqp.io.problem_file import load_problem_file
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples" / "problems"
+FCLIB = ROOT.parent / "shared" / "data" / "fclib"
 
 
 def run(*args) -> tuple[int, str, str]:
@@ -149,8 +150,8 @@ def test_a_damaged_npz_is_one_line_naming_the_key_and_the_file(tmp_path, damage)
     path = damaged_archives(tmp_path)[damage]
     problem = example(tmp_path, edit=lambda text: text.replace(
         '"two_springs_R.csv"', f'{{ file = "{path.name}", key = "R" }}'))
-    with pytest.raises(FileFormatError, match=r"\[model\]\.flexibility \('.*\.npz'\): .*npz: "
-                                              r"not a readable \.npy / \.npz file"):
+    with pytest.raises(FileFormatError, match=r"\[model\]\.flexibility \('.*\.npz'\): not a "
+                                              r"readable \.npy / \.npz file"):
         load_problem_file(problem)
     status, _, err = run("solve", problem)
     assert_one_line_error(status, err, "[model].flexibility", path.name)
@@ -259,6 +260,11 @@ def op4_problem(tmp_path) -> Path:
                                                       text.replace("\nmu = 0.3\n",
                                                                    "\nmu = 0.3\nfacets = 6\n"))]),
     ("pyNastran", "nastran", lambda tmp: ["solve", op4_problem(tmp)]),
+    ("clarabel", "qp", lambda tmp: ["rod"]),
+    ("clarabel", "qp", lambda tmp: ["solve", example(tmp, "cyclic_block.toml", lambda text:
+                                                     text.replace("\nmu = 0.3\n", "\nmu = 0.3"
+                                                                  "\nsolver = 'tresca'\n"))]),
+    ("h5py", "hdf5", lambda tmp: ["fclib", FCLIB / "CubeH8.hdf5"]),
 ])
 def test_a_missing_optional_dependency_names_its_extra(tmp_path, monkeypatch, module, extra,
                                                        command):
@@ -487,6 +493,14 @@ def assert_command_exits_clean(property_dir, tmp_path_factory, command, option, 
     except BaseException as exc:  # noqa: BLE001  (what the user would see as a traceback)
         pytest.fail(f"traceback: {type(exc).__name__}: {exc} for {args}")
     assert_clean_exit(status, err)
+
+
+@pytest.mark.parametrize("content", ["", "# only a comment\n", ",,\n", "a,b\n", "\xff\xfe"])
+def test_an_empty_or_foreign_gap_csv_is_one_line_and_no_warning(tmp_path, content):
+    (tmp_path / "gaps.csv").write_bytes(content.encode("latin-1"))
+    status, _, err = run("riveting", "--gaps", tmp_path / "gaps.csv", "--out", tmp_path / "out")
+    assert_one_line_error(status, err, "gaps.csv")
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("content", ["", "\n\n", "# only a comment\n", ",,\n", " , \n"])

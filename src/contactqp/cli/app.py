@@ -9,19 +9,30 @@ from __future__ import annotations
 
 import sys
 import time
+import warnings
 from contextlib import contextmanager
 
 import click
 
-from ..errors import ContactError
+from ..errors import ContactError, ContactWarning
 
-__all__ = ["cli", "console", "fail", "float_list", "main", "progress"]
+__all__ = ["cli", "console", "fail", "float_list", "main", "progress", "warn"]
 
 EXIT_OK, EXIT_NOT_SOLVED, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def fail(message: str) -> None:
     click.echo(f"contactqp: error: {message}", err=True)
+
+
+def warn(message: str) -> None:
+    """One line on stderr: ``contactqp: warning: MESSAGE``."""
+    click.echo(f"contactqp: warning: {' '.join(str(message).split())}", err=True)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Python warnings as one :func:`warn` line; one not of contactqp's tree names its class."""
+    warn(message if issubclass(category, ContactWarning) else f"{message} ({category.__name__})")
 
 
 def console():
@@ -86,6 +97,12 @@ def cli():
 
 def main(argv=None) -> int:
     """Run the command line; return the exit status instead of raising."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _run(argv)
+
+
+def _run(argv) -> int:
     try:
         cli.main(args=argv, prog_name="contactqp", standalone_mode=False)
     except click.exceptions.Exit as exc:

@@ -9,11 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail
-
-
-def warn(message: str) -> None:
-    click.echo(f"contactqp: warning: {message}", err=True)
+from .app import EXIT_NOT_SOLVED, cli, console, fail, warn
 
 
 @cli.command()

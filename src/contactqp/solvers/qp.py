@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 import scipy.sparse
 
-from ..errors import InvalidInputError, MissingDependencyError
+from ..errors import InvalidInputError
+from ..optional import require
 
 __all__ = ["solve_qp", "available_backends", "backend_options", "DEFAULT_BACKEND"]
 
@@ -27,14 +29,8 @@ _TIGHT = {
 }
 
 
-def _qpsolvers():
-    try:
-        import qpsolvers
-    except ImportError:
-        raise MissingDependencyError(
-            "the 'qp' solver needs qpsolvers and a backend: pip install 'contactqp[qp]'"
-        ) from None
-    return qpsolvers
+def _qpsolvers(purpose: str = "the 'qp' solver"):
+    return require("qpsolvers", purpose, "qp")
 
 
 def available_backends() -> list[str]:
@@ -85,14 +81,18 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
                            h=problem.constraints.gaps / length_scale)
     settings = backend_options(backend)
     settings.update(options)
-    solution = qpsolvers.solve_problem(qp, solver=backend, **settings)
+    with warnings.catch_warnings(record=True) as said:  # a backend's warnings go in the message
+        warnings.simplefilter("always")
+        solution = qpsolvers.solve_problem(qp, solver=backend, **settings)
     elapsed = time.perf_counter() - start
     found = solution.x is not None and solution.z is not None and solution.found is not False
     U = length_scale * solution.x if found else np.full(problem.model.n_freedoms, np.nan)
     forces = (force_scale * np.maximum(solution.z, 0.0) if found
               else np.full(problem.n_constraints, np.nan))
+    message = "backend found a solution" if found else "backend found no solution"
+    notes = list(dict.fromkeys(" ".join(str(w.message).split()) for w in said))
     return problem.make_result(
         U, forces, solver=f"qp:{backend}", converged=bool(found),
-        message="backend found a solution" if found else "backend found no solution",
+        message=f"{message} ({'; '.join(notes)})" if notes else message,
         nit=int(getattr(solution, "extras", {}).get("iter", 0) or 0), wall_time=elapsed,
     )
