@@ -515,3 +515,14 @@ def test_an_empty_csv_is_one_line_and_no_warning(tmp_path, content):
         with pytest.raises(FileFormatError, match="empty.csv"):
             read_unit_load_csv(tmp_path / "empty.csv")
     assert_one_line_error(status, err, "[model].flexibility ('empty.csv')")
+
+
+def test_a_warning_on_the_command_line_is_one_line(tmp_path):
+    problem = example(tmp_path, edit=lambda text: text.replace(
+        '"two_springs_R.csv"', "[[5e-7, 5e-7], [5.0000000001e-7, 1.5e-6]]"))
+    status, _, err = run("solve", problem)
+    assert status in (0, 1) and "Traceback" not in err
+    warning = [line for line in err.splitlines() if "symmetrised" in line]
+    assert len(warning) == 1 and warning[0].startswith("contactqp: warning: ")
+    assert "[model].flexibility: flexibility symmetrised: relative asymmetry" in warning[0]
+    assert "Warning" not in err  # contactqp's own warnings do not show a class name
