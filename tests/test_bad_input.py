@@ -427,7 +427,7 @@ def test_broken_values_found_give_one_line_and_the_right_exit_code(property_dir,
 
 
 def assert_solve_exits_clean(directory: Path, doc: dict) -> None:
-    """``contactqp solve`` of ``doc`` written as a file exits cleanly (:func:`assert_clean_exit`)."""
+    """``contactqp solve`` of ``doc``, written as a file, exits cleanly (see assert_clean_exit)."""
     problem = directory / "broken.toml"
     problem.write_text(toml_text(doc))
     try:

@@ -87,7 +87,8 @@ class FrictionLaw:
     ------
     InvalidInputError
         ``mu`` or ``cohesion`` negative, NaN, inf or of the wrong length; cohesion where
-        ``mu = 0`` (the cone has no apex); ``facets`` not an integer from 3 to :data:`~contactqp.solvers.polygonal.MAX_FACETS`.
+        ``mu = 0`` (the cone has no apex); ``facets`` not an integer from 3 to
+        :data:`~contactqp.solvers.polygonal.MAX_FACETS`.
     """
 
     mu: np.ndarray

@@ -135,8 +135,8 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
     W_nn = W[normal][:, normal]
     W_nn = np.asarray(W_nn.toarray() if hasattr(W_nn, "toarray") else W_nn, dtype=float)
     q_n = problem.q[normal]
-    solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0,
-                            tol=min(tol, 1e-10) * 1e-2, max_iter=500 if max_iter is None else max_iter)
+    solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0, tol=min(tol, 1e-10) * 1e-2,
+                            max_iter=500 if max_iter is None else max_iter)
     reactions = _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
