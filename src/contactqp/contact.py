@@ -328,20 +328,33 @@ _DUPLICATE_DECIMALS = 9
 
 
 def _refuse_duplicates(rows) -> None:
-    """Raise if two rows constrain the same freedoms along the same direction."""
-    seen = {}
-    for position, (_, dofs, coefficients, _, label) in enumerate(rows):
-        order = np.argsort(dofs)
-        unit = np.asarray(coefficients, dtype=float)[order] / np.linalg.norm(coefficients)
-        key = (tuple(np.asarray(dofs)[order].tolist()),
-               tuple(np.round(unit, _DUPLICATE_DECIMALS).tolist()))
-        if key in seen:
-            first = seen[key]
-            raise InvalidInputError(
-                f"{label} is constrained twice along the same direction (constraints {first} "
-                f"and {position}, '{rows[first][4]}' and '{label}'): the contact operator would "
-                f"be singular; give each node and direction once (keep the smaller gap)")
-        seen[key] = position
+    """Raise if two rows constrain the same freedoms along the same direction.
+
+    Rows are compared by size, vectorised: each row's freedoms sorted, with its unit
+    coefficients rounded to :data:`_DUPLICATE_DECIMALS`.
+    """
+    by_size: dict[int, list[int]] = {}
+    for position, row in enumerate(rows):
+        by_size.setdefault(len(row[1]), []).append(position)
+    for size, positions in by_size.items():
+        dofs = np.array([rows[p][1] for p in positions], dtype=float).reshape(-1, size)
+        coefficients = np.array([rows[p][2] for p in positions], dtype=float).reshape(-1, size)
+        order = np.argsort(dofs, axis=1, kind="stable")
+        dofs = np.take_along_axis(dofs, order, axis=1)
+        unit = np.take_along_axis(coefficients, order, axis=1)
+        unit = np.round(unit / np.linalg.norm(unit, axis=1, keepdims=True), _DUPLICATE_DECIMALS)
+        keys = np.hstack([dofs, unit + 0.0])  # + 0.0: -0.0 and 0.0 are one direction
+        _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+        if np.all(counts == 1):
+            continue
+        twice = np.flatnonzero(counts[inverse.ravel()] > 1)
+        group = inverse.ravel()[twice[0]]
+        first, second = (positions[i] for i in twice[inverse.ravel()[twice] == group][:2])
+        label = rows[second][4]
+        raise InvalidInputError(
+            f"{label} is constrained twice along the same direction (constraints {first} "
+            f"and {second}, '{rows[first][4]}' and '{label}'): the contact operator would "
+            f"be singular; give each node and direction once (keep the smaller gap)")
 
 
 def tangent_basis(normals) -> np.ndarray:
