@@ -300,8 +300,15 @@ _EPS = float(np.finfo(float).eps)
 
 
 def _abs_product(A, x) -> np.ndarray:
-    """``|A| |x|`` for a dense or sparse ``A``."""
-    return np.asarray(abs(A) @ np.abs(x)).ravel()
+    """``|A| |x|`` for a dense or sparse ``A``; a dense ``A`` by blocks of rows, so that no copy
+    of a large ``W`` is made."""
+    ax = np.abs(np.asarray(x, dtype=float)).ravel()
+    if sp.issparse(A):
+        return np.asarray(abs(A) @ ax).ravel()
+    A = np.asarray(A)
+    rows = max(1, (1 << 22) // max(1, A.shape[1]))  # blocks of at most 32 MB
+    return np.concatenate([np.abs(A[start:start + rows]) @ ax
+                           for start in range(0, A.shape[0], rows)] or [np.zeros(0)])
 
 
 def accuracy_limits(problem: LocalProblem, r, u) -> AccuracyLimits:
