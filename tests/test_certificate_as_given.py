@@ -172,7 +172,6 @@ def test_rescaling_solvers_report_the_given_problems_error(route):
     else:
         from contactqp.solvers.tresca import solve_tresca_fixed_point
 
-        pytest.importorskip("clarabel")
         solution = solve_tresca_fixed_point(problem, tol=TOL)
     W = dense(problem.W)
     u = W @ solution.r + problem.q
