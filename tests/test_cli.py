@@ -143,3 +143,21 @@ def test_fclib_bad_problems_exit_2(tmp_path):
     proc = run("fclib", missing)
     assert_one_line_error(proc, 2)
     assert proc.stderr.count(missing) == 1, proc.stderr  # the file named once
+
+
+def test_a_figure_leaves_the_users_matplotlib_state_alone(tmp_path):
+    # a notebook user's backend and pyplot figures must survive a figure drawn by contactqp
+    script = f"""
+import sys
+import matplotlib
+matplotlib.use("svg")
+from contactqp.plot import plot_spring_chain
+from contactqp.springs import SpringChain
+chain = SpringChain(n=3, stiffness=1.0, mu=0.2, mass=2.0, g=10.0)
+plot_spring_chain([chain.solve(f) for f in (3.0, 14.0)], {str(tmp_path / "chain.png")!r})
+print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["svg", "False"]
+    assert (tmp_path / "chain.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

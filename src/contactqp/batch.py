@@ -704,15 +704,14 @@ def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
 
     ``coordinates``: shape (m, 2), the position of each contact (m); drawn in mm.
     """
-    from .plot import pyplot, save_figure
+    from .plot import save_figure, subplots
 
-    plt = pyplot()
     xy = np.asarray(coordinates, dtype=float) * 1e3
     panels = [(statistics.mean * 1e3, "mean final gap (mm)"),
               (statistics.quantiles[-1] * 1e3,
                f"{statistics.levels[-1]:.0%} quantile of the final gap (mm)"),
               (statistics.contact_probability, "probability of contact")]
-    figure, axes = plt.subplots(len(panels), 1, figsize=(7, 9.5), sharex=True)
+    figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True)
     for ax, (values, title) in zip(axes, panels):
         shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, s=18, cmap="viridis")
         figure.colorbar(shown, ax=ax)

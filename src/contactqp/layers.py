@@ -262,10 +262,9 @@ class LayersResult:
 
 def plot_layers(result: LayersResult, path) -> Path:
     """Lateral load against relative displacement, with the analytic limit, as a PNG."""
-    from .plot import pyplot, save_figure
+    from .plot import save_figure, subplots
 
-    plt = pyplot()
-    figure, axes = plt.subplots(figsize=(7, 4.5))
+    figure, axes = subplots(figsize=(7, 4.5))
     axes.plot(result.relative * 1e3, result.load / 1e3, "o-", ms=3, label="reduced model")
     axes.axhline(result.layers.limit / 1e3, color="C3", ls="--",
                  label="c A + mu N (sliding block)")

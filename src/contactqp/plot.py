@@ -1,4 +1,8 @@
-"""Figures (matplotlib, imported when a figure is asked for)."""
+"""Figures (matplotlib, imported when a figure is asked for).
+
+Figures are made outside pyplot (:func:`subplots`), so drawing one never switches the user's
+matplotlib backend nor leaves a figure registered in a notebook's pyplot state.
+"""
 
 from __future__ import annotations
 
@@ -7,19 +11,22 @@ from pathlib import Path
 from .errors import InvalidInputError
 from .optional import require
 
-__all__ = ["plot_spring_chain", "plot_rod", "pyplot", "save_figure"]
+__all__ = ["plot_spring_chain", "plot_rod", "save_figure", "subplots"]
 
 
-def pyplot():
-    """matplotlib.pyplot on the non-interactive Agg backend (figures are written, not shown)."""
-    require("matplotlib", "figures", "plot").use("Agg")
-    import matplotlib.pyplot as plt
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize=(7, 4.5), **options):
+    """``(figure, axes)`` as :func:`matplotlib.pyplot.subplots` gives, without pyplot.
 
-    return plt
+    The :class:`matplotlib.figure.Figure` is written by :func:`save_figure` (Agg for raster
+    formats); no backend is selected and no pyplot state changes. ``options`` go to
+    :meth:`~matplotlib.figure.Figure.subplots` (``sharex``, ...).
+    """
+    figure = require("matplotlib.figure", "figures", "plot", "matplotlib").Figure(figsize=figsize)
+    return figure, figure.subplots(nrows, ncols, **options)
 
 
 def save_figure(figure, path) -> Path:
-    """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders; close it.
+    """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders.
 
     Raises
     ------
@@ -27,15 +34,12 @@ def save_figure(figure, path) -> Path:
         The suffix is not a format matplotlib writes (png, pdf, svg, ...).
     """
     path = Path(path)
-    try:
-        formats = figure.canvas.get_supported_filetypes()
-        if path.suffix.lstrip(".").lower() not in formats:
-            raise InvalidInputError(f"{path}: a figure file needs a suffix among "
-                                    f"{', '.join(sorted(formats))}")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        figure.savefig(path, dpi=120)
-    finally:
-        pyplot().close(figure)
+    formats = figure.canvas.get_supported_filetypes()
+    if path.suffix.lstrip(".").lower() not in formats:
+        raise InvalidInputError(f"{path}: a figure file needs a suffix among "
+                                f"{', '.join(sorted(formats))}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
     return path
 
 
@@ -48,8 +52,7 @@ def plot_spring_chain(results, path) -> Path:
     path : str or Path
         Output file; its suffix chooses the format.
     """
-    plt = pyplot()
-    figure, axes = plt.subplots(figsize=(7, 4.5))
+    figure, axes = subplots(figsize=(7, 4.5))
     for result in results:
         bodies = range(1, len(result.x) + 1)
         axes.plot(bodies, result.x, marker="o" if len(result.x) <= 50 else None,
@@ -79,11 +82,10 @@ def plot_rod(rod, comparisons, path) -> Path:
     """
     import numpy as np
 
-    plt = pyplot()
     x = rod.frame.coordinates[:, 0] * 1e3
     nodes = rod.node_indices
-    figure, panels = plt.subplots(len(comparisons), 1, figsize=(8, 3.2 * len(comparisons)),
-                                  sharex=True, squeeze=False)
+    figure, panels = subplots(len(comparisons), 1, figsize=(8, 3.2 * len(comparisons)),
+                              sharex=True, squeeze=False)
     arrow = 0.25 * rod.gap_clamped * 1e3
     for axes, c in zip(panels[:, 0], comparisons):
         obstacle = -rod.gap(rod.frame.coordinates[:, 0]) * 1e3

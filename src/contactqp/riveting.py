@@ -554,11 +554,10 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
     """Maps of the initial and residual gaps (mm) and of the pair status, as a PNG."""
-    from .plot import pyplot, save_figure
+    from .plot import save_figure, subplots
 
-    plt = pyplot()
     xy = model.points * 1e3
-    figure, axes = plt.subplots(3, 1, figsize=(7, 9.5), sharex=True)
+    figure, axes = subplots(3, 1, figsize=(7, 9.5), sharex=True)
     panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
               (state.contact.gaps * 1e3, "residual gap (mm)", "viridis"),
               (state.status, "status: " + " / ".join(STATUS_LABELS), "coolwarm")]
