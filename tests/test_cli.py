@@ -161,3 +161,13 @@ print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["svg", "False"]
     assert (tmp_path / "chain.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_version_has_one_source():
+    from importlib.metadata import version
+
+    import contactqp
+
+    proc = run("--version")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split()[-1] == contactqp.__version__ == version("contactqp")
