@@ -41,7 +41,7 @@ from .contact import Constraints, LocalFrames, assemble_constraints, local_frame
 from .errors import ContactWarning, InvalidInputError
 from .friction import FrictionLaw
 from .local import LocalProblem
-from .model import (MAX_MAGNITUDE, ReducedModel, finite_array, iteration_cap, positive_tolerance,
+from .model import (MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance,
                     real_array)
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
                      contact_scales)
@@ -474,9 +474,6 @@ class FrictionalProblem:
             Passed to the solver.
         """
         name, method = friction_route(self.law, solver)
-        positive_tolerance(tol, "tol", below_one=name != "coulomb")
-        if "max_iter" in options:
-            iteration_cap(options["max_iter"])
         start = time.perf_counter()
         step = self.step(previous)
         problem, shift, unit = step.fclib, step.apex_shift, step.force_unit
