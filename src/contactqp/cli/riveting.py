@@ -13,7 +13,7 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail, warn
 
 
 @cli.command()
-@click.option("--samples", type=click.IntRange(min=1, max=10**7),
+@click.option("--samples", type=click.IntRange(min=1, max=10**7),  # batch.MAX_SAMPLES
               help="Gap-field samples of the variation study  [default: 1000, or every row "
                    "of --gaps]")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
@@ -65,7 +65,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     if nominal_gaps.shape != (model.n_pairs,):
         raise click.BadParameter(f"gap realisations must have {model.n_pairs} columns, got "
                                  f"{nominal_gaps.shape[0]}", param_hint="--gaps")
-    # absurd before anything is written; merely unusual (a user could mean it): a warning
+    # absurd gaps are refused before anything is written (unusual ones are warned about below)
     model.check_gaps(nominal_gaps, "--mean-gap" if gap_file is None else "the mean of --gaps")
     out.mkdir(parents=True, exist_ok=True)
     case = FasteningCase(model, method=method)

@@ -149,8 +149,9 @@ def _polish_active_set(P, c, G, h, normal, x):
     G = sp.csr_matrix(G)
     scale = max(float(np.max(np.abs(x), initial=0.0)), float(np.max(np.abs(h), initial=0.0)),
                 np.finfo(float).tiny)
-    facets = np.flatnonzero(h - G @ x <= _ACTIVE_RTOL * scale)
-    bounds = normal[x[normal] <= _ACTIVE_RTOL * scale]
+    tiny = _ACTIVE_RTOL * scale
+    facets = np.flatnonzero(h - G @ x <= tiny)
+    bounds = normal[x[normal] <= tiny]
     n = x.size
     C = sp.vstack([G[facets], sp.csr_matrix((-np.ones(bounds.size), (np.arange(bounds.size),
                                                                       bounds)),
@@ -164,7 +165,6 @@ def _polish_active_set(P, c, G, h, normal, x):
     except RuntimeError:  # exactly singular (degenerate active set)
         return x
     refined, multipliers = solution[:n], solution[n:]
-    tiny = _ACTIVE_RTOL * scale
     feasible = (np.all(np.isfinite(solution)) and np.all(G @ refined <= h + tiny)
                 and np.all(refined[normal] >= -tiny) and np.all(multipliers >= -tiny))
     return refined if feasible else x
