@@ -241,17 +241,13 @@ import inspect
 import json
 import math
 import os
-import sys
-import tempfile
 import tomllib
 import warnings
 from collections.abc import Callable
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse
 
 from ..contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
@@ -884,63 +880,17 @@ def _route_options(where: _Where, table: dict, section: str, route: str, named: 
 
 def _check_backend(where: _Where, section: str, backend, settings: dict) -> None:
     """Raise, naming the key, when the qpsolvers ``backend`` is not installed or refuses one of
-    ``settings``: each is tried on a QP of one variable (a backend checks its settings only
-    when it runs)."""
-    from ..solvers.qp import _qpsolvers, available_backends, backend_options
+    ``settings`` (see :func:`~contactqp.solvers.qp.refused_setting`)."""
+    from ..solvers.qp import _qpsolvers, available_backends, refused_setting
 
-    qpsolvers = _qpsolvers()
-    if backend not in qpsolvers.available_solvers:
+    if backend not in _qpsolvers().available_solvers:
         raise where.error(f"{section}.backend", f"qp backend {backend!r} is not installed "
                                                 f"(available: {', '.join(available_backends())})")
-    sparse = backend in qpsolvers.sparse_solvers
-    one = scipy.sparse.csc_matrix(np.ones((1, 1))) if sparse else np.ones((1, 1))
-    probe = qpsolvers.Problem(P=one, q=np.zeros(1), G=one, h=np.ones(1))
     for key, value in settings.items():
-        tried = {**backend_options(backend), key: value}
-        reason = _refusal(qpsolvers, probe, backend, tried, key)
+        reason = refused_setting(backend, key, value)
         if reason:
             raise where.error(f"[{section[1:-1]}.backend_options].{key}",
                               f"backend '{backend}' refuses {key} = {value!r} ({reason})")
-
-
-def _refusal(qpsolvers, probe, backend: str, settings: dict, key: str) -> str | None:
-    """Why ``backend`` refuses ``settings`` on ``probe``, or None: what it raises or prints
-    (C code), or a warning naming ``key`` (piqp warns of unknown names only when verbose)."""
-    for verbose in (False, True):
-        with _captured_output() as printed, warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            try:
-                qpsolvers.solve_problem(probe, solver=backend, **{"verbose": verbose, **settings})
-                raised = None
-            except Exception as exc:  # noqa: BLE001  (what a backend raises on a bad setting)
-                raised = f"{type(exc).__name__}: {exc}"
-        if raised:
-            said = [line for line in printed[0].splitlines() if "error" in line.lower()]
-            return " ".join((said[0] if said else raised).split())
-        named = [str(warning.message) for warning in caught if key in str(warning.message)]
-        if named:
-            return " ".join(named[0].split())
-    return None
-
-
-@contextmanager
-def _captured_output():
-    """Capture what C code writes to file descriptors 1 and 2 into the list yielded."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    text = [""]
-    with tempfile.TemporaryFile() as sink:
-        saved = [os.dup(fd) for fd in (1, 2)]
-        try:
-            for fd in (1, 2):
-                os.dup2(sink.fileno(), fd)
-            yield text
-        finally:
-            for fd, copy in zip((1, 2), saved):
-                os.dup2(copy, fd)
-                os.close(copy)
-            sink.seek(0)
-            text[0] = sink.read().decode(errors="replace").strip()
 
 
 def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, float]:

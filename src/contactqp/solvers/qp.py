@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
 import time
 import warnings
+from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse
@@ -11,7 +15,8 @@ import scipy.sparse
 from ..errors import InvalidInputError
 from ..optional import require
 
-__all__ = ["solve_qp", "available_backends", "backend_options", "DEFAULT_BACKEND"]
+__all__ = ["solve_qp", "available_backends", "backend_options", "refused_setting",
+           "DEFAULT_BACKEND"]
 
 DEFAULT_BACKEND = "clarabel"
 
@@ -96,3 +101,53 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
         message=f"{message} ({'; '.join(notes)})" if notes else message,
         nit=int(getattr(solution, "extras", {}).get("iter", 0) or 0), wall_time=elapsed,
     )
+
+
+def refused_setting(backend: str, key: str, value) -> str | None:
+    """Why the installed qpsolvers ``backend`` refuses the setting ``key = value``, or None.
+
+    Backends check their settings only when they run, so the setting (over contactqp's
+    defaults, :func:`backend_options`) is tried on a QP of one variable. The reason is what the
+    backend raises or prints (from C code), or a warning naming ``key`` (piqp warns of unknown
+    names only when verbose).
+    """
+    qpsolvers = _qpsolvers()
+    sparse = backend in qpsolvers.sparse_solvers
+    one = scipy.sparse.csc_matrix(np.ones((1, 1))) if sparse else np.ones((1, 1))
+    probe = qpsolvers.Problem(P=one, q=np.zeros(1), G=one, h=np.ones(1))
+    settings = {**backend_options(backend), key: value}
+    for verbose in (False, True):
+        with _captured_output() as printed, warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                qpsolvers.solve_problem(probe, solver=backend, **{"verbose": verbose, **settings})
+                raised = None
+            except Exception as exc:  # noqa: BLE001  (what a backend raises on a bad setting)
+                raised = f"{type(exc).__name__}: {exc}"
+        if raised:
+            said = [line for line in printed[0].splitlines() if "error" in line.lower()]
+            return " ".join((said[0] if said else raised).split())
+        named = [str(warning.message) for warning in caught if key in str(warning.message)]
+        if named:
+            return " ".join(named[0].split())
+    return None
+
+
+@contextmanager
+def _captured_output():
+    """Capture what C code writes to file descriptors 1 and 2 into the list yielded."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    text = [""]
+    with tempfile.TemporaryFile() as sink:
+        saved = [os.dup(fd) for fd in (1, 2)]
+        try:
+            for fd in (1, 2):
+                os.dup2(sink.fileno(), fd)
+            yield text
+        finally:
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+            sink.seek(0)
+            text[0] = sink.read().decode(errors="replace").strip()
