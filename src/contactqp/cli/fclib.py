@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -91,10 +90,8 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
     when it exists and is not the solution file this command wrote for the same input
     (:func:`~contactqp.io.fclib.is_own_solution`): nothing is solved then.
     """
+    from ..io.fclib import file_key as key
     from ..io.fclib import is_own_solution, solution_source
-
-    def key(path: Path) -> str:
-        return os.path.normcase(os.path.realpath(path))
 
     inputs = {key(p): p for p in files}
     targets, owners = {}, {}

@@ -37,7 +37,7 @@ from contactqp.local import GlobalProblem, LocalProblem
 from contactqp.optional import require
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
-           "is_hdf5", "is_own_solution", "solution_source", "SOLUTION_OF"]
+           "is_hdf5", "is_own_solution", "solution_source", "file_key", "SOLUTION_OF"]
 
 #: Root attribute of a solution file written with ``write_solution(..., source=...)``.
 SOLUTION_OF = "contactqp_solution_of"
@@ -348,11 +348,12 @@ def is_own_solution(path, source=None) -> bool:
     written_for = solution_source(path)
     if written_for is None or source is None:
         return written_for is not None
-    return _same_file(written_for, source)
+    return file_key(written_for) == file_key(source)
 
 
-def _same_file(a, b) -> bool:
-    return os.path.normcase(os.path.realpath(a)) == os.path.normcase(os.path.realpath(b))
+def file_key(path) -> str:
+    """``path`` as the real, case-normalised path: equal for two names of one file."""
+    return os.path.normcase(os.path.realpath(path))
 
 
 def write_solution(path, r, u, v=None, *, source=None) -> None:
