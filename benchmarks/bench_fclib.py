@@ -1,10 +1,10 @@
 """Coulomb friction on the shared FCLIB problems: time per file beside the published figures.
 
 Every problem file in ``shared/data/fclib`` (or the files given) is read once, outside the timing,
-then solved by :func:`contactqp.solvers.coulomb.solve_coulomb` from a cold start (``r = 0``) to
+then solved by :func:`contactqp.methods.coulomb.solve_coulomb` from a cold start (``r = 0``) to
 the natural-map error ``--tol`` (default 1e-8, the README's measure). A global problem is
 condensed as given (outside the timing) and its error is that of the global equations as written
-(:meth:`~contactqp.local.GlobalProblem.certify`: ``M v = H r + f``, ``u = H^T v + w``). The time is the best of
+(:meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``M v = H r + f``, ``u = H^T v + w``). The time is the best of
 repeated solves (runs shorter than 0.5 s are repeated, up to 7 times, 2 s in all), each including
 the positive-semidefiniteness check of ``W``.
 
@@ -33,8 +33,8 @@ from pathlib import Path
 import numpy as np
 
 from contactqp.io.fclib import read_any
-from contactqp.local import GlobalProblem, natural_map_error
-from contactqp.solvers.coulomb import solve_coulomb
+from contactqp.core.local_problem import GlobalProblem, natural_map_error
+from contactqp.methods.coulomb import solve_coulomb
 
 __all__ = ["PUBLISHED", "family", "time_file", "main"]
 

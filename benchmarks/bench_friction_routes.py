@@ -2,12 +2,12 @@
 
 Three routes solve the same local problems ``u = W r + q`` with Coulomb cones to the same
 natural-map error ``--tol`` (default 1e-8), checked independently by
-:func:`contactqp.local.natural_map_error`:
+:func:`contactqp.core.local_problem.natural_map_error`:
 
-* coulomb: :func:`contactqp.solvers.coulomb.solve_coulomb` (semismooth Newton, the own solver);
-* tresca: :func:`contactqp.solvers.tresca.solve_tresca_fixed_point`, a fixed point on Tresca
+* coulomb: :func:`contactqp.methods.coulomb.solve_coulomb` (semismooth Newton, the own solver);
+* tresca: :func:`contactqp.methods.tresca.solve_tresca_fixed_point`, a fixed point on Tresca
   problems, each a second-order cone program solved by Clarabel;
-* poly: :func:`contactqp.solvers.polygonal.solve_polygonal`, the same fixed point with the disc
+* poly: :func:`contactqp.methods.polygonal.solve_polygonal`, the same fixed point with the disc
   replaced by an inscribed polygon of ``--facets`` sides, each step a QP through qpsolvers
   (``--backend``). In 3-D it solves the polygonal problem, not the Coulomb one: its time is that
   of reaching its own fixed point, and its ``err`` column is its error against the exact cones
@@ -47,10 +47,10 @@ import numpy as np
 
 from contactqp.compliance import grid, influence_matrix
 from contactqp.io.fclib import read_problem
-from contactqp.local import LocalProblem, natural_map_error
-from contactqp.solvers.coulomb import solve_coulomb
-from contactqp.solvers.polygonal import solve_polygonal
-from contactqp.solvers.tresca import solve_tresca_fixed_point
+from contactqp.core.local_problem import LocalProblem, natural_map_error
+from contactqp.methods.coulomb import solve_coulomb
+from contactqp.methods.polygonal import solve_polygonal
+from contactqp.methods.tresca import solve_tresca_fixed_point
 
 __all__ = ["random_problem", "main"]
 

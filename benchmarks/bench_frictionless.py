@@ -11,11 +11,11 @@ For each size the script times
 * assembly: ``problem.dual()`` (``W = A R A^T`` and ``b``), reported, never added to a solve;
 * own: ``contactqp.solve(problem)`` (default solver), first call and best of the repetitions
   (the first call also pays one-off work cached in the model);
-* core: :func:`contactqp.solvers.box_qp.solve_box_qp` on ``(W, -b)`` alone, from the same cold
+* core: :func:`contactqp.methods.box_qp.solve_box_qp` on ``(W, -b)`` alone, from the same cold
   start as the own solver;
 * chol: one dense ``scipy.linalg.cho_factor(W)``, the yardstick of the project's target;
 * every installed qpsolvers backend on the same dual box QP with contactqp's tight tolerances
-  (:func:`contactqp.solvers.qp.backend_options`), each run in a forked child process (killed after
+  (:func:`contactqp.methods.qp.backend_options`), each run in a forked child process (killed after
   ``--timeout`` seconds). A backend's answer counts only when its forces agree with the own
   solver's to ``1e-6`` relative (``max|l - l_own| / max l_own``).
 
@@ -48,9 +48,9 @@ import scipy.linalg
 import contactqp
 from contactqp import ContactProblem, GapObstacle, ReducedModel
 from contactqp.compliance import grid, normal_influence
-from contactqp.solvers import solve_box_qp
-from contactqp.solvers.active_set import cold_start
-from contactqp.solvers.qp import available_backends, backend_options
+from contactqp.methods import solve_box_qp
+from contactqp.methods.active_set import cold_start
+from contactqp.methods.qp import available_backends, backend_options
 
 __all__ = ["build_problem", "main"]
 

@@ -4,9 +4,9 @@ A rigid sphere (radius ``R_s``) is pushed a depth ``d`` into an elastic half-spa
 tangentially by ``delta`` along x with the depth kept. The surface is cut into square cells of
 side ``h``, each with three unknowns: the normal reaction and the two tangential ones. Their
 flexibility is the half-space's (:func:`contactqp.compliance.influence_matrix`: Love, Cerruti);
-the contact is the local problem ``u = W r + q`` of :mod:`contactqp.local`, one Coulomb cone per
-cell, solved by :func:`contactqp.solvers.coulomb.solve_coulomb` (the Tresca fixed point of
-:mod:`contactqp.solvers.tresca` with ``--solver tresca``, a cross-check), with
+the contact is the local problem ``u = W r + q`` of :mod:`contactqp.core.local_problem`, one Coulomb cone per
+cell, solved by :func:`contactqp.methods.coulomb.solve_coulomb` (the Tresca fixed point of
+:mod:`contactqp.methods.tresca` with ``--solver tresca``, a cross-check), with
 
 * normal: gap ``u_N = r^2 / (2 R_s) - d + sum_j R_zz r_N,j`` (a compressive reaction sinks the
   surface);
@@ -39,9 +39,9 @@ import argparse
 import numpy as np
 
 from contactqp.compliance import grid, influence_matrix
-from contactqp.local import LocalProblem
-from contactqp.solvers.coulomb import solve_coulomb
-from contactqp.solvers.tresca import solve_tresca_fixed_point
+from contactqp.core.local_problem import LocalProblem
+from contactqp.methods.coulomb import solve_coulomb
+from contactqp.methods.tresca import solve_tresca_fixed_point
 
 SOLVERS = {"coulomb": solve_coulomb, "tresca": solve_tresca_fixed_point}
 

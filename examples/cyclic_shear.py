@@ -1,11 +1,11 @@
 r"""Cyclic shear of the spring chain with friction: a hysteresis loop against its closed form.
 
-The chain of :mod:`contactqp.springs` (``n`` bodies of mass ``m`` on a floor, springs of stiffness
+The chain of :mod:`contactqp.applications.springs` (``n`` bodies of mass ``m`` on a floor, springs of stiffness
 ``c`` from the wall to body 1 and between neighbours, a force ``F`` on the last body) is built here
 as a 2-D reduced model: each body is a node with a horizontal and a vertical freedom, pressed on
 the floor (a :class:`~contactqp.PlaneObstacle`) by its weight, with Coulomb friction ``mu``. The
 force goes 0 -> F_max -> -F_max -> F_max ... and each step is solved from the previous state
-(:func:`~contactqp.loading.solve_history`).
+(:func:`~contactqp.core.history.solve_history`).
 
 Closed form (derived for this example; ``L = mu m g``). Loaded from rest (virgin curve),
 
@@ -30,8 +30,8 @@ import sys
 import numpy as np
 
 import contactqp as cq
-from contactqp.loading import linear_path, solve_history
-from contactqp.springs import chain_flexibility
+from contactqp.core.history import linear_path, solve_history
+from contactqp.applications.springs import chain_flexibility
 
 
 def chain_problem(n: int, stiffness: float, mu: float, normal_stiffness: float = 1.0):

@@ -21,9 +21,9 @@ import scipy.sparse as sp
 import contactqp as cq
 from contactqp.io.fclib import read_global_problem, read_problem
 from contactqp.io.siconos import parse_dat
-from contactqp.local import LocalProblem, natural_map_error
-from contactqp.solvers.coulomb import solve_coulomb
-from contactqp.solvers.local import solve_local
+from contactqp.core.local_problem import LocalProblem, natural_map_error
+from contactqp.methods.coulomb import solve_coulomb
+from contactqp.methods.local_global import solve_local
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "fclib"
@@ -72,7 +72,7 @@ def test_lmgc_global_file_is_solved_as_written():
 
 
 def test_global_solution_is_certified_on_the_written_equations():
-    from contactqp.solvers.local import solve_global
+    from contactqp.methods.local_global import solve_global
 
     g = read_global_problem(LMGC)
     written, M, H = written_local(g)
@@ -92,8 +92,8 @@ def test_global_solution_is_certified_on_the_written_equations():
 
 
 def test_ill_conditioned_m_says_what_accuracy_it_allows():
-    from contactqp.local import GlobalProblem
-    from contactqp.solvers.local import solve_global
+    from contactqp.core.local_problem import GlobalProblem
+    from contactqp.methods.local_global import solve_global
 
     # cond(M) = 2e13 after Jacobi scaling: u = H^T M^-1 (H r + f) + w loses 13 digits
     delta = 1e-13
@@ -170,7 +170,7 @@ def test_rescaling_solvers_report_the_given_problems_error(route):
     if route == "newton":
         solution = solve_coulomb(problem, tol=TOL)
     else:
-        from contactqp.solvers.tresca import solve_tresca_fixed_point
+        from contactqp.methods.tresca import solve_tresca_fixed_point
 
         solution = solve_tresca_fixed_point(problem, tol=TOL)
     W = dense(problem.W)

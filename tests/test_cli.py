@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from contactqp.io.fclib import read_problem, write_problem
-from contactqp.local import LocalProblem, natural_map_error
+from contactqp.core.local_problem import LocalProblem, natural_map_error
 
 ROOT = Path(__file__).resolve().parents[1]
 FCLIB = ROOT.parent / "shared" / "data" / "fclib"
@@ -151,8 +151,8 @@ def test_a_figure_leaves_the_users_matplotlib_state_alone(tmp_path):
 import sys
 import matplotlib
 matplotlib.use("svg")
-from contactqp.plot import plot_spring_chain
-from contactqp.springs import SpringChain
+from contactqp.io.plot import plot_spring_chain
+from contactqp.applications.springs import SpringChain
 chain = SpringChain(n=3, stiffness=1.0, mu=0.2, mass=2.0, g=10.0)
 plot_spring_chain([chain.solve(f) for f in (3.0, 14.0)], {str(tmp_path / "chain.png")!r})
 print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)

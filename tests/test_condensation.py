@@ -8,7 +8,7 @@ from contactqp.compliance.condensation import (RigidBodyModeError, _by_schur_com
                                                _by_solves, _schur_pays, condense, factorize)
 from contactqp.compliance.fem import ElasticModel, block, plate
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
-from contactqp.model import unit_load_compliance
+from contactqp.core.model import unit_load_compliance
 
 
 def bar_stiffness(n, k=3.0, fixed=True):

@@ -24,17 +24,17 @@ from hypothesis import strategies as st
 
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.io import read_problem
-from contactqp.local import (
+from contactqp.core.local_problem import (
     LocalProblem,
     check_positive_semidefinite,
     contact_status,
     natural_map_error,
 )
-import contactqp.local
-from contactqp.solvers import coulomb
-from contactqp.solvers.coulomb import alart_curnier, solve_coulomb
-from contactqp.solvers.local import solve_local
-from contactqp.solvers.pgs import GaussSeidel
+import contactqp.core.local_problem
+from contactqp.methods import coulomb
+from contactqp.methods.coulomb import alart_curnier, solve_coulomb
+from contactqp.methods.local_global import solve_local
+from contactqp.methods.pgs import GaussSeidel
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
 FILES = sorted(p.name for p in DATA.iterdir() if p.suffix in (".dat", ".hdf5"))
@@ -195,8 +195,8 @@ def test_newton_agrees_with_gauss_seidel_where_unique(dim, sparse):
 def test_dense_and_sparse_newton_matrices_give_the_same_solution(monkeypatch):
     # a small sparse W is factored dense; lift the thresholds to run the SuperLU paths (Newton
     # and the PSD check), on a full W and on one with missing blocks (diagonally dominant, so SPD)
-    monkeypatch.setattr(contactqp.local, "DENSE_SIZE", 0)
-    monkeypatch.setattr(contactqp.local, "DENSE_FILL", 2.0)
+    monkeypatch.setattr(contactqp.core.local_problem, "DENSE_SIZE", 0)
+    monkeypatch.setattr(contactqp.core.local_problem, "DENSE_FILL", 2.0)
     base = random_problem(10, 3, seed=7)
     pattern = np.kron(np.random.default_rng(1).random((10, 10)) < 0.3, np.ones((3, 3)))
     holes = base.W * np.maximum(pattern, pattern.T) + 3 * np.eye(30)

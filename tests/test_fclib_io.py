@@ -26,7 +26,7 @@ from contactqp.errors import (
 from contactqp.io import read_problem, write_problem, write_solution
 from contactqp.io.fclib import read_global_problem
 from contactqp.io.siconos import parse_dat
-from contactqp.local import (
+from contactqp.core.local_problem import (
     GlobalProblem,
     LocalProblem,
     condense_global,

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from contactqp.solvers.free_block import FreeBlockSolver
+from contactqp.methods.free_block import FreeBlockSolver
 
 
 def spd(n, rng):

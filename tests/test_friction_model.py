@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import contactqp as cq
-from contactqp.contact import local_frames, tangent_basis
+from contactqp.core.contact import local_frames, tangent_basis
 
 
 def one_node(stiffness=None, coords=(0.0, 0.0), flexibility=None):

@@ -11,7 +11,7 @@ import pytest
 
 import contactqp as cq
 from contactqp import InvalidInputError
-from contactqp.solvers import solve_box_qp
+from contactqp.methods import solve_box_qp
 
 R = np.array([[1.0e-6, 0.4e-6], [0.4e-6, 1.0e-6]])  # the README's flexibility, m/N
 LOADS = [1500.0, 500.0]
@@ -225,8 +225,8 @@ def test_the_friction_routes_stop_at_max_iter(solver, facets, max_iter):
 
 
 def test_the_coulomb_cap_counts_gauss_seidel_sweeps():
-    from contactqp.local import LocalProblem
-    from contactqp.solvers.coulomb import solve_coulomb
+    from contactqp.core.local_problem import LocalProblem
+    from contactqp.methods.coulomb import solve_coulomb
 
     # W = 0 with q_N < 0 has no solution: the stages run until the budget is spent (the later
     # ones stop by themselves, which the default budget leaves room for)

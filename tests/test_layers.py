@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
-from contactqp.layers import Layers
+from contactqp.applications.layers import Layers
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,7 @@
 """Load histories with friction: hysteresis against closed forms, energy balance, carried state.
 
 Truths used: the spring chain's virgin curve (tests/test_springs.py's analytic formula and the
-box-QP solver of contactqp.springs) and Masing's rule for its reversals (derived in
+box-QP solver of contactqp.applications.springs) and Masing's rule for its reversals (derived in
 examples/cyclic_shear.py); the one-spring friction element's closed-form loop and dissipation
 4 mu N (Q_max - mu N) / k; the work of the loads over a cycle (trapezoid rule, exact when the
 response is linear in every step); a second solver route on a coupled problem.
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import contactqp as cq
-from contactqp.loading import MAX_STEPS
-from contactqp.springs import SpringChain
+from contactqp.core.history import MAX_STEPS
+from contactqp.applications.springs import SpringChain
 
 EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "examples" / "cyclic_shear.py"
 
@@ -49,7 +49,7 @@ def test_chain_loop_follows_masing_and_dissipates_the_closed_form(example, n, fo
     assert out["history"].success
     scale = np.max(np.abs(out["exact"]))
     np.testing.assert_allclose(out["x"], out["exact"], atol=1e-9 * scale)
-    # the virgin branch is the monotonic spring chain of contactqp.springs (box QP)
+    # the virgin branch is the monotonic spring chain of contactqp.applications.springs (box QP)
     chain = SpringChain(n, 1.0, 0.2, 2.0, 10.0)
     np.testing.assert_allclose(out["x"][8], chain.solve(force_max).x, atol=1e-9 * scale)
     per_cycle = out["dissipated_per_cycle"]

@@ -37,8 +37,8 @@ from contactqp import (
     solve,
 )
 from contactqp.errors import SymmetrizedWarning
-from contactqp.loading import HistoryResult
-from contactqp.result import FrictionalResult
+from contactqp.core.history import HistoryResult
+from contactqp.core.result import FrictionalResult
 from contactqp.io.problem_file import (
     HISTORY_FILES,
     RESULT_FILES,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from contactqp.errors import InvalidInputError
-from contactqp.riveting import (Assembly, FastenerClosure, Plate, plate_flexibility, plot_status,
+from contactqp.applications.riveting import (Assembly, FastenerClosure, Plate, plate_flexibility, plot_status,
                                 write_vtu)
 
 ALL_EDGES = ("left", "right", "bottom", "top")
@@ -252,7 +252,7 @@ def test_cli_corrupt_gap_file_is_one_line_exit_2(tmp_path, capsys):
 
 def test_cli_every_sample_failing_exits_1(tmp_path, capsys, monkeypatch):
     from contactqp.cli import main
-    from contactqp.riveting import FasteningCase
+    from contactqp.applications.riveting import FasteningCase
 
     solve_sample = FasteningCase.solve_sample
 

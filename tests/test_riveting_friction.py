@@ -11,7 +11,7 @@ import pytest
 
 import contactqp
 from contactqp import ContactProblem, NodePairs
-from contactqp.riveting_friction import FrictionAssembly
+from contactqp.applications.riveting_friction import FrictionAssembly
 
 CLAMP = 500.0  # N per fastener
 FASTENERS = [(1, 2), (4, 2), (7, 2)]  # along the middle of the width

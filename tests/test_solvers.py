@@ -6,7 +6,7 @@ import qpsolvers
 from hypothesis import given, settings, strategies as st
 
 import contactqp as cq
-from contactqp.solvers.box_qp import solve_box_qp
+from contactqp.methods.box_qp import solve_box_qp
 
 
 def random_problem(n, seed, dofs_per_node=1):
@@ -117,7 +117,7 @@ def test_unknown_solver_is_a_clear_error():
 
 @pytest.mark.parametrize("seed", range(6))
 def test_lawson_hanson_agrees_with_quadprog(seed):
-    from contactqp.solvers.lawson_hanson import solve_nonnegative_qp
+    from contactqp.methods.lawson_hanson import solve_nonnegative_qp
 
     rng = np.random.default_rng(seed)
     n = 60

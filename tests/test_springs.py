@@ -9,8 +9,8 @@ import scipy.sparse
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from contactqp.solvers.box_qp import solve_box_qp
-from contactqp.springs import SpringChain, chain_flexibility
+from contactqp.methods.box_qp import solve_box_qp
+from contactqp.applications.springs import SpringChain, chain_flexibility
 
 
 def analytic(n, c, mu, m, g, F):

@@ -1,6 +1,6 @@
 """contactqp: fast elastic contact with friction on reduced (compliance-matrix) models."""
 
-from .contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
+from .core.contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
 from .errors import (
     ContactError,
     ContactWarning,
@@ -10,12 +10,12 @@ from .errors import (
     NotPositiveDefiniteError,
     UnsupportedProblemError,
 )
-from .model import ReducedModel, unit_load_compliance
-from .friction import FrictionLaw
-from .loading import HistoryResult, linear_path, solve_history
-from .problem import ContactProblem, FrictionalProblem
-from .result import Certificate, ContactResult, FrictionalResult, FrictionCertificate
-from .solvers import SOLVERS, solve
+from .core.model import ReducedModel, unit_load_compliance
+from .core.friction import FrictionLaw
+from .core.history import HistoryResult, linear_path, solve_history
+from .core.problem import ContactProblem, FrictionalProblem
+from .core.result import Certificate, ContactResult, FrictionalResult, FrictionCertificate
+from .methods import SOLVERS, solve
 
 __all__ = [
     "ReducedModel",

@@ -10,7 +10,7 @@ likewise filled block by block straight into compressed storage. The functions h
 validated float64 arrays (one row per contact, of dimension 2 or 3, normal component first;
 index arrays int64), write into the arrays they are given and check nothing beyond the buffer
 types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overrun):
-:mod:`contactqp.local` and :mod:`contactqp.solvers.coulomb` are their callers.
+:mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb` are their callers.
 """
 
 from libc.math cimport sqrt

@@ -44,8 +44,8 @@ def fclib(files, tol, as_json, solution_dir):
     overwrite an input, another input's solution or a file this command did not write.
     """
     from ..io.fclib import read_any, write_solution
-    from ..local import GlobalProblem
-    from ..solvers.local import solve_global, solve_local
+    from ..core.local_problem import GlobalProblem
+    from ..methods.local_global import solve_global, solve_local
 
     targets = _solution_targets(files, solution_dir) if solution_dir else {}
     exit_code = EXIT_OK

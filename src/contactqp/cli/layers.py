@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from ..loading import MAX_STEPS
+from ..core.history import MAX_STEPS
 from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
 
 
@@ -30,7 +30,7 @@ def layers(mu, cohesion, steps, as_json, plot):
     The interface is Mohr-Coulomb; sliding starts when the load reaches c A + mu N. Exit status
     1 when a step is not solved or the layer does not slide within the travel.
     """
-    from ..layers import Layers, LayersError, plot_layers
+    from ..applications.layers import Layers, LayersError, plot_layers
 
     model = Layers(mu=mu, cohesion=cohesion, steps=steps)
     try:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from ..rod import MAX_ELEMENTS
+from ..applications.rod import MAX_ELEMENTS
 from .app import EXIT_NOT_SOLVED, cli, console, fail
 
 
@@ -30,7 +30,7 @@ def rod(elements, as_json, plot, vtu):
     The rod (40 mm, E = 1e12 Pa, A = 0.2 mm^2) is clamped at its right end; the gap to the
     obstacle grows from 1 mm under the free left end to 5 mm under the clamp.
     """
-    from ..rod import ReferenceSolveError, Rod, as_record, compare, write_vtu
+    from ..applications.rod import ReferenceSolveError, Rod, as_record, compare, write_vtu
 
     model = Rod(n_elements=elements)
     try:
@@ -44,7 +44,7 @@ def rod(elements, as_json, plot, vtu):
         _rod_tables(model, comparisons)
     written = []
     if plot:
-        from ..plot import plot_rod
+        from ..io.plot import plot_rod
 
         written.append(plot_rod(model, comparisons, plot))
     if vtu:

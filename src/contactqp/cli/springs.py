@@ -31,7 +31,7 @@ MAX_BODIES = 1_000_000
               help="Draw the bodies' displacements to this PNG file.")
 def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
     """A chain of bodies linked by springs on a floor with friction, pulled at its end."""
-    from ..springs import SpringChain
+    from ..applications.springs import SpringChain
 
     chain = SpringChain(n=n, stiffness=stiffness, mu=mu, mass=mass, g=gravity)
     results = []
@@ -45,7 +45,7 @@ def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
     if not as_json:
         _springs_table(chain, results)
     if plot:
-        from ..plot import plot_spring_chain
+        from ..io.plot import plot_spring_chain
 
         plot_spring_chain(results, plot)
         if not as_json:

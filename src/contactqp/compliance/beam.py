@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InvalidInputError
-from ..model import finite_array
+from ..core.model import finite_array
 from .condensation import condense, factorize
 
 __all__ = ["Frame2D", "frame_element_stiffness", "COMPONENTS"]

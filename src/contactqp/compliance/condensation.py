@@ -31,7 +31,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError
-from ..model import SYMMETRY_RTOL
+from ..core.model import SYMMETRY_RTOL
 
 __all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
 

@@ -26,15 +26,15 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp.errors import (
+from ..errors import (
     ContactError,
     FileFormatError,
     InvalidInputError,
     UnsupportedProblemError,
 )
-from contactqp.io.siconos import read_dat
-from contactqp.local import GlobalProblem, LocalProblem
-from contactqp.optional import require
+from .siconos import read_dat
+from ..core.local_problem import GlobalProblem, LocalProblem
+from ..optional import require
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
            "is_hdf5", "is_own_solution", "solution_source", "file_key", "SOLUTION_OF"]
@@ -218,8 +218,8 @@ def read_problem(path) -> LocalProblem:
 
     The format is found from the content: a file with the HDF5 signature is read as FCLIB
     (``/fclib_local``, or ``/fclib_global`` condensed, as given, with
-    :func:`~contactqp.local.condense_global`; :func:`read_any` keeps it global, for
-    :func:`~contactqp.solvers.local.solve_global`), anything else as a Siconos ``.dat`` text file
+    :func:`~contactqp.core.local_problem.condense_global`; :func:`read_any` keeps it global, for
+    :func:`~contactqp.methods.local_global.solve_global`), anything else as a Siconos ``.dat`` text file
     (see :mod:`contactqp.io.siconos`).
 
     Parameters

@@ -94,13 +94,13 @@ other keys     Keyword options of the chosen route, checked against its signatur
 
 Local frames: a contact's normal is its obstacle's direction (towards the obstacle, or from the
 first node of a pair towards the second); the tangent is the normal turned by +90 degrees in 2-D
-(``(n_x, n_y) -> (-n_y, n_x)``), the two tangents of :func:`~contactqp.contact.tangent_basis`
+(``(n_x, n_y) -> (-n_y, n_x)``), the two tangents of :func:`~contactqp.core.contact.tangent_basis`
 in 3-D. Tangential forces (on the body, or on the first node of a pair) and slips are given
 along these tangents. With ``[friction]``, ``[solver]`` holds ``certificate_tol`` only: a
 ``[solver].name`` (a frictionless solver) is an error, the route is ``[friction].solver``.
 
 **[loading]** (optional, needs ``[friction]``): a load history, solved by
-:func:`~contactqp.loading.solve_history` from rest, step by step, the friction state carried
+:func:`~contactqp.core.history.solve_history` from rest, step by step, the friction state carried
 over. Its turning points are given by exactly one of
 
 =============  ===========================================================================
@@ -113,7 +113,7 @@ over. Its turning points are given by exactly one of
 
 Step 0 is the first turning point, then ``steps`` increments lead to each next one:
 ``1 + steps (j - 1)`` steps for ``j`` turning points, numbered from 0 in the results; at most
-100000 (:data:`contactqp.loading.MAX_STEPS`: each step is a full solve whose result is kept).
+100000 (:data:`contactqp.core.history.MAX_STEPS`: each step is a full solve whose result is kept).
 
 **[solver]** (optional): how to solve a frictionless problem (with ``[friction]``: only
 ``certificate_tol``).
@@ -206,7 +206,7 @@ Results
   dissipated by friction in the step (J), ``open``, ``stick`` or ``slip``.
 * ``result.npz``: frictionless, ``x`` (m), ``forces`` (N), ``nodal_forces`` (N), ``gaps`` (m),
   ``closed`` (bool), as in :class:`~contactqp.ContactResult`. With friction, the fields of
-  :class:`~contactqp.result.FrictionalResult`: ``x`` (m, shape (n,)), ``forces`` (N, (k, d),
+  :class:`~contactqp.core.result.FrictionalResult`: ``x`` (m, shape (n,)), ``forces`` (N, (k, d),
   normal first), ``nodal_forces`` (N, (n,)), ``gaps`` (m, (k,)), ``slip`` and
   ``tangential_displacements`` (m, (k, d - 1)), ``contact_status`` (int, (k,): 0 open,
   1 stick, 2 slip), ``dissipation`` (J, (k,)), with the frames ``normals`` ((k, d)) and
@@ -249,14 +249,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
+from ..core.contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
-from ..friction import STATUS_LABELS, FrictionLaw
-from ..loading import HistoryResult, linear_path, solve_history
-from ..model import ReducedModel
-from ..problem import ContactProblem, FrictionalProblem, friction_route
-from ..result import CERTIFICATE_TOL, ContactResult, FrictionalResult
-from ..solvers import SOLVERS, solve
+from ..core.friction import STATUS_LABELS, FrictionLaw
+from ..core.history import HistoryResult, linear_path, solve_history
+from ..core.model import ReducedModel
+from ..core.problem import ContactProblem, FrictionalProblem, friction_route
+from ..core.result import CERTIFICATE_TOL, ContactResult, FrictionalResult
+from ..methods import SOLVERS, solve
 from .arrays import read_csv_array, read_numpy_array
 from .export import write_rows
 
@@ -880,8 +880,8 @@ def _route_options(where: _Where, table: dict, section: str, route: str, named: 
 
 def _check_backend(where: _Where, section: str, backend, settings: dict) -> None:
     """Raise, naming the key, when the qpsolvers ``backend`` is not installed or refuses one of
-    ``settings`` (see :func:`~contactqp.solvers.qp.refused_setting`)."""
-    from ..solvers.qp import _qpsolvers, available_backends, refused_setting
+    ``settings`` (see :func:`~contactqp.methods.qp.refused_setting`)."""
+    from ..methods.qp import _qpsolvers, available_backends, refused_setting
 
     if backend not in _qpsolvers().available_solvers:
         raise where.error(f"{section}.backend", f"qp backend {backend!r} is not installed "

@@ -24,7 +24,7 @@ Precision: the problem is the one written, digit for digit. Each array's signifi
 recorded in the problem's ``digits`` when from 4 to 15 (e.g. ``{"W": 6}`` for a ``cs_print``
 dump, 7 for ``%e``; an array whose values all have at most 3 digits, such as ``0.5 1.25``, is
 taken as written by hand, exactly), so that a solution can say how far the rounding of the data limits its
-meaning for the problem the file was written from (:func:`contactqp.local.accuracy_limits`).
+meaning for the problem the file was written from (:func:`contactqp.core.local_problem.accuracy_limits`).
 
 Local or global is decided by content, not by the file name: the tokens are first read as a
 local problem, which is accepted only if ``W`` is ``(d*nc) x (d*nc)`` and at most one integer
@@ -42,8 +42,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp.errors import ContactError, FileFormatError
-from contactqp.local import GlobalProblem, LocalProblem
+from ..errors import ContactError, FileFormatError
+from ..core.local_problem import GlobalProblem, LocalProblem
 
 __all__ = ["read_dat", "parse_dat"]
 
@@ -426,7 +426,7 @@ def read_dat(path):
     -------
     LocalProblem or GlobalProblem
         The global form (``GFC3D_*`` files) is returned as read; call its
-        :meth:`~contactqp.local.GlobalProblem.condense` for the local form. The title is the
+        :meth:`~contactqp.core.local_problem.GlobalProblem.condense` for the local form. The title is the
         file name without its suffix.
 
     Raises

@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from ...errors import InvalidInputError, UnsupportedProblemError
-from ...model import ReducedModel, finite_array
+from ...core.model import ReducedModel, finite_array
 from ..condensation import RigidBodyModeError, condense, factorize
 from .meshes import SUPPORTED_MESHES, straight_sided
 from .rigid import free_rigid_motions

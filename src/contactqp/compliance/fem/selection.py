@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import InvalidInputError
-from ...model import finite_array
+from ...core.model import finite_array
 
 __all__ = ["Box", "boundary_facets", "node_mask", "dof_mask"]
 

@@ -10,7 +10,7 @@ MatrixMarket ``.mtx``      :func:`read_matrix_market`          row indices, ``fi
 unit-load CSV              :func:`read_unit_load_csv`          header ``NODE:COMPONENT``
 =========================  ==================================  ===============================
 
-Every reader returns a :class:`~contactqp.model.ReducedModel` whose freedoms are ordered node by
+Every reader returns a :class:`~contactqp.core.model.ReducedModel` whose freedoms are ordered node by
 node, in the order of the chosen nodes and components. A stiffness is condensed to the chosen
 freedoms by one sparse factorisation (static condensation, exact for a linear model); when every
 free freedom is kept the model holds the stiffness itself. :func:`load_compliance` picks the

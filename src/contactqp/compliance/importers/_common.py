@@ -10,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...errors import FileFormatError, InvalidInputError
-from ...model import SYMMETRY_RTOL, ReducedModel
+from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ...optional import require
 from ..condensation import condense
 
@@ -158,7 +158,7 @@ def reduced_model(matrix, kind: str, keep=None, fixed=None, labels=None, dofs_pe
     labels : sequence of str, optional
         Name of each of the ``n`` freedoms, for error messages.
     dofs_per_node, coordinates, symmetry_rtol
-        Passed to :class:`~contactqp.model.ReducedModel`; ``symmetry_rtol`` also to
+        Passed to :class:`~contactqp.core.model.ReducedModel`; ``symmetry_rtol`` also to
         :func:`~contactqp.compliance.condensation.condense`.
 
     Returns

@@ -14,7 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...errors import ContactError, FileFormatError, UnsupportedProblemError
-from ...model import SYMMETRY_RTOL, ReducedModel
+from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
                       reduced_model)
 
@@ -153,7 +153,7 @@ def read_ansys_full(path, nodes: Sequence[int], components: Sequence[str] = ("UX
         Freedoms taken at every node, in order: ``"UX"``, ``"UY"``, ``"UZ"``, ``"ROTX"``,
         ``"ROTY"``, ``"ROTZ"`` (1 to 3 of them).
     symmetry_rtol : float
-        See :func:`~contactqp.model.check_spd_matrix`.
+        See :func:`~contactqp.core.model.check_spd_matrix`.
 
     Returns
     -------

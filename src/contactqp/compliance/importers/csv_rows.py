@@ -18,7 +18,7 @@ from typing import Sequence
 import numpy as np
 
 from ...errors import FileFormatError, InvalidInputError
-from ...model import SYMMETRY_RTOL, ReducedModel
+from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ._common import (about, existing_file, freedom_indices, node_major, one_line, reduced_model,
                       whole_numbers)
 
@@ -101,7 +101,7 @@ def read_unit_load_csv(path, nodes: Sequence[int] | None = None,
         Freedoms of each node of a file without a header (default 1); with a header they come
         from its labels.
     symmetry_rtol : float
-        See :func:`~contactqp.model.check_spd_matrix`.
+        See :func:`~contactqp.core.model.check_spd_matrix`.
 
     Returns
     -------

@@ -7,7 +7,7 @@ import scipy.io
 import scipy.sparse as sp
 
 from ...errors import FileFormatError, InvalidInputError
-from ...model import SYMMETRY_RTOL, ReducedModel
+from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ._common import about, existing_file, one_line, reduced_model
 
 __all__ = ["read_matrix_market"]
@@ -28,9 +28,9 @@ def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_n
     fixed : sequence of int, optional
         Rows of a stiffness that are clamped.
     dofs_per_node : int or sequence of int
-        Freedoms of each computational node (see :class:`~contactqp.model.ReducedModel`).
+        Freedoms of each computational node (see :class:`~contactqp.core.model.ReducedModel`).
     symmetry_rtol : float
-        See :func:`~contactqp.model.check_spd_matrix`.
+        See :func:`~contactqp.core.model.check_spd_matrix`.
 
     Returns
     -------

@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...errors import ContactError, FileFormatError, InvalidInputError
-from ...model import SYMMETRY_RTOL, ReducedModel
+from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
                       reduced_model, whole_numbers)
 
@@ -96,9 +96,9 @@ def read_op4(path, name: str | None = None, *, kind: str, freedoms=None, fixed=N
     fixed : sequence of int, optional
         Rows of a stiffness that are clamped (e.g. the SPCs of an unconstrained ``KGG``).
     dofs_per_node : int or sequence of int
-        Freedoms of each computational node (see :class:`~contactqp.model.ReducedModel`).
+        Freedoms of each computational node (see :class:`~contactqp.core.model.ReducedModel`).
     symmetry_rtol : float
-        See :func:`~contactqp.model.check_spd_matrix`.
+        See :func:`~contactqp.core.model.check_spd_matrix`.
 
     Returns
     -------
@@ -248,7 +248,7 @@ def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
         ``(grid, component)`` freedoms of a stiffness that are clamped. Freedoms neither chosen
         nor fixed are condensed out of a stiffness and dropped from a flexibility.
     symmetry_rtol : float
-        See :func:`~contactqp.model.check_spd_matrix`.
+        See :func:`~contactqp.core.model.check_spd_matrix`.
 
     Returns
     -------

@@ -28,12 +28,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp import kernels
-from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
-from contactqp.model import finite_array
+from .. import kernels
+from ..errors import InvalidInputError, NotPositiveDefiniteError
+from contactqp.core.model import finite_array
 
 if TYPE_CHECKING:
-    from contactqp.friction import FrictionLaw
+    from contactqp.core.friction import FrictionLaw
 
 __all__ = [
     "AccuracyLimits",
@@ -661,7 +661,7 @@ def natural_map_error(problem: LocalProblem, r, u=None, *, per_contact: bool = F
     with a stiff ``W`` (say 1e-6 m/N) the reactions dominate and a displacement error hardly
     shows: a reaction 1 % short, 1e-5 m of interpenetration, measures 2e-8. Solve such a
     problem made dimensionless, as :meth:`~contactqp.FrictionalProblem.solve` does
-    (:attr:`~contactqp.problem.FrictionStep.fclib`), whose certificate also checks the gaps
+    (:attr:`~contactqp.core.problem.FrictionStep.fclib`), whose certificate also checks the gaps
     in metres.
 
     Scale: the FCLIB measure is relative to the whole problem, so one contact with a wide gap
@@ -729,7 +729,7 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
 
     A contact is open when its reaction, measured from the cone apex
     (``r + apex_shift``), is zero; otherwise it slips when its tangential velocity is nonzero,
-    else it sticks (the rule of :meth:`~contactqp.friction.FrictionLaw.status`). "Zero" is
+    else it sticks (the rule of :meth:`~contactqp.core.friction.FrictionLaw.status`). "Zero" is
     relative and in the units of each quantity: a reaction is zero below ``rtol * F`` and a
     velocity below ``rtol * w F``, with ``w`` the largest diagonal entry of ``W`` and
     ``F = max(||r||, ||r + apex_shift||, ||q|| / w, ||u|| / w)``, so that the labels do not

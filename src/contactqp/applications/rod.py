@@ -45,15 +45,15 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .compliance.beam import Frame2D
-from .contact import GapObstacle
-from .errors import ContactError, InvalidInputError
-from .io import export
-from .model import ReducedModel
-from .optional import require
-from .problem import ContactProblem
-from .result import ContactResult
-from .solvers import solve
+from ..compliance.beam import Frame2D
+from ..core.contact import GapObstacle
+from ..errors import ContactError, InvalidInputError
+from ..io import export
+from ..core.model import ReducedModel
+from ..optional import require
+from ..core.problem import ContactProblem
+from ..core.result import ContactResult
+from ..methods import solve
 
 __all__ = ["Rod", "RodLoad", "RodLoadCase", "FullSolution", "CaseComparison", "DEFAULT_CASES",
            "ReferenceSolveError", "solve_reduced", "solve_full", "compare", "deviations",
@@ -288,7 +288,7 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     """
     qpsolvers = require("qpsolvers", "the reference solve", "qp")
     require("clarabel", "the reference solve", "qp")
-    from .solvers.qp import backend_options
+    from ..methods.qp import backend_options
 
     if contact not in ("mesh", "nodes"):
         raise InvalidInputError(f"contact must be 'mesh' or 'nodes', got {contact!r}")
@@ -350,7 +350,7 @@ def _active_set_polish(K, G, f, h, active, name):
     v, z : ndarray
         Scaled displacements and contact forces.
     """
-    from .solvers.lawson_hanson import solve_nonnegative_qp
+    from ..methods.lawson_hanson import solve_nonnegative_qp
 
     try:
         lu = spla.splu(K.tocsc())

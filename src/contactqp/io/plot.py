@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import InvalidInputError
-from .optional import require
+from ..errors import InvalidInputError
+from ..optional import require
 
 __all__ = ["plot_spring_chain", "plot_rod", "save_figure", "subplots"]
 
@@ -72,8 +72,8 @@ def plot_rod(rod, comparisons, path) -> Path:
 
     Parameters
     ----------
-    rod : contactqp.rod.Rod
-    comparisons : sequence of contactqp.rod.CaseComparison
+    rod : contactqp.applications.rod.Rod
+    comparisons : sequence of contactqp.applications.rod.CaseComparison
         Drawn: the reference deflection on the mesh (line), the reduced solution at the
         computational nodes (markers), the applied forces and the reduced contact forces (arrows,
         labelled in N).

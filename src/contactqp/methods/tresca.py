@@ -15,7 +15,7 @@ small ``mu`` (where the Coulomb solution is unique) and is a classical reference
 A slightly unsymmetric ``W`` (e.g. FCLIB files written with few digits) is split into its
 symmetric part, kept in the cone program, and its skew part, moved to the right-hand side with
 the previous reactions, so that a fixed point solves the problem with the given ``W``. Cohesion
-(:class:`~contactqp.local.LocalProblem`) is handled by measuring reactions from the cone apex.
+(:class:`~contactqp.core.local_problem.LocalProblem`) is handled by measuring reactions from the cone apex.
 
 An interior-point solution is accurate to about 1e-9 relative, which leaves a 3-D fixed point
 stalling near a natural-map error of 1e-8; each cone program's answer is therefore polished by
@@ -42,10 +42,10 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
 from ..errors import InvalidInputError
-from ..local import LocalProblem, contact_status, natural_map_error
-from ..model import iteration_cap, positive_tolerance
+from ..core.local_problem import LocalProblem, contact_status, natural_map_error
+from ..core.model import iteration_cap, positive_tolerance
 from ..optional import require
-from .local import LocalSolution
+from .local_global import LocalSolution
 
 __all__ = ["solve_tresca_fixed_point"]
 
@@ -87,7 +87,7 @@ class FixedPointData:
     q : ndarray, shape (m,)
         ``q - W apex_shift``.
     shift : ndarray, shape (m,)
-        :attr:`~contactqp.local.LocalProblem.apex_shift`.
+        :attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`.
     w, f : float
         Compliance scale (largest diagonal of ``W``) and force scale: the sub-problems solve
         for ``r' / f`` with ``W / w`` and ``q / (f w)``, data on which the backends' absolute
@@ -139,7 +139,7 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
         settle while the velocities do).
     per_contact : bool
         Measure the natural map on each contact's own scale too
-        (:func:`~contactqp.local.natural_map_error`).
+        (:func:`~contactqp.core.local_problem.natural_map_error`).
 
     Returns
     -------
@@ -360,7 +360,7 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
         2-D or 3-D; ``W`` symmetric positive semidefinite, or nearly so (its skew part is
         treated by the outer iteration, see the module notes).
     tol : float
-        Target natural-map error (:func:`~contactqp.local.natural_map_error`), in (0, 1).
+        Target natural-map error (:func:`~contactqp.core.local_problem.natural_map_error`), in (0, 1).
     max_iter : int
         Largest number of cone programs solved.
     r0 : array_like, shape (m,), optional

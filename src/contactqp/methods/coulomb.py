@@ -8,13 +8,13 @@ Formulation (Alart and Curnier 1991). For each contact, with ``rho_i > 0``,
     \Phi_T = r_T - P_{B(0,\ \mu \max(0, r_N - \rho u_N))}(r_T - \rho u_T),
 
 and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
-:class:`~contactqp.local.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
+:class:`~contactqp.core.local_problem.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
 ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
 contact, computed with ``Phi`` by one compiled loop over the contacts, :mod:`contactqp.kernels`;
 ``rho_i`` = 1 / mean diagonal of ``W_ii``).
 A released contact's step is simply ``-Phi``: each Newton step factors only the block of the
 other contacts, with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W`` that
-:func:`~contactqp.local.better_dense` prefers dense) or SuperLU (``scipy.sparse.linalg.splu``:
+:func:`~contactqp.core.local_problem.better_dense` prefers dense) or SuperLU (``scipy.sparse.linalg.splu``:
 the matrix is assembled on ``W``'s stored blocks straight into CSC storage, in a minimum-degree
 order computed once).
 
@@ -25,18 +25,18 @@ freedoms):
   contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (it vanishes at
   the solution, so convergence stays fast);
 * a full step is taken when it lowers the absolute natural-map residual (the numerator of the
-  error, :func:`~contactqp.local.natural_map_residual`, which unlike the ratio cannot fall by
+  error, :func:`~contactqp.core.local_problem.natural_map_residual`, which unlike the ratio cannot fall by
   letting ``r`` grow); otherwise a non-monotone Armijo line search on the merit
   ``1/2 ||Phi||^2`` (the reference is the largest merit of the last 5 iterations; Grippo,
   Lampariello and Lucidi 1986), because the merit has kinks where contacts change status;
 * a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
   (``eta`` adapted to the success of full steps) then continues from the best point;
-* if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.solvers.pgs`) and both
+* if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.methods.pgs`) and both
   Newton runs again, in at most 3 rounds.
 
-Convergence is decided only by :func:`~contactqp.local.natural_map_error` (<= ``tol``), never by
+Convergence is decided only by :func:`~contactqp.core.local_problem.natural_map_error` (<= ``tol``), never by
 the solver's own residual. Cohesion is handled by translating each cone to its apex
-(:attr:`~contactqp.local.LocalProblem.apex_shift`): ``r~ = r + s`` solves the FCLIB problem with
+(:attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`): ``r~ = r + s`` solves the FCLIB problem with
 ``q~ = q - W s``.
 
 References
@@ -58,10 +58,10 @@ from scipy.sparse.linalg import splu
 
 from .. import kernels
 from ..errors import InvalidInputError
-from ..local import (LocalProblem, better_dense, check_positive_semidefinite,
+from ..core.local_problem import (LocalProblem, better_dense, check_positive_semidefinite,
                      natural_map_residual)
-from ..model import finite_array, iteration_cap, positive_tolerance
-from .local import finish
+from ..core.model import finite_array, iteration_cap, positive_tolerance
+from .local_global import finish
 from .pgs import GaussSeidel
 
 __all__ = ["solve_coulomb", "alart_curnier"]
@@ -111,7 +111,7 @@ def alart_curnier(R, U, mu, rho, jacobian: bool = False):
 class _Newton:
     """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``.
 
-    ``W`` is a dense array, or a sparse matrix that :func:`~contactqp.local.better_dense`
+    ``W`` is a dense array, or a sparse matrix that :func:`~contactqp.core.local_problem.better_dense`
     leaves sparse.
     """
 
@@ -327,9 +327,9 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     r0 : array_like, shape (m,), optional
         Warm start (reactions); zero when not given.
     tol : float
-        Target of :func:`~contactqp.local.natural_map_error` (relative; it adds reactions and
+        Target of :func:`~contactqp.core.local_problem.natural_map_error` (relative; it adds reactions and
         velocities, so give a problem whose ``W`` is O(1), e.g.
-        :attr:`~contactqp.problem.FrictionStep.fclib`, not one in newtons and metres).
+        :attr:`~contactqp.core.problem.FrictionStep.fclib`, not one in newtons and metres).
     max_iter : int
         Total budget of Newton iterations and Gauss-Seidel sweeps over all stages (the
         reported ``iterations`` never exceed it). A round is a Newton run then a
@@ -358,7 +358,7 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
         On a bad ``tol``, ``max_iter`` or ``r0``.
     NotPositiveDefiniteError
         If ``W`` is not positive semidefinite
-        (:func:`~contactqp.local.check_positive_semidefinite`).
+        (:func:`~contactqp.core.local_problem.check_positive_semidefinite`).
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)

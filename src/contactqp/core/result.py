@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .friction import STATUS_LABELS
-from .local import CONTACT_FLOOR, natural_map_error
+from .local_problem import CONTACT_FLOOR, natural_map_error
 
 __all__ = ["Certificate", "ContactResult", "certify", "FrictionCertificate", "FrictionalResult",
            "certify_friction", "scales", "contact_scales"]
@@ -31,7 +31,7 @@ class Certificate:
     ----------
     penetration : float
         ``max(A U - Delta, 0)`` over each contact's length scale: the largest of its ``|A U|``,
-        ``|Delta|`` and ``|A R P|`` (at least :data:`~contactqp.local.CONTACT_FLOOR` times
+        ``|Delta|`` and ``|A R P|`` (at least :data:`~contactqp.core.local_problem.CONTACT_FLOOR` times
         the largest over the contacts).
     force_sign : float
         ``max(-lambda, 0)`` over the force scale (contact forces push, never pull).
@@ -146,8 +146,8 @@ def contact_scales(problem, local_displacements, forces, step) -> tuple[float, n
 
     The length scale is each contact's own: the largest of its local displacement ``H U``,
     initial gap and local displacement the loads cause with the apex forces applied (``q~``,
-    :attr:`~contactqp.problem.FrictionStep.q_apex`), so that another contact's wide gap does
-    not loosen its gap checks; at least :data:`~contactqp.local.CONTACT_FLOOR` times the
+    :attr:`~contactqp.core.problem.FrictionStep.q_apex`), so that another contact's wide gap does
+    not loosen its gap checks; at least :data:`~contactqp.core.local_problem.CONTACT_FLOOR` times the
     largest over the contacts.
 
     Parameters
@@ -176,7 +176,7 @@ def contact_scales(problem, local_displacements, forces, step) -> tuple[float, n
 
 
 def _floored(scale):
-    """``scale`` raised to :data:`~contactqp.local.CONTACT_FLOOR` times its largest value."""
+    """``scale`` raised to :data:`~contactqp.core.local_problem.CONTACT_FLOOR` times its largest value."""
     tiny = np.finfo(float).tiny
     return np.maximum(scale, max(CONTACT_FLOOR * float(np.max(scale, initial=0.0)), tiny))
 
@@ -296,8 +296,8 @@ class FrictionCertificate:
         ``max |U - R (P + H^T r)|`` over the model's length scale (``K U`` against the forces
         over its force scale for a stiffness model).
     natural_map : float
-        :func:`~contactqp.local.natural_map_error` of the step's dimensionless FCLIB problem
-        (:attr:`~contactqp.problem.FrictionStep.fclib`, exact cones), each contact also on its
+        :func:`~contactqp.core.local_problem.natural_map_error` of the step's dimensionless FCLIB problem
+        (:attr:`~contactqp.core.problem.FrictionStep.fclib`, exact cones), each contact also on its
         own scale (``per_contact=True``). For a polygonal law it measures the distance the
         linearisation puts between the answer and the Coulomb one.
     exact_cone : bool
@@ -428,7 +428,7 @@ class FrictionalResult:
     tangential_displacements : ndarray, shape (k, d - 1)
         ``(H U)_T``, total tangential displacement (m): the origin of the next step's slips.
     contact_status : ndarray of int, shape (k,)
-        Index into :data:`~contactqp.friction.STATUS_LABELS` (open, stick, slip). "Open": the
+        Index into :data:`~contactqp.core.friction.STATUS_LABELS` (open, stick, slip). "Open": the
         force from the cone's apex is below ``1e-10`` times the contacts' force scale; "slip":
         the slip exceeds ``certificate_tol`` times the contact's length scale (both of
         :func:`contact_scales`), below which the certificate could not tell a slip from none.

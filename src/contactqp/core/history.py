@@ -14,7 +14,7 @@ local forces :math:`r_k = r_{k-1} + \Delta r` with, in the local frames of
 so that :math:`u_N = \Delta + (H U_k)_N` is the total gap and
 :math:`u_T = (H U_k)_T - (H U_{k-1})_T` the *slip increment* of the step. The laws hold on the
 totals of the forces and the increments of the slip: :math:`r_k` in the friction set
-(:class:`~contactqp.friction.FrictionLaw`), :math:`u_N \ge 0` complementary to the normal force,
+(:class:`~contactqp.core.friction.FrictionLaw`), :math:`u_N \ge 0` complementary to the normal force,
 and :math:`-r_{T,k} \cdot u_T` the largest friction work (maximum dissipation). In the total
 unknown :math:`r_k` this is the FCLIB problem :math:`u = W r_k + q_k` with
 :math:`q_k = \bar q_k - W r_{k-1}`, solved by :meth:`~contactqp.FrictionalProblem.solve` warm
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 from .model import finite_array
 from .problem import FrictionalProblem
 from .result import FrictionalResult

@@ -10,7 +10,7 @@ regular polygon of ``facets`` sides,
 
 so that with the bounds ``s_i = mu_i r_N,i`` frozen each step is a convex quadratic program with
 linear constraints, solved by any :mod:`qpsolvers` backend; ``s`` is then updated as in
-:func:`~contactqp.solvers.tresca.solve_tresca_fixed_point`. The polygon's vertices lie on the
+:func:`~contactqp.methods.tresca.solve_tresca_fixed_point`. The polygon's vertices lie on the
 circle and its sides at the distance ``s cos(pi / F)`` from the centre: the admissible tangential
 force is reduced by the factor ``1 - cos(pi / F)`` across the middle of a side (7.6 % for
 ``F = 8``, 1.9 % for 16, 0.5 % for 32) and not at all at a vertex, and a sliding force may point
@@ -39,8 +39,8 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..errors import InvalidInputError
-from ..local import LocalProblem
-from .local import LocalSolution
+from ..core.local_problem import LocalProblem
+from .local_global import LocalSolution
 from .qp import _qpsolvers, available_backends, backend_options
 from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
                      run_fixed_point)
@@ -183,8 +183,8 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
         Sides of the inscribed polygon replacing each friction disc in 3-D, >= 3. Checked but
         not used in 2-D, where the two facets ``+-r_T <= mu r_N`` are the exact cone.
     backend : str
-        A :mod:`qpsolvers` backend (see :func:`~contactqp.solvers.qp.available_backends`),
-        run with contactqp's tight tolerances (:func:`~contactqp.solvers.qp.backend_options`).
+        A :mod:`qpsolvers` backend (see :func:`~contactqp.methods.qp.available_backends`),
+        run with contactqp's tight tolerances (:func:`~contactqp.methods.qp.backend_options`).
     tol : float
         In (0, 1). Convergence: the natural-map error is at most ``tol`` (always so in 2-D,
         exact cone), or in 3-D the relative change of the reactions between two iterations is.

@@ -1,13 +1,13 @@
 """Local FCLIB problems ``u = W r + q`` solved by the project's own methods.
 
 With friction (some ``mu > 0``) :func:`solve_local` calls
-:func:`~contactqp.solvers.coulomb.solve_coulomb`. Without (every ``mu`` zero) the cones reduce to
+:func:`~contactqp.methods.coulomb.solve_coulomb`. Without (every ``mu`` zero) the cones reduce to
 rays, the tangential reactions vanish and the normal part is the bound-constrained QP
 ``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``, solved by the own box-QP solver.
 
 :func:`solve_global` solves a global problem through its condensed form and certifies the answer
-on the global equations as written (:meth:`~contactqp.local.GlobalProblem.certify`).
-Every solution carries its :class:`~contactqp.local.AccuracyLimits`: how far rounding (the
+on the global equations as written (:meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
+Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far rounding (the
 conditioning of ``M``) and the data's written digits limit its error.
 """
 
@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..local import (
+from ..core.local_problem import (
     AccuracyLimits,
     GlobalProblem,
     LocalProblem,
@@ -41,7 +41,7 @@ class LocalSolution:
     r, u : numpy.ndarray, shape (m,)
         Reactions and velocities (or gap increments), ``u = W r + q``.
     error : float
-        :func:`~contactqp.local.natural_map_error` of ``(r, u)``.
+        :func:`~contactqp.core.local_problem.natural_map_error` of ``(r, u)``.
     converged : bool
         ``error <= tol``.
     iterations : int
@@ -49,7 +49,7 @@ class LocalSolution:
         Wall time of the solve.
     message : str
     status : numpy.ndarray of str, shape (n_contacts,)
-        ``"open"``, ``"stick"`` or ``"slip"`` (:func:`~contactqp.local.contact_status`).
+        ``"open"``, ``"stick"`` or ``"slip"`` (:func:`~contactqp.core.local_problem.contact_status`).
     limits : AccuracyLimits
         How far rounding and the data's digits limit ``error``; the message says so where a
         limit exceeds ``tol``.
@@ -111,18 +111,18 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
     ----------
     problem : LocalProblem
     tol : float
-        Target of :func:`~contactqp.local.natural_map_error`; ``converged`` is True only when the
+        Target of :func:`~contactqp.core.local_problem.natural_map_error`; ``converged`` is True only when the
         error, computed independently of the solver, is at most ``tol``.
     max_iter : int, optional
         Cap on all the iterations of the route: the box-QP solver (default 500) or, with
         friction, every Newton run and Gauss-Seidel sweep of
-        :func:`~contactqp.solvers.coulomb.solve_coulomb` together (default its ``MAX_ITER``).
+        :func:`~contactqp.methods.coulomb.solve_coulomb` together (default its ``MAX_ITER``).
 
     Raises
     ------
     NotPositiveDefiniteError
         If ``W`` is not positive semidefinite
-        (:func:`~contactqp.local.check_positive_semidefinite`).
+        (:func:`~contactqp.core.local_problem.check_positive_semidefinite`).
     """
     if np.any(problem.mu > 0):
         from .coulomb import MAX_ITER, solve_coulomb
@@ -150,7 +150,7 @@ def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
     ``u``, the error, ``converged`` and the contact status are computed here from ``r`` alone,
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
-    ``per_contact`` chooses the error (:func:`~contactqp.local.natural_map_error`).
+    ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
     """
     u = np.asarray(problem.W @ r).reshape(-1) + problem.q
     error = natural_map_error(problem, r, u, per_contact=per_contact)
@@ -176,9 +176,9 @@ def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
                  max_iter: int | None = None) -> LocalSolution:
     """Solve a global problem ``M v = H r + f, u = H^T v + w`` as given, certified on it.
 
-    The problem is condensed (:meth:`~contactqp.local.GlobalProblem.condense`, ``W`` not
+    The problem is condensed (:meth:`~contactqp.core.local_problem.GlobalProblem.condense`, ``W`` not
     symmetrised) and solved by :func:`solve_local`; the reactions are then judged on the written
-    equations by :meth:`~contactqp.local.GlobalProblem.certify`: ``v`` solves ``M v = H r + f``,
+    equations by :meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``v`` solves ``M v = H r + f``,
     ``u = H^T v + w``, and ``error`` is the natural-map error of that ``(r, u)``.
 
     Parameters

@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..model import iteration_cap, positive_tolerance
+from ..core.model import iteration_cap, positive_tolerance
 from .box_qp import solve_box_qp
 
 __all__ = ["solve_active_set", "cold_start"]
@@ -36,7 +36,7 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     forces0 : array_like, shape (n_constraints,), optional
         Warm start: contact forces of a nearby problem (their support is the first active set).
     tol : float
-        Relative natural-residual tolerance of :func:`~contactqp.solvers.box_qp.solve_box_qp`.
+        Relative natural-residual tolerance of :func:`~contactqp.methods.box_qp.solve_box_qp`.
     max_iter : int
         Largest number of iterations (both phases of the box-QP solver together).
 

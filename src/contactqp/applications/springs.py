@@ -17,7 +17,7 @@ friction forces ``f`` as unknowns (``X = R (F e_N - f)``, ``R = (cK)^{-1}``,
 
     \\min_f \\tfrac12 f^T R f - f^T R F e_N, \\qquad -\\mu m g \\le f \\le \\mu m g,
 
-which :func:`~contactqp.solvers.box_qp.solve_box_qp` solves on the dense ``R``. Here ``R`` is
+which :func:`~contactqp.methods.box_qp.solve_box_qp` solves on the dense ``R``. Here ``R`` is
 never formed (it would take ``8 N^2`` bytes): in the spring tensions
 ``s_i = c (X_i - X_{i-1})``, ``(f - F e_N)^T R (f - F e_N) = |s|^2 / c`` and the box QP
 reads ``min |s|^2`` with ``s_i - s_{i+1} = p_i - f_i`` (equilibrium of body ``i``, ``p`` the
@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 __all__ = ["SpringChain", "SpringChainResult", "chain_flexibility", "chain_stiffness"]
 

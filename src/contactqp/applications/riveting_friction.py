@@ -1,6 +1,6 @@
 r"""Fastening two thin parts with friction on their interface, the state carried over.
 
-:mod:`contactqp.riveting` models the parts as Kirchhoff plates, out-of-plane only, so their
+:mod:`contactqp.applications.riveting` models the parts as Kirchhoff plates, out-of-plane only, so their
 interface cannot slip. Here each part is a coarse 3-D elastic block
 (:class:`~contactqp.compliance.fem.ElasticModel`), so the facing surfaces move in-plane when the
 parts bend: a fastener pulling the parts together makes the interface slip where friction lets
@@ -10,7 +10,7 @@ Model
 -----
 The ``lower`` part occupies ``[0, L] x [0, B] x [0, t_l]``, the ``upper`` one lies on it,
 ``t_l <= z <= t_l + t_u``. Both are **clamped at their short end faces** (``x = 0`` and
-``x = L``, every component), the assembly jig of :mod:`contactqp.riveting`: this removes every
+``x = L``, every component), the assembly jig of :mod:`contactqp.applications.riveting`: this removes every
 rigid-body mode of each part with the fixations ``ElasticModel.fix`` offers, and an in-plane
 load on the upper part can then be carried by its own clamps and, through friction, by the lower
 part, which is the load sharing the fastening sequence decides. (Soft springs holding the upper
@@ -30,7 +30,7 @@ move alike and never slip.
 Each part is condensed (``ElasticModel.reduced_model``) to the three displacement components
 of the interface vertices that are not clamped: a grid of ``k`` pairs. The reduced model has
 ``2 k`` nodes (lower part first, then upper), its flexibility block diagonal. Pair ``i`` is
-``(i, k + i)`` with the direction ``+z`` (:class:`~contactqp.contact.NodePairs`), so
+``(i, k + i)`` with the direction ``+z`` (:class:`~contactqp.core.contact.NodePairs`), so
 ``u_N = gap_i + w_upper - w_lower`` and the tangents are ``x`` and ``y``; the tangential
 displacement of a pair is that of the lower node relative to the upper one, and the tangential
 force is the one on the lower part.
@@ -41,8 +41,8 @@ A fastener at pair ``i`` is a clamping force ``F`` (N): ``+F e_z`` on the lower 
 ``-F e_z`` on the upper one. Fasteners are installed one after another, each a load increment;
 then, optionally, an in-plane shear ``T`` (N, along ``x``, shared equally by the upper part's
 interface nodes) is applied and removed in increments. The whole is one load history solved by
-:func:`~contactqp.loading.solve_history` (each step
-:meth:`~contactqp.problem.FrictionalProblem.solve` from the previous result), so the friction
+:func:`~contactqp.core.history.solve_history` (each step
+:meth:`~contactqp.core.problem.FrictionalProblem.solve` from the previous result), so the friction
 law acts on each step's slip increment.
 """
 
@@ -53,13 +53,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from .contact import NodePairs
-from .errors import InvalidInputError
-from .friction import STATUS_LABELS
-from .loading import linear_path, solve_history
-from .model import ReducedModel, finite_array
-from .problem import FrictionalProblem
-from .result import FrictionalResult
+from ..core.contact import NodePairs
+from ..errors import InvalidInputError
+from ..core.friction import STATUS_LABELS
+from ..core.history import linear_path, solve_history
+from ..core.model import ReducedModel, finite_array
+from ..core.problem import FrictionalProblem
+from ..core.result import FrictionalResult
 
 __all__ = ["Part", "FrictionAssembly", "FrictionRivetingModel", "FasteningStep",
            "STATUS_LABELS"]
@@ -103,7 +103,7 @@ class FrictionAssembly:
 
     def build(self) -> "FrictionRivetingModel":
         """Mesh, clamp and condense both parts (about a second for the default cells)."""
-        from .compliance.fem import ElasticModel, block  # needs scikit-fem
+        from ..compliance.fem import ElasticModel, block  # needs scikit-fem
 
         if (self.lower.length, self.lower.width) != (self.upper.length, self.upper.width):
             raise InvalidInputError("lower and upper parts must have the same length and width")

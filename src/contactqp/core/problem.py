@@ -14,7 +14,7 @@ Dual form (on contact forces, built from ``R`` without inverting it):
     \\qquad W = A R A^T, \\qquad U = R (P - A^T \\lambda)
 
 Local form with friction (FCLIB's ``u = W r + q``, see :class:`LocalForm`): with the operator
-``H`` of :func:`~contactqp.contact.local_frames` (per contact the rows ``-n, t_1[, t_2]``),
+``H`` of :func:`~contactqp.core.contact.local_frames` (per contact the rows ``-n, t_1[, t_2]``),
 
 .. math::
 
@@ -38,9 +38,9 @@ import numpy as np
 import scipy.sparse
 
 from .contact import Constraints, LocalFrames, assemble_constraints, local_frames
-from .errors import ContactWarning, InvalidInputError
+from ..errors import ContactWarning, InvalidInputError
 from .friction import FrictionLaw
-from .local import LocalProblem
+from .local_problem import LocalProblem
 from .model import (MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance,
                     real_array)
 from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
@@ -115,8 +115,8 @@ class ContactProblem:
     loads : array_like, shape (n_freedoms,)
         External forces ``P`` on the computational freedoms (N).
     obstacles : sequence
-        :class:`~contactqp.contact.GapObstacle`, :class:`~contactqp.contact.PlaneObstacle`,
-        :class:`~contactqp.contact.ProfileObstacle` or :class:`~contactqp.contact.NodePairs`.
+        :class:`~contactqp.core.contact.GapObstacle`, :class:`~contactqp.core.contact.PlaneObstacle`,
+        :class:`~contactqp.core.contact.ProfileObstacle` or :class:`~contactqp.core.contact.NodePairs`.
     certificate_tol : float
         Largest relative residual the certificate accepts.
     """
@@ -289,7 +289,7 @@ class FrictionalProblem:
         u = W r + q - \begin{pmatrix} 0 \\ (H U_{prev})_T \end{pmatrix},
         \qquad u_N = \text{gap}, \quad u_T = s_T,
 
-    with ``r`` the total local forces, in the friction set of :class:`~contactqp.friction.FrictionLaw`
+    with ``r`` the total local forces, in the friction set of :class:`~contactqp.core.friction.FrictionLaw`
     and complementary to ``u`` (FCLIB's Coulomb problem for the exact cone without cohesion).
 
     Parameters
@@ -301,12 +301,12 @@ class FrictionalProblem:
     obstacles : sequence
         As for :class:`ContactProblem`; each direction towards the obstacle (from the first node
         of a pair towards the second) is its frame's normal, the tangents those of
-        :func:`~contactqp.contact.tangent_basis`.
+        :func:`~contactqp.core.contact.tangent_basis`.
     mu : float or array_like, shape (k,)
         Friction coefficient per contact, >= 0.
     cohesion : float or array_like, shape (k,)
         Mohr-Coulomb cohesion per contact (N), >= 0, where ``mu > 0``: ``||r_T|| <= mu r_N + c``
-        and tension up to ``c / mu`` (the cone's apex; see :mod:`contactqp.friction`): a bonded
+        and tension up to ``c / mu`` (the cone's apex; see :mod:`contactqp.core.friction`): a bonded
         interface, so a cohesive contact must start closed (gap <= 0). One pulled open keeps
         pulling with ``c / mu`` (no tension cut-off): the result then carries a
         :class:`~contactqp.errors.ContactWarning` and says so in its message.
@@ -380,13 +380,13 @@ class FrictionalProblem:
         return previous.tangential_displacements
 
     def local_problem(self, previous=None) -> LocalProblem:
-        """The step's :class:`~contactqp.local.LocalProblem` from ``previous`` (None: rest).
+        """The step's :class:`~contactqp.core.local_problem.LocalProblem` from ``previous`` (None: rest).
 
         In the model's units (m, N), with the cohesion of the law; FCLIB's problem when there
         is none. To solve it, prefer :meth:`solve` (or :attr:`FrictionStep.fclib`): in these
         units the natural-map error that the local solvers stop on weighs newtons against
         metres and, for a stiff ``W``, barely sees displacement errors
-        (:func:`~contactqp.local.natural_map_error`).
+        (:func:`~contactqp.core.local_problem.natural_map_error`).
         """
         return self.step(previous).local
 
@@ -525,13 +525,13 @@ def friction_route(law: FrictionLaw, solver: str | None):
             f"facets={law.facets} asks for the polygonal cone: use solver='polygonal', got "
             f"{name!r}")
     if name == "coulomb":
-        from .solvers.coulomb import solve_coulomb as method
+        from ..methods.coulomb import solve_coulomb as method
     elif name == "tresca":
-        from .solvers.tresca import solve_tresca_fixed_point as method
+        from ..methods.tresca import solve_tresca_fixed_point as method
     elif name == "polygonal":
         if law.facets is None:
             raise InvalidInputError("solver='polygonal' needs facets (an integer >= 3)")
-        from .solvers.polygonal import solve_polygonal as method
+        from ..methods.polygonal import solve_polygonal as method
     else:
         raise InvalidInputError(
             f"unknown friction solver {solver!r}; choose coulomb, tresca or polygonal")

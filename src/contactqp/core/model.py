@@ -16,7 +16,7 @@ from typing import Callable, Sequence
 import numpy as np
 import scipy.linalg
 
-from .errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
+from ..errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
 
 __all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix",
            "checked_cholesky", "finite_array", "real_array", "positive_tolerance", "iteration_cap",

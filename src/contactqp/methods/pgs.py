@@ -10,7 +10,7 @@ The one-contact problem is solved by the projected fixed point of the De Saxce f
 ``r_i <- P_K(r_i - rho_i (u_i + mu_i ||u_iT|| e_N))`` with ``rho_i = 1 / ||W_ii||_F``
 (Jourdan, Alart and Jean, CMAME 155, 1998; Acary, Bremond and Huber, INRIA RR-9118, 2018).
 
-This is the robust, linearly convergent fallback of :func:`contactqp.solvers.coulomb.solve_coulomb`
+This is the robust, linearly convergent fallback of :func:`contactqp.methods.coulomb.solve_coulomb`
 and works on the FCLIB form (no cohesion: the caller translates a cohesive problem first).
 """
 
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..local import project_rows
+from ..core.local_problem import project_rows
 
 __all__ = ["GaussSeidel"]
 

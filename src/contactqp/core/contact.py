@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 import numpy as np
 import scipy.sparse
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 from .model import MAX_MAGNITUDE, ReducedModel, real_array
 
 __all__ = [
@@ -278,7 +278,7 @@ def assemble_constraints(model: ReducedModel, obstacles) -> Constraints:
     ------
     InvalidInputError
         Something that is not an obstacle, no constraint at all, a gap beyond
-        :data:`~contactqp.model.MAX_MAGNITUDE`, or a duplicate: one node (or pair) constrained
+        :data:`~contactqp.core.model.MAX_MAGNITUDE`, or a duplicate: one node (or pair) constrained
         twice along the same direction, which makes the Delassus operator singular. A node may
         meet several obstacles along different directions (a corner, or a slot between two
         walls with opposite normals).

@@ -4,8 +4,8 @@ Model
 -----
 Two elastic layers in plane strain (:class:`~contactqp.compliance.fem.ElasticModel`, a slice of
 ``depth`` metres): the lower one clamped at its base, the upper one resting on it through the
-interface, a line of node pairs (:class:`~contactqp.contact.NodePairs`, normal ``+y``) with the
-Mohr-Coulomb law of :class:`~contactqp.friction.FrictionLaw`: ``|r_T| <= mu r_N + c_i``, the
+interface, a line of node pairs (:class:`~contactqp.core.contact.NodePairs`, normal ``+y``) with the
+Mohr-Coulomb law of :class:`~contactqp.core.friction.FrictionLaw`: ``|r_T| <= mu r_N + c_i``, the
 cohesion ``c_i`` of a contact being the cohesion (Pa) times its tributary area. The upper layer
 carries its weight and is pushed sideways over its left side by an actuator, springs spread
 evenly over the side (stiffness ``k_a`` in all) whose far ends move by ``d``: the lateral load
@@ -18,7 +18,7 @@ reported, to be compared with the weight).
 Both layers are condensed (:func:`~contactqp.compliance.condensation.condense`) to the interface
 nodes and the nodes of the upper layer's left side; gravity enters through the loads that give,
 on these nodes, the displacements of the full model under gravity alone. The history
-``d = 0 .. d_max`` (gravity first) is solved by :func:`~contactqp.loading.solve_history`, the
+``d = 0 .. d_max`` (gravity first) is solved by :func:`~contactqp.core.history.solve_history`, the
 friction state carried over.
 
 The analytic limit of the sliding block: when no contact sticks, the interface carries
@@ -36,11 +36,11 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from .contact import NodePairs
-from .errors import ContactError, InvalidInputError
-from .loading import MAX_STEPS, solve_history
-from .model import ReducedModel
-from .problem import FrictionalProblem
+from ..core.contact import NodePairs
+from ..errors import ContactError, InvalidInputError
+from ..core.history import MAX_STEPS, solve_history
+from ..core.model import ReducedModel
+from ..core.problem import FrictionalProblem
 
 __all__ = ["Layers", "LayersResult", "LayersError", "plot_layers"]
 
@@ -108,7 +108,7 @@ class Layers:
         return self.cohesion * self.area + self.mu * self.weight
 
     def _layer(self, height: float, rows: int):
-        from .compliance.fem import ElasticModel, plate  # noqa: I001  (first: names the extra)
+        from ..compliance.fem import ElasticModel, plate  # noqa: I001  (first: names the extra)
         import skfem
 
         body = ElasticModel(plate(self.length, height, self.cells[0], rows), self.young,
@@ -129,7 +129,7 @@ class Layers:
         ``(nodes, stiffnesses)`` of the actuator's springs on the left side (N/m, summing to
         ``k_a``); ``gravity_loads`` (N, on the model's freedoms); ``cohesions`` (N, per pair).
         """
-        from .compliance.condensation import condense, factorize
+        from ..compliance.condensation import condense, factorize
 
         lower, lower_weight = self._layer(self.lower_height, self.cells[1])
         lower.fix("bottom")
@@ -176,7 +176,7 @@ class Layers:
         ``d_max`` (m) defaults to twice the travel that brings the load to the analytic limit
         when the spring and the upper layer stretched over its length act in series,
         ``2 H_lim (1 / k_a + length / (E h_upper depth))``: beyond the onset of sliding.
-        ``options`` go to :func:`~contactqp.loading.solve_history` (``progress``) and
+        ``options`` go to :func:`~contactqp.core.history.solve_history` (``progress``) and
         :meth:`~contactqp.FrictionalProblem.solve`.
 
         Raises
@@ -262,7 +262,7 @@ class LayersResult:
 
 def plot_layers(result: LayersResult, path) -> Path:
     """Lateral load against relative displacement, with the analytic limit, as a PNG."""
-    from .plot import save_figure, subplots
+    from ..io.plot import save_figure, subplots
 
     figure, axes = subplots(figsize=(7, 4.5))
     axes.plot(result.relative * 1e3, result.load / 1e3, "o-", ms=3, label="reduced model")

@@ -20,7 +20,7 @@ def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None
     passive set with ``x_P > 0`` optimal on it is a valid start of the outer loop).
     Suited to problems whose solution has few positive entries (most contacts open): each step
     costs a bordering of a small factor, where the primal-dual active set of
-    :func:`~contactqp.solvers.box_qp.solve_box_qp` may take many steps on a strongly coupled
+    :func:`~contactqp.methods.box_qp.solve_box_qp` may take many steps on a strongly coupled
     ``S`` (plates). ``max_iter`` defaults to ``3 len(q)``.
     Returns ``(x, converged, iterations, factorizations)``.
 

@@ -21,18 +21,18 @@ would need the in-plane slip of the surfaces, which this plate model does not gi
 
 The reduced model has ``2 k`` nodes with one freedom each (``k`` contact pairs): nodes
 ``0 .. k-1`` on the lower plate, ``k .. 2k-1`` on the upper one, pair ``i = (i, k + i)`` with
-direction ``+z`` (:class:`~contactqp.contact.NodePairs`): ``w_lower - w_upper <= gap``.
+direction ``+z`` (:class:`~contactqp.core.contact.NodePairs`): ``w_lower - w_upper <= gap``.
 
 Fasteners
 ---------
 A fastener imposes closure: at its pair the gap is brought to zero and held there (a bilateral
 constraint). Its multiplier ``lambda_f`` is free in sign: ``lambda_f >= 0`` is a contact
 compression at the fastener, ``lambda_f < 0`` a tension ``-lambda_f`` carried by the fastener.
-The dual QP is the frictionless one (:class:`~contactqp.problem.DualForm`) with the lower bound
+The dual QP is the frictionless one (:class:`~contactqp.core.problem.DualForm`) with the lower bound
 of the fastener rows lifted to ``-inf``; :class:`FastenerClosure` eliminates the fastener
 multipliers (a Schur complement) and solves the remaining non-negative QP by Lawson and
 Hanson's active-set method (or the project's box-QP solver, or scipy's NNLS). The answer is
-returned as a certified :class:`~contactqp.result.ContactResult` of the contact problem in which
+returned as a certified :class:`~contactqp.core.result.ContactResult` of the contact problem in which
 the fastener tensions are external loads, and the closure of each fastener is checked
 separately. Fasteners are installed one after another (:meth:`RivetingModel.fasten`), each an
 increment warm-started from the previous one; without friction the final state does not depend
@@ -49,14 +49,14 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
-from .batch import GapVariation
-from .contact import NodePairs
-from .errors import InvalidInputError
-from .model import ReducedModel, finite_array
-from .problem import ContactProblem
-from .result import ContactResult
-from .solvers import solve_box_qp
-from .solvers.lawson_hanson import solve_nonnegative_qp
+from ..studies.batch import GapVariation
+from ..core.contact import NodePairs
+from ..errors import InvalidInputError
+from ..core.model import ReducedModel, finite_array
+from ..core.problem import ContactProblem
+from ..core.result import ContactResult
+from ..methods import solve_box_qp
+from ..methods.lawson_hanson import solve_nonnegative_qp
 
 __all__ = ["Plate", "Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
            "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened",
@@ -107,7 +107,7 @@ def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -
     ndarray, shape (k, k)
         ``R[i, j]``: deflection (m) of point ``i`` under a unit force (N) at point ``j``.
     """
-    from .compliance.fem import plate as plate_mesh  # raises MissingDependencyError without skfem
+    from ..compliance.fem import plate as plate_mesh  # raises MissingDependencyError without skfem
 
     import skfem
     from scipy.spatial import cKDTree
@@ -137,7 +137,7 @@ def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -
     if np.any(np.isin(freedoms, held)):
         raise InvalidInputError("a point lies on a supported edge: it has no flexibility")
     free = np.setdiff1d(np.arange(basis.N), held)
-    from .compliance.condensation import condense
+    from ..compliance.condensation import condense
 
     return condense(K[free][:, free], np.searchsorted(free, freedoms))
 
@@ -426,7 +426,7 @@ class FastenerClosure:
             ``"lawson-hanson"`` (default): Lawson and Hanson's active-set method on ``S``
             directly, adding one contact at a time, warm started from the support of
             ``forces0``. ``"active-set"``: the project's primal-dual box-QP solver
-            (:func:`~contactqp.solvers.solve_box_qp`) on ``S``, warm started from ``forces0``.
+            (:func:`~contactqp.methods.solve_box_qp`) on ``S``, warm started from ``forces0``.
             ``"nnls"``: :func:`scipy.optimize.nnls` (Lawson and Hanson too, cold) on
             ``min ||L^T lambda_c - L^-1 q||`` with ``S = L L^T``: an independent route.
         forces0 : array_like, shape (m,), optional
@@ -484,12 +484,12 @@ def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-
 
 
 class FasteningCase(GapVariation):
-    """A riveted assembly, every fastener installed: a case of :func:`~contactqp.batch.run_batch`.
+    """A riveted assembly, every fastener installed: a case of :func:`~contactqp.studies.batch.run_batch`.
 
     Each sample is solved by :meth:`FastenerClosure.solve` (``method``, ``tol``) with all the
     fasteners at once (without friction the final state does not depend on the order), warm
     started from the previous sample (except with ``method="nnls"``). Records add ``fastener_force``
-    (tension per fastener, N) to those of :class:`~contactqp.batch.GapVariation`.
+    (tension per fastener, N) to those of :class:`~contactqp.studies.batch.GapVariation`.
     """
 
     def __init__(self, model: RivetingModel, method: str = "lawson-hanson", tol: float = 1e-10):
@@ -524,7 +524,7 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
     node, along ``z``), ``initial_gap`` and ``gap`` (m), ``status`` (codes of
     :data:`STATUS_LABELS`), ``fastener_force`` (N, zero away from fasteners).
     """
-    from .io.export import write_vtu as write_mesh
+    from ..io.export import write_vtu as write_mesh
 
     nx, ny = model.assembly.grid
     k = model.n_pairs
@@ -554,7 +554,7 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
     """Maps of the initial and residual gaps (mm) and of the pair status, as a PNG."""
-    from .plot import save_figure, subplots
+    from ..io.plot import save_figure, subplots
 
     xy = model.points * 1e3
     figure, axes = subplots(3, 1, figsize=(7, 9.5), sharex=True)

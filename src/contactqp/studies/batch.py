@@ -32,11 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import FileFormatError, InvalidInputError
-from .model import MAX_MAGNITUDE, finite_array
-from .optional import require
-from .problem import ContactProblem
-from .solvers import solve
+from ..errors import FileFormatError, InvalidInputError
+from ..core.model import MAX_MAGNITUDE, finite_array
+from ..optional import require
+from ..core.problem import ContactProblem
+from ..methods import solve
 
 __all__ = ["BatchData", "BatchSummary", "GapSamples", "GapStatistics", "GapVariation",
            "GaussianGapField", "check_scheduler", "load_batch", "load_gap_samples",
@@ -240,7 +240,7 @@ def load_gap_samples(path) -> GapSamples:
     Values in metres, shape (N, m). A missing, truncated or corrupt file is a one-line
     :class:`~contactqp.errors.FileFormatError`.
     """
-    from .io.arrays import read_csv_array, read_numpy_array
+    from ..io.arrays import read_csv_array, read_numpy_array
 
     path = Path(path)
     if not path.is_file():
@@ -704,7 +704,7 @@ def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
 
     ``coordinates``: shape (m, 2), the position of each contact (m); drawn in mm.
     """
-    from .plot import save_figure, subplots
+    from ..io.plot import save_figure, subplots
 
     xy = np.asarray(coordinates, dtype=float) * 1e3
     panels = [(statistics.mean * 1e3, "mean final gap (mm)"),

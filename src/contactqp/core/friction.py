@@ -9,7 +9,7 @@ the (Mohr-)Coulomb cone
     C_i = \{ \|r_T\| \le \mu_i r_N + c_i \}, \qquad r_N \ge -c_i / \mu_i ,
 
 Coulomb's for cohesion :math:`c_i = 0`. With cohesion the cone is Coulomb's translated to its
-apex :math:`r_N = -c_i/\mu_i` (the law of :class:`~contactqp.local.LocalProblem`): a closed
+apex :math:`r_N = -c_i/\mu_i` (the law of :class:`~contactqp.core.local_problem.LocalProblem`): a closed
 contact carries shear up to :math:`c_i` without normal force and tension up to
 :math:`c_i/\mu_i`, and the gap opens when that tension is reached (perfectly plastic, no
 softening: an open cohesive contact keeps transmitting :math:`c_i/\mu_i`). The normal law acts on
@@ -18,7 +18,7 @@ gap :math:`\ge 0`, and :math:`\tilde r = 0` where the gap is open.
 
 The *polygonal* law of the method replaces the disc :math:`\|r_T\| \le s` by the inscribed
 regular polygon of ``facets`` sides :math:`n_k \cdot r_T \le s \cos(\pi / F)`, with the outward
-normals :math:`n_k` of :func:`~contactqp.solvers.polygonal.polygon_normals` (vertices on the circle
+normals :math:`n_k` of :func:`~contactqp.methods.polygonal.polygon_normals` (vertices on the circle
 at the angles :math:`(2k + 1)\pi / F`). In 2-D the tangential "disc" is the segment
 :math:`|r_T| \le s`, which every polygon reproduces: the polygonal law is then exact.
 
@@ -34,9 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 from .model import finite_array
-from .solvers.polygonal import polygon_normals
+from ..methods.polygonal import polygon_normals
 
 __all__ = ["FrictionLaw", "STATUS_LABELS", "apex_distance"]
 
@@ -88,7 +88,7 @@ class FrictionLaw:
     InvalidInputError
         ``mu`` or ``cohesion`` negative, NaN, inf or of the wrong length; cohesion where
         ``mu = 0`` (the cone has no apex); ``facets`` not an integer from 3 to
-        :data:`~contactqp.solvers.polygonal.MAX_FACETS`.
+        :data:`~contactqp.methods.polygonal.MAX_FACETS`.
     """
 
     mu: np.ndarray

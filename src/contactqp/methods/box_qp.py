@@ -10,7 +10,7 @@ with ``W`` symmetric positive (semi)definite. This is the dual of frictionless c
 
 Method: primal-dual active set, i.e. semismooth Newton on ``x = P_[l,u](x - sigma (W x + c))``
 [HIK2002]_. Each iteration fixes the bounded variables and solves the free block through
-:class:`~contactqp.solvers.free_block.FreeBlockSolver`, which borders or trims one LAPACK
+:class:`~contactqp.methods.free_block.FreeBlockSolver`, which borders or trims one LAPACK
 Cholesky factor instead of factoring every new free set. The plain iteration converges in a few
 steps on contact problems but may cycle on general ``W`` (it does on the spring chain); a step
 that does not lower the objective is therefore replaced by the best point of a projected search
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..model import iteration_cap, positive_tolerance
+from ..core.model import iteration_cap, positive_tolerance
 from .free_block import FreeBlockSolver
 
 __all__ = ["BoxQPSolution", "solve_box_qp"]
@@ -61,7 +61,7 @@ class BoxQPSolution:
         Cholesky factorisations of free blocks.
     updates : int
         Free blocks solved by updating a factorisation instead (see
-        :class:`~contactqp.solvers.free_block.FreeBlockSolver`).
+        :class:`~contactqp.methods.free_block.FreeBlockSolver`).
     residual : float
         ``max|x - P(x - sigma g)|`` relative to the scale of ``x``, at the returned point.
     message : str
