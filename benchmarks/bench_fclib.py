@@ -91,17 +91,17 @@ def time_file(path: Path, tol: float, perturbed: int = 0) -> dict:
         spent += elapsed
         if elapsed >= SHORT_RUN or spent >= REPEAT_BUDGET:
             break
-    size = 1e-10 * np.abs(solution.r).max(initial=0.0)
+    size = 1e-10 * np.abs(solution.forces).max(initial=0.0)
     robust = sum(
         solve_coulomb(problem, r0=size * np.abs(np.random.default_rng(seed).standard_normal(
-            problem.q.size)), tol=tol).converged
+            problem.q.size)), tol=tol).success
         for seed in range(perturbed)
     )
-    error = (given.certify(solution.r).error if isinstance(given, GlobalProblem)
-             else natural_map_error(problem, solution.r))
+    error = (given.certify(solution.forces).error if isinstance(given, GlobalProblem)
+             else natural_map_error(problem, solution.forces))
     return {
         "file": path.name, "dim": problem.dim, "contacts": problem.n_contacts,
-        "error": error, "converged": solution.converged and error <= tol,
+        "error": error, "converged": solution.success and error <= tol,
         "iterations": solution.iterations, "seconds": best,
         "gauss_seidel": "gauss-seidel" in solution.message, "perturbed": (robust, perturbed),
     }

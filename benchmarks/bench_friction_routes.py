@@ -102,8 +102,8 @@ def row(name, problem, routes, tol):
     results = {}
     for route, solve in routes.items():
         seconds, solution = timed(solve, problem)
-        error = natural_map_error(problem, solution.r)  # not the solver's own figure
-        met = error <= tol if route != "poly" or problem.dim == 2 else solution.converged
+        error = natural_map_error(problem, solution.forces)  # not the solver's own figure
+        met = error <= tol if route != "poly" or problem.dim == 2 else solution.success
         results[route] = (seconds, error, solution.iterations, met)
     reference = results["coulomb"][0]
     cells = [f"{name[:34]:<34}{problem.dim:>2}{problem.n_contacts:>6}"]

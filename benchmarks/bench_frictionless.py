@@ -250,7 +250,9 @@ def main(argv=None) -> int:
                                                             check_finite=False))
         chol_best, _, _ = best_time(lambda: scipy.linalg.cho_factor(W, lower=True, check_finite=False))
 
-        row = {"contacts": size, "closed": int(np.count_nonzero(result.closed)),
+        row = {"contacts": size,
+               "closed": int(np.count_nonzero(
+                   result.contact_status == contactqp.ContactStatus.CLOSED)),
                "build R": _fmt_seconds(build), "assembly": _fmt_seconds(assembly),
                "own 1st": _fmt_seconds(own_first), "own": _fmt_seconds(own_best),
                "core": _fmt_seconds(core_best),

@@ -40,6 +40,7 @@ import numpy as np
 
 from contactqp.compliance import grid, influence_matrix
 from contactqp.core.local_problem import LocalProblem
+from contactqp.core.status import ContactStatus
 from contactqp.methods.coulomb import solve_coulomb
 from contactqp.methods.tresca import solve_tresca_fixed_point
 
@@ -85,16 +86,16 @@ def run(cells_per_radius: int = 12, ratio: float = 0.5, mu: float = 0.3,
     problem, _, force, x, y = contact_problem(cells_per_radius, sphere_radius, cell, young,
                                               poisson, mu, delta)
     solution = SOLVERS[solver](problem, tol=1e-8)
-    r = force * solution.r.reshape(-1, 3)
+    r = force * solution.forces.reshape(-1, 3)
     P, Q = float(r[:, 0].sum()), float(r[:, 1].sum())
     measured_ratio = Q / (mu * P)
-    status = solution.status
-    stick = status == "stick"
+    status = solution.contact_status
+    stick = status == ContactStatus.STICK
     area = cell * cell / np.pi
     stick_radius = float(np.sqrt(np.count_nonzero(stick) * area))
-    contact_radius = float(np.sqrt(np.count_nonzero(status != "open") * area))
+    contact_radius = float(np.sqrt(np.count_nonzero(status != ContactStatus.OPEN) * area))
     return {
-        "converged": bool(solution.converged), "error": float(solution.error),
+        "converged": bool(solution.success), "error": float(solution.certificate.natural_map),
         "seconds": float(solution.seconds), "solver": solver, "cell": cell,
         "load": P, "load_hertz": float(load),
         "contact_radius": contact_radius, "contact_radius_hertz": float(a),

@@ -89,7 +89,7 @@ def run(n: int = 3, stiffness: float = 1.0, mu: float = 0.2, mass: float = 2.0, 
     exact = masing(n, stiffness, limit, force_max, forces, steps)
     per_cycle = history.dissipated[1 + steps:].reshape(cycles, 2 * steps).sum(axis=1)
     return {
-        "history": history, "force": forces, "x": history.x[:, 0::2], "exact": exact,
+        "history": history, "force": forces, "x": history.displacements[:, 0::2], "exact": exact,
         "dissipated_per_cycle": per_cycle,
         "closed_form_per_cycle": 4.0 * limit * float(np.sum(virgin(n, stiffness, limit, force_max))),
     }

@@ -43,11 +43,12 @@ def run(cells_per_radius: int = 12, sphere_radius: float = 5e-3, cell: float = 1
         "cell": cell,
         "load": float(result.forces.sum()),
         "load_theory": float(load_theory),
-        "radius": float(np.sqrt(np.count_nonzero(result.closed) * cell * cell / np.pi)),
+        "radius": float(np.sqrt(np.count_nonzero(result.contact_status == cq.ContactStatus.CLOSED)
+                                * cell * cell / np.pi)),
         "radius_theory": float(a_theory),
         "peak_pressure": float(result.forces.max() / cell**2),
         "peak_pressure_theory": float(2 * e_star * a_theory / (np.pi * sphere_radius)),
-        "seconds": float(result.wall_time),
+        "seconds": float(result.seconds),
         "cells": n * n,
     }
 

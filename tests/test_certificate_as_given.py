@@ -64,9 +64,9 @@ def test_lmgc_global_file_is_solved_as_written():
     np.testing.assert_allclose(dense(condensed.W), written.W, rtol=0,
                                atol=1e-9 * np.abs(written.W).max())
     solution = solve_local(condensed, tol=TOL)
-    assert solution.converged, solution.message
+    assert solution.success, solution.message
     # was 3.9e-3 when W was symmetrised (the solver then reported 2e-14)
-    assert natural_map_error(written, solution.r) <= TOL
+    assert natural_map_error(written, solution.forces) <= TOL
     # the unscaled cond(M) of 1e7 is the 2.6e8 constrained diagonal only
     assert np.linalg.cond(M) > 1e6
 
@@ -77,17 +77,18 @@ def test_global_solution_is_certified_on_the_written_equations():
     g = read_global_problem(LMGC)
     written, M, H = written_local(g)
     solution = solve_global(g, tol=TOL)
-    assert solution.converged, solution.message
+    assert solution.success, solution.message
     # v and u are those of the written equations, recomputed here
-    v = np.linalg.solve(M, H @ solution.r + g.f)
+    v = np.linalg.solve(M, H @ solution.forces + g.f)
     np.testing.assert_allclose(solution.v, v, rtol=0, atol=1e-10 * np.abs(v).max())
-    np.testing.assert_allclose(solution.u, H.T @ solution.v + g.w, rtol=0, atol=1e-15)
-    assert natural_map_error(written, solution.r, H.T @ v + g.w) <= TOL
-    assert solution.error == pytest.approx(natural_map_error(written, solution.r, solution.u),
-                                           rel=1e-6, abs=1e-15)
-    assert solution.equilibrium <= 1e-13
+    np.testing.assert_allclose(solution.displacements, H.T @ solution.v + g.w, rtol=0, atol=1e-15)
+    assert natural_map_error(written, solution.forces, H.T @ v + g.w) <= TOL
+    error = natural_map_error(written, solution.forces, solution.displacements)
+    assert solution.certificate.natural_map == pytest.approx(error, rel=1e-6, abs=1e-15)
+    assert solution.certificate.equilibrium <= 1e-13
     # Jacobi scaling removes the 1e7: the attainable error is at rounding, nothing to say
-    assert solution.limits.condition < 100 and solution.limits.rounding < 1e-13
+    limits = solution.certificate.limits
+    assert limits.condition < 100 and limits.rounding < 1e-13
     assert "limits" not in solution.message and "global equations" in solution.message
 
 
@@ -100,14 +101,14 @@ def test_ill_conditioned_m_says_what_accuracy_it_allows():
     M = np.array([[1.0, 1.0 - delta], [1.0 - delta, 1.0]])
     g = GlobalProblem(M, np.eye(2), [1.0, -1.0], [-1e13, 0.0], [0.3], 2)
     solution = solve_global(g, tol=TOL)
-    limits = solution.limits
+    limits = solution.certificate.limits
     assert limits.condition == pytest.approx(np.linalg.cond(M, 1), rel=1e-3)
     assert limits.rounding > TOL
     assert f"{limits.rounding:.1e}" in solution.message and "conditioning of M" in solution.message
     # the error is measured all the same, on the problem as written
     written, _, _ = written_local(g)
-    assert solution.error == pytest.approx(natural_map_error(written, solution.r, solution.u),
-                                           rel=1e-6)
+    error = natural_map_error(written, solution.forces, solution.displacements)
+    assert solution.certificate.natural_map == pytest.approx(error, rel=1e-6)
 
 
 def test_cli_json_certifies_global_files_and_reports_limits(tmp_path):
@@ -137,12 +138,12 @@ def test_few_digits_define_the_problem_and_limit_its_meaning():
     solution = solve_local(exact, tol=TOL)
     # the error is on the written values, recomputed from them here
     W = np.array([[1.5, 0.1, 0.2], [0.1, 2.2501, 0.3], [0.2, 0.3, 1.75]]).T
-    assert natural_map_error(LocalProblem(W, [-1, 0.5, 0], [0.3], 3), solution.r) <= TOL
-    assert solution.converged and solution.limits.data > TOL
+    assert natural_map_error(LocalProblem(W, [-1, 0.5, 0], [0.3], 3), solution.forces) <= TOL
+    assert solution.success and solution.certificate.limits.data > TOL
     assert "significant digits (W 5)" in solution.message
     # full-precision values: nothing to say
     full = parse_dat(text.replace("2.2501", "2.2501000000000002"))
-    assert full.digits == {} and solve_local(full, tol=TOL).limits.data == 0.0
+    assert full.digits == {} and solve_local(full, tol=TOL).certificate.limits.data == 0.0
 
 
 # --- other changes of the problem: the reported error is the given problem's -----------------
@@ -174,13 +175,13 @@ def test_rescaling_solvers_report_the_given_problems_error(route):
 
         solution = solve_tresca_fixed_point(problem, tol=TOL)
     W = dense(problem.W)
-    u = W @ solution.r + problem.q
-    assert solution.error == pytest.approx(natural_map_error(
-        LocalProblem(W, problem.q, problem.mu, 3), solution.r, u), rel=1e-9, abs=1e-18)
-    assert solution.converged == (solution.error <= TOL)
+    u = W @ solution.forces + problem.q
+    assert solution.certificate.natural_map == pytest.approx(natural_map_error(
+        LocalProblem(W, problem.q, problem.mu, 3), solution.forces, u), rel=1e-9, abs=1e-18)
+    assert solution.success == (solution.certificate.natural_map <= TOL)
     # the fixed point stalls near 6e-7 on this problem (the zero-row contact; with a unit
     # block there it converges), and says so; Newton converges
-    assert solution.converged or route == "tresca"
+    assert solution.success or route == "tresca"
 
 
 def test_frictionless_route_is_judged_on_every_row_of_the_unsymmetric_w():
@@ -189,10 +190,10 @@ def test_frictionless_route_is_judged_on_every_row_of_the_unsymmetric_w():
     base = _scaled_problem(1)
     problem = LocalProblem(base.W, base.q, np.zeros(6), 3)
     solution = solve_local(problem, tol=TOL)
-    assert solution.converged, solution.message
-    assert np.all(solution.r.reshape(6, 3)[:, 1:] == 0)
+    assert solution.success, solution.message
+    assert np.all(solution.forces.reshape(6, 3)[:, 1:] == 0)
     assert natural_map_error(LocalProblem(dense(problem.W), problem.q, problem.mu, 3),
-                             solution.r) <= TOL
+                             solution.forces) <= TOL
 
 
 def test_symmetrised_model_is_certified_on_the_flexibility_given():

@@ -23,6 +23,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
+from contactqp.core.status import ContactStatus
 from contactqp.io import read_problem
 from contactqp.core.local_problem import (
     LocalProblem,
@@ -70,16 +71,17 @@ def test_one_contact_closed_forms(dim, a, b, mu, q, sparse):
     problem = LocalProblem(sp.csr_matrix(W) if sparse else W, q, [mu], dim)
     solution = solve_coulomb(problem, tol=1e-12)
     expected, status = one_contact(a, b, q, mu)
-    assert solution.converged and solution.error <= 1e-12
-    np.testing.assert_allclose(solution.r, expected, rtol=0, atol=1e-9 * (1 + np.abs(q).max()))
-    np.testing.assert_allclose(solution.u, W @ solution.r + q, rtol=0, atol=1e-12 * 10)
+    assert solution.success and solution.certificate.natural_map <= 1e-12
+    np.testing.assert_allclose(solution.forces, expected, rtol=0, atol=1e-9 * (1 + np.abs(q).max()))
+    np.testing.assert_allclose(solution.displacements, W @ solution.forces + q, rtol=0,
+                               atol=1e-12 * 10)
     # on the cone edge stick and slip are the same point: a slip velocity below the status's
     # threshold (1e-6 of max(a, b) times the force scale, see contact_status) is "zero"
     w = max(a, b)
     force = max(np.linalg.norm(expected), np.linalg.norm(q) / w)
     velocity = np.linalg.norm(q[1:]) - b * mu * max(-q[0], 0) / a
     if abs(velocity) > 1e-5 * w * force:
-        assert solution.status.tolist() == [status]
+        assert solution.status_labels == [status]
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -88,18 +90,18 @@ def test_cohesion_turns_slip_into_stick(dim):
     W = np.diag([2.0] + [4.0] * (dim - 1))
     q = np.array([-2.0, 6.0, 0.0][:dim])
     without = solve_coulomb(LocalProblem(W, q, [0.5], dim), tol=1e-12)
-    np.testing.assert_allclose(without.r[:2], [1.0, -0.5], atol=1e-10)  # slips on mu r_N = 0.5
-    assert without.status.tolist() == ["slip"]
+    np.testing.assert_allclose(without.forces[:2], [1.0, -0.5], atol=1e-10)  # slips on mu r_N = 0.5
+    assert without.status_labels == ["slip"]
     sticky = LocalProblem(W, q, [0.5], dim, cohesion=[1.2])
     with_c = solve_coulomb(sticky, tol=1e-12)
-    np.testing.assert_allclose(with_c.r[:2], [1.0, -1.5], atol=1e-10)  # 1.5 <= 0.5 + 1.2
-    assert with_c.status.tolist() == ["stick"] and with_c.error <= 1e-12
+    np.testing.assert_allclose(with_c.forces[:2], [1.0, -1.5], atol=1e-10)  # 1.5 <= 0.5 + 1.2
+    assert with_c.status_labels == ["stick"] and with_c.certificate.natural_map <= 1e-12
     # the cohesionless answer is wrong for the cohesive problem, and the measure says so
-    assert natural_map_error(sticky, without.r) > 1e-3
+    assert natural_map_error(sticky, without.forces) > 1e-3
     slipping = LocalProblem(W, q, [0.5], dim, cohesion=[0.7])
     slip = solve_coulomb(slipping, tol=1e-12)
-    np.testing.assert_allclose(slip.r[:2], [1.0, -1.2], atol=1e-10)  # ||r_T|| = 0.5 + 0.7
-    assert slip.status.tolist() == ["slip"]
+    np.testing.assert_allclose(slip.forces[:2], [1.0, -1.2], atol=1e-10)  # ||r_T|| = 0.5 + 0.7
+    assert slip.status_labels == ["slip"]
 
 
 @settings(max_examples=100, deadline=None)
@@ -113,8 +115,8 @@ def test_cohesion_closed_forms(dim, a, b, mu, c, q):
     tol = 1e-12 * (1 + c / mu)
     solution = solve_coulomb(problem, tol=tol)
     expected, _ = one_contact(a, b, q, mu, c)
-    assert solution.converged
-    np.testing.assert_allclose(solution.r, expected, rtol=0,
+    assert solution.success
+    np.testing.assert_allclose(solution.forces, expected, rtol=0,
                                atol=1e-9 * (1 + np.abs(expected).max()))
     assert natural_map_error(problem, expected) <= tol
 
@@ -124,11 +126,11 @@ def test_open_cohesive_contact_holds_tension_until_its_strength():
     # reached only if a * 2 < q_N
     W = np.eye(3)
     held = solve_coulomb(LocalProblem(W, [1.0, 0.0, 0.0], [0.5], 3, cohesion=[1.0]), tol=1e-12)
-    np.testing.assert_allclose(held.r, [-1.0, 0.0, 0.0], atol=1e-12)  # u_N = 0, in tension
-    assert held.status.tolist() == ["stick"]
+    np.testing.assert_allclose(held.forces, [-1.0, 0.0, 0.0], atol=1e-12)  # u_N = 0, in tension
+    assert held.status_labels == ["stick"]
     broken = solve_coulomb(LocalProblem(W, [3.0, 0.0, 0.0], [0.5], 3, cohesion=[1.0]), tol=1e-12)
-    np.testing.assert_allclose(broken.r, [-2.0, 0.0, 0.0], atol=1e-12)
-    assert broken.status.tolist() == ["open"]
+    np.testing.assert_allclose(broken.forces, [-2.0, 0.0, 0.0], atol=1e-12)
+    assert broken.status_labels == ["open"]
 
 
 def assert_mohr_coulomb_law(problem, r, u, atol):
@@ -154,10 +156,11 @@ def test_cohesive_solution_obeys_the_law_contact_by_contact(dim):
     cohesion = np.random.default_rng(5).uniform(0.0, 0.3, 15)
     problem = LocalProblem(base.W, base.q, base.mu, dim, cohesion=cohesion)
     solution = solve_coulomb(problem, tol=1e-12)
-    assert solution.converged
-    carrying, sliding = assert_mohr_coulomb_law(problem, solution.r, solution.u, 1e-9)
+    assert solution.success
+    carrying, sliding = assert_mohr_coulomb_law(problem, solution.forces, solution.displacements,
+                                                1e-9)
     assert carrying.any() and sliding.any() and (carrying & ~sliding).any()
-    np.testing.assert_array_equal(solution.status == "slip", sliding & carrying)
+    np.testing.assert_array_equal(solution.contact_status == ContactStatus.SLIP, sliding & carrying)
 
 
 def random_problem(nc, dim, seed, mu=0.3, sparse=False):
@@ -186,10 +189,11 @@ def gauss_seidel_alone(problem, tol, sweeps=5000):
 def test_newton_agrees_with_gauss_seidel_where_unique(dim, sparse):
     problem = random_problem(12, dim, seed=3, sparse=sparse)
     solution = solve_coulomb(problem, tol=1e-12)
-    assert solution.converged and "gauss-seidel" not in solution.message
-    assert set(solution.status) == {"open", "stick", "slip"}  # every regime is exercised
+    assert solution.success and "gauss-seidel" not in solution.message
+    assert set(solution.status_labels) == {"open", "stick", "slip"}  # every regime is exercised
     reference = gauss_seidel_alone(problem, 1e-13)
-    np.testing.assert_allclose(solution.r, reference, rtol=0, atol=1e-9 * np.abs(reference).max())
+    np.testing.assert_allclose(solution.forces, reference, rtol=0,
+                               atol=1e-9 * np.abs(reference).max())
 
 
 def test_dense_and_sparse_newton_matrices_give_the_same_solution(monkeypatch):
@@ -203,19 +207,20 @@ def test_dense_and_sparse_newton_matrices_give_the_same_solution(monkeypatch):
     for W in (base.W, holes):
         d = solve_coulomb(LocalProblem(W, base.q, base.mu, 3), tol=1e-12)
         s = solve_coulomb(LocalProblem(sp.csr_matrix(W), base.q, base.mu, 3), tol=1e-12)
-        assert d.converged and s.converged
-        np.testing.assert_allclose(s.r, d.r, rtol=0, atol=1e-10 * np.abs(d.r).max())
+        assert d.success and s.success
+        np.testing.assert_allclose(s.forces, d.forces, rtol=0, atol=1e-10 * np.abs(d.forces).max())
 
 
 def test_warm_start():
     problem = read_problem(DATA / "Capsules-i97-269.hdf5")
     cold = solve_coulomb(problem)
-    assert cold.converged
-    again = solve_coulomb(problem, r0=cold.r)
-    assert again.iterations == 0 and again.error == cold.error
+    assert cold.success
+    again = solve_coulomb(problem, r0=cold.forces)
+    assert again.iterations == 0 and again.certificate.natural_map == cold.certificate.natural_map
     rng = np.random.default_rng(0)
-    near = solve_coulomb(problem, r0=cold.r * (1 + 1e-4 * rng.standard_normal(cold.r.size)))
-    assert near.converged and near.iterations < cold.iterations
+    near = solve_coulomb(problem,
+                         r0=cold.forces * (1 + 1e-4 * rng.standard_normal(cold.forces.size)))
+    assert near.success and near.iterations < cold.iterations
 
 
 def test_gauss_seidel_rounds_finish_what_newton_cannot(monkeypatch):
@@ -225,10 +230,10 @@ def test_gauss_seidel_rounds_finish_what_newton_cannot(monkeypatch):
     reference = solve_coulomb(problem, tol=1e-12)
     monkeypatch.setattr(coulomb, "RUN_ITERATIONS", 1)
     solution = solve_coulomb(problem, tol=1e-10)
-    assert solution.converged and "gauss-seidel" in solution.message
+    assert solution.success and "gauss-seidel" in solution.message
     assert "levenberg-marquardt 1 it." in solution.message
-    np.testing.assert_allclose(solution.r, reference.r, rtol=0,
-                               atol=1e-7 * np.abs(reference.r).max())
+    np.testing.assert_allclose(solution.forces, reference.forces, rtol=0,
+                               atol=1e-7 * np.abs(reference.forces).max())
 
 
 def test_non_convergence_is_reported_not_hidden():
@@ -237,13 +242,13 @@ def test_non_convergence_is_reported_not_hidden():
     # relative error falls like 1/||r||, but never to tol)
     problem = LocalProblem(np.zeros((3, 3)), [-1.0, 0.5, 0.0], [0.3], 3)
     solution = solve_coulomb(problem, max_iter=150)
-    assert not solution.converged and solution.iterations <= 150
-    assert solution.error == natural_map_error(problem, solution.r) > 1e-8
+    assert not solution.success and solution.iterations <= 150
+    assert solution.certificate.natural_map == natural_map_error(problem, solution.forces) > 1e-8
     assert "not converged" in solution.message and "gauss-seidel" in solution.message
-    assert f"{solution.error:.2e}" in solution.message
+    assert f"{solution.certificate.natural_map:.2e}" in solution.message
     # steps are accepted on the absolute residual: with the relative error as the test, 100
     # full steps let r grow until the ratio fell below 1e-8 and the solver claimed success
-    assert not solve_coulomb(problem).converged
+    assert not solve_coulomb(problem).success
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -276,10 +281,10 @@ def test_alart_curnier_jacobian_matches_finite_differences(dim):
 def test_every_fclib_file_is_solved(name):
     problem = read_problem(DATA / name)
     solution = solve_local(problem, tol=1e-8)
-    assert solution.converged, solution.message
+    assert solution.success, solution.message
     # the README's measure, recomputed from r alone (u = W r + q) outside the solver
-    assert natural_map_error(problem, solution.r) <= 1e-8
-    assert np.array_equal(contact_status(problem, solution.r), solution.status)
+    assert natural_map_error(problem, solution.forces) <= 1e-8
+    assert np.array_equal(contact_status(problem, solution.forces), solution.contact_status)
 
 
 @pytest.mark.parametrize("cohesion", [0.0, 0.4])
@@ -290,21 +295,21 @@ def test_contact_status_does_not_depend_on_units(cohesion):
     base = random_problem(12, 3, seed=3)
     c = np.full(12, cohesion)
     reference = solve_coulomb(LocalProblem(base.W, base.q, base.mu, 3, cohesion=c), tol=1e-13)
-    assert reference.converged and {"stick", "slip"} <= set(reference.status)
+    assert reference.success and {"stick", "slip"} <= set(reference.status_labels)
     force, length = 1e3, 1e-5  # N and m per unit of the dimensionless problem
     si = LocalProblem(base.W * (length / force), base.q * length, base.mu, 3,
                       cohesion=c * force)
-    status = contact_status(si, reference.r * force, reference.u * length)
-    np.testing.assert_array_equal(status, reference.status)
+    status = contact_status(si, reference.forces * force, reference.displacements * length)
+    np.testing.assert_array_equal(status, reference.contact_status)
 
 
 def test_frictionless_problems_stay_on_the_box_qp():
     problem = random_problem(8, 3, seed=3, mu=0.0)
     solution = solve_local(problem)
-    assert solution.converged and "newton" not in solution.message
-    assert np.all(solution.r.reshape(8, 3)[:, 1:] == 0)
+    assert solution.success and "newton" not in solution.message
+    assert np.all(solution.forces.reshape(8, 3)[:, 1:] == 0)
     frictional = solve_local(random_problem(8, 3, seed=3, mu=0.3))
-    assert frictional.converged and "newton" in frictional.message
+    assert frictional.success and "newton" in frictional.message
 
 
 # --- bad input ------------------------------------------------------------------------------
@@ -363,5 +368,5 @@ def test_numpy_scalars_are_valid_options():
     # as for the Tresca and polygonal routes (numbers.Real / numbers.Integral)
     problem = LocalProblem(np.eye(3), [-1.0, 0.0, 0.0], [0.3], 3)
     solution = solve_coulomb(problem, tol=np.float32(1e-8), max_iter=np.int64(5))
-    assert solution.converged
-    np.testing.assert_allclose(solution.r, [1.0, 0.0, 0.0], atol=1e-12)
+    assert solution.success
+    np.testing.assert_allclose(solution.forces, [1.0, 0.0, 0.0], atol=1e-12)

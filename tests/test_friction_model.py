@@ -174,7 +174,8 @@ def test_two_bodies_in_frictional_contact_slip_relative_to_each_other(Q):
     normal = N - 4.0 * gap / 2  # the springs close the gap, the rest is contact force
     friction = np.clip(Q, -mu * normal, mu * normal)
     np.testing.assert_allclose(result.forces[0], [normal, -friction], atol=1e-10)
-    np.testing.assert_allclose(result.x[[0, 2]], [(Q - friction) / k, -(Q - friction) / k],
+    np.testing.assert_allclose(result.displacements[[0, 2]], [(Q - friction) / k,
+                                                              -(Q - friction) / k],
                                atol=1e-10)
     np.testing.assert_allclose(result.slip[0, 0], 2 * (Q - friction) / k, atol=1e-10)
     assert result.status_labels == ["slip" if abs(Q) > mu * normal else "stick"]
@@ -212,7 +213,7 @@ def test_polygonal_cone_reduces_the_limit_across_a_side_not_at_a_vertex(facets):
         polygonal = cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets).solve()
         exact = cq.FrictionalProblem(model, P, [floor(3)], mu=mu).solve()
         assert polygonal.success and exact.success, (polygonal.message, exact.message)
-        assert polygonal.solver == "polygonal" and exact.solver == "coulomb"
+        assert polygonal.method == "polygonal" and exact.method == "coulomb"
         local_direction = np.array([direction[0], -direction[1]])
         np.testing.assert_allclose(polygonal.tangential_forces[0], -limit * local_direction,
                                    atol=1e-7 * N)
@@ -276,13 +277,13 @@ def test_certificate_rejects_wrong_answers():
     assert good.success
     r = good.forces.copy()
     r[:, 1] *= 1.5  # friction beyond the cone somewhere, or sticking forces changed
-    bad = problem.make_result(r.ravel(), solver="test", converged=True, message="", nit=0,
-                              wall_time=0.0)
+    bad = problem.make_result(r.ravel(), method="test", converged=True, message="", iterations=0,
+                              seconds=0.0)
     assert not bad.success and bad.status == 2 and not bad.certificate.passed
     flipped = good.forces.copy()
     flipped[:, 1] *= -1.0  # friction pushing along the slip: no longer maximum dissipation
-    wrong = problem.make_result(flipped.ravel(), solver="test", converged=True, message="",
-                                nit=0, wall_time=0.0)
+    wrong = problem.make_result(flipped.ravel(), method="test", converged=True, message="",
+                                iterations=0, seconds=0.0)
     assert wrong.certificate.equilibrium < 1e-12  # U is recomputed from the forces...
     assert not wrong.certificate.passed  # ...but the law is violated
 
@@ -312,8 +313,9 @@ def test_a_soft_node_away_from_the_contacts_does_not_blunt_status_or_certificate
     assert good.success, good.message
     assert good.status_labels == ["slip"] and good.slip[0, 0] > 9e-6
     wrong = good.forces * 0.99  # 1 % short of the normal force: 1e-5 m interpenetration
-    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
-                              wall_time=0.0)
+    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
+                              iterations=0,
+                              seconds=0.0)
     assert bad.gaps[0] == pytest.approx(-1e-5, rel=1e-6)
     assert not bad.success and bad.certificate.penetration > 1e-3
 
@@ -332,8 +334,9 @@ def test_a_large_load_away_from_the_contacts_does_not_blunt_the_cone_check():
     assert good.success and good.status_labels == ["slip"], good.message
     wrong = good.forces.copy()
     wrong[0, 1:] *= 1.01
-    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
-                              wall_time=0.0)
+    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
+                              iterations=0,
+                              seconds=0.0)
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
@@ -348,8 +351,9 @@ def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
     assert good.success and good.status_labels == ["slip", "open"], good.message
     wrong = good.forces.copy()
     wrong[0, 1] *= 1.01
-    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
-                              wall_time=0.0)
+    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
+                              iterations=0,
+                              seconds=0.0)
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
@@ -393,7 +397,8 @@ def test_a_wide_gap_elsewhere_does_not_loosen_the_solution(solver, facets, rtol)
     assert solved.success and solved.status_labels[-1] == "open", solved.message
     np.testing.assert_allclose(solved.forces[:6], near.forces, rtol=0,
                                atol=rtol * np.abs(near.forces).max())
-    np.testing.assert_allclose(solved.x[:12], near.x, rtol=0, atol=rtol * np.abs(near.x).max())
+    np.testing.assert_allclose(solved.displacements[:12], near.displacements, rtol=0,
+                               atol=rtol * np.abs(near.displacements).max())
     # the same solve stopped on the FCLIB measure alone: the certificate now sees the difference
     loose = far.solve(solver=solver, per_contact=False)
     assert np.abs(loose.forces[:6] - near.forces).max() > 1e-7 * np.abs(near.forces).max()
@@ -422,14 +427,16 @@ def test_each_contact_is_certified_on_its_own_scales():
     assert good.success, good.message
     wrong = good.forces.copy()
     wrong[:6] *= 1.01
-    bad = problem.make_result(wrong.ravel(), solver="test", converged=True, message="", nit=0,
-                              wall_time=0.0)
+    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
+                              iterations=0,
+                              seconds=0.0)
     assert not bad.success and bad.certificate.complementarity > 1e-3
     # but a rounding-sized force on the open contact is judged against the contacts' forces
     noisy = good.forces.copy()
     noisy[6] = [1e-13, 1e-13]
-    fine = problem.make_result(noisy.ravel(), solver="test", converged=True, message="", nit=0,
-                               wall_time=0.0)
+    fine = problem.make_result(noisy.ravel(), method="test", converged=True, message="",
+                               iterations=0,
+                               seconds=0.0)
     assert fine.success and fine.status_labels[6] == "open", fine.message
 
 
@@ -441,13 +448,14 @@ def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
                                      [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0], nodes=[0])])
     forces = np.array([990.0])  # 1 % short of the 1000 N the contact carries
     U = frictionless.dual().displacements(forces)
-    bad = frictionless.make_result(U, forces, solver="test", converged=True, message="", nit=0,
-                                   wall_time=0.0)
+    bad = frictionless.make_result(U, forces, method="test", converged=True, message="",
+                                   iterations=0,
+                                   seconds=0.0)
     assert bad.gaps[0] == pytest.approx(-1e-5, rel=1e-6)
     assert not bad.success and bad.certificate.penetration > 1e-3
     good = frictionless.make_result(frictionless.dual().displacements([1000.0]), [1000.0],
-                                    solver="test", converged=True, message="", nit=0,
-                                    wall_time=0.0)
+                                    method="test", converged=True, message="", iterations=0,
+                                    seconds=0.0)
     assert good.success, good.message
 
 
@@ -457,8 +465,8 @@ def test_frictionless_certificate_judges_each_contact_on_its_own_length():
     good = cq.solve(problem)
     assert good.success, good.message
     wrong = good.forces * 1.01
-    bad = problem.make_result(problem.dual().displacements(wrong), wrong, solver="test",
-                              converged=True, message="", nit=0, wall_time=0.0)
+    bad = problem.make_result(problem.dual().displacements(wrong), wrong, method="test",
+                              converged=True, message="", iterations=0, seconds=0.0)
     assert not bad.success and bad.certificate.complementarity > 1e-3
 
 
@@ -502,8 +510,8 @@ def test_bad_models_and_solvers_are_clear_errors():
     with pytest.raises(cq.InvalidInputError, match="loads"):
         coupled_problem(0).with_loads(["a"] * 6)
     with pytest.raises(cq.InvalidInputError, match="forces must hold 2 local components"):
-        coupled_problem(0).make_result(np.zeros(5), solver="test", converged=True, message="",
-                                       nit=0, wall_time=0.0)
+        coupled_problem(0).make_result(np.zeros(5), method="test", converged=True, message="",
+                                       iterations=0, seconds=0.0)
 
 
 def test_cohesion_on_a_gapped_contact_is_refused():

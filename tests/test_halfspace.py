@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 
 from contactqp import ContactProblem, GapObstacle, InvalidInputError, ReducedModel, solve
 from contactqp.compliance import grid, influence_matrix, normal_influence
+from contactqp.core.status import ContactStatus
 
 E, NU = 210e9, 0.3  # steel-like half-space (Pa, -)
 KERNEL = (1.0 - NU**2) / (np.pi * E)  # Boussinesq: w = KERNEL * F / r  (m/N . m)
@@ -301,16 +302,17 @@ def test_hertz_rigid_sphere(n, cells_per_radius):
     assert np.max(np.abs(pressure[inner] - profile)) < 1e-2 * p0
 
     r = np.sqrt(r2)
-    assert np.all(result.closed[r < a - h])
-    assert not np.any(result.closed[r > a + h])
-    a_equivalent = np.sqrt(np.count_nonzero(result.closed) * h * h / np.pi)
+    assert np.all((result.contact_status == ContactStatus.CLOSED)[r < a - h])
+    assert not np.any((result.contact_status == ContactStatus.CLOSED)[r > a + h])
+    a_equivalent = np.sqrt(np.count_nonzero(result.contact_status == ContactStatus.CLOSED)
+                           * h * h / np.pi)
     assert abs(a_equivalent - a) < 0.5 * h
 
     # Physical signs: the surface sinks under the sphere and follows it in contact; the contact
     # loads on the half-space point into it; outside the contact the gap stays open.
-    closed = result.closed
-    assert np.allclose(result.x[closed], gaps[closed], rtol=0, atol=1e-9 * d)
-    assert np.all(result.x < 0.0)
+    closed = result.contact_status == ContactStatus.CLOSED
+    assert np.allclose(result.displacements[closed], gaps[closed], rtol=0, atol=1e-9 * d)
+    assert np.all(result.displacements < 0.0)
     assert np.all(result.nodal_forces <= 0.0)
     assert np.all(result.gaps[~closed] >= -1e-9 * d)
     # Outside the contact the surface displacement matches Hertz's (Johnson, Contact Mechanics,
@@ -319,7 +321,7 @@ def test_hertz_rigid_sphere(n, cells_per_radius):
     outside = r > a + 2 * h
     ratio = r[outside] / a
     u_hertz = -d / np.pi * ((2 - ratio**2) * np.arcsin(1 / ratio) + np.sqrt(ratio**2 - 1))
-    assert np.max(np.abs(result.x[outside] - u_hertz)) < 1e-2 * d
+    assert np.max(np.abs(result.displacements[outside] - u_hertz)) < 1e-2 * d
 
 
 # --------------------------------------------------------------------------------------------

@@ -66,8 +66,8 @@ def test_loads_and_gaps_that_would_overflow_are_refused(loads, gaps, match):
 def test_a_non_finite_or_overflowing_answer_fails_the_certificate(bad):
     # was: NaN residuals read as 0 (max(0, nan) is 0): a NaN answer "passed" its certificate
     problem = cq.ContactProblem(cq.ReducedModel(flexibility=R), LOADS, [cq.GapObstacle([0, 1], GAPS)])
-    result = problem.make_result([bad, 0.0], [bad, 0.0], solver="test", converged=True,
-                                 message="done", nit=1, wall_time=0.0)
+    result = problem.make_result([bad, 0.0], [bad, 0.0], method="test", converged=True,
+                                 message="done", iterations=1, seconds=0.0)
     assert not result.certificate.passed and not result.success and result.status == 2
     assert result.certificate.worst == np.inf
     assert "NaN or inf" in result.message
@@ -79,8 +79,8 @@ def test_a_non_finite_frictional_answer_fails_the_certificate():
     forces = np.zeros(3 * problem.n_contacts)
     forces[0] = 1e300  # finite, but U = R H^T r and the residuals overflow
     for r in (forces, np.where(forces > 0, np.inf, 0.0)):
-        result = problem.make_result(r, solver="test", converged=True, message="done", nit=1,
-                                     wall_time=0.0)
+        result = problem.make_result(r, method="test", converged=True, message="done", iterations=1,
+                                     seconds=0.0)
         assert not result.success and result.status == 2 and "NaN or inf" in result.message
 
 
@@ -163,7 +163,7 @@ def test_a_node_between_two_walls_or_in_a_corner_is_legitimate():
     for obstacles in (slot, corner):
         result = cq.solve(cq.ContactProblem(model, [1500.0, 1500.0, 0.0, 0.0], obstacles))
         assert result.success
-        np.testing.assert_allclose(result.x[0], 1e-3, rtol=1e-9)
+        np.testing.assert_allclose(result.displacements[0], 1e-3, rtol=1e-9)
 
 
 # 4. complex input ----------------------------------------------------------------------------
@@ -191,7 +191,7 @@ def test_a_single_obstacle_needs_no_list():
     obstacle = cq.GapObstacle([0, 1], GAPS)
     alone = cq.solve(cq.ContactProblem(model, LOADS, obstacle))
     listed = cq.solve(cq.ContactProblem(model, LOADS, [obstacle]))
-    assert alone.success and np.array_equal(alone.x, listed.x)
+    assert alone.success and np.array_equal(alone.displacements, listed.displacements)
     frictional = cq.FrictionalProblem(*frictional_block(2), FLOOR, mu=0.3).solve()
     assert frictional.success and frictional.forces.shape == (2, 3)
 
@@ -217,9 +217,9 @@ def test_the_friction_routes_stop_at_max_iter(solver, facets, max_iter):
     model, loads = frictional_block()
     problem = cq.FrictionalProblem(model, loads, FLOOR, mu=0.3, facets=facets)
     free = problem.solve(solver=solver)
-    assert free.success and free.nit > max_iter  # the problem needs more than max_iter
+    assert free.success and free.iterations > max_iter  # the problem needs more than max_iter
     capped = problem.solve(solver=solver, max_iter=max_iter)
-    assert capped.nit <= max_iter
+    assert capped.iterations <= max_iter
     assert not capped.success and capped.status == 1
     assert f"max_iter = {max_iter} reached" in capped.message
 
@@ -233,7 +233,7 @@ def test_the_coulomb_cap_counts_gauss_seidel_sweeps():
     problem = LocalProblem(np.zeros((3, 3)), [-1.0, 0.5, 0.0], [0.3], 3)
     for max_iter in (1, 50, 150):
         solution = solve_coulomb(problem, max_iter=max_iter)
-        assert not solution.converged and solution.iterations == max_iter
+        assert not solution.success and solution.iterations == max_iter
         assert f"max_iter = {max_iter} reached" in solution.message
 
 
@@ -245,6 +245,6 @@ def test_the_active_set_cap_caps_both_phases():
     problem = cq.ContactProblem(model, np.linspace(-1.0, 1.0, n) * 1e3,
                                 [cq.GapObstacle(range(n), np.full(n, 1e-5))])
     free = cq.solve(problem)
-    assert free.success and free.nit > 2
+    assert free.success and free.iterations > 2
     capped = cq.solve(problem, max_iter=2)
-    assert capped.nit <= 2 and not capped.success and capped.status == 1
+    assert capped.iterations <= 2 and not capped.success and capped.status == 1

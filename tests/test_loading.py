@@ -30,7 +30,7 @@ def example():
 
 def work_of_loads(history):
     """Trapezoid rule for the work of the loads, step by step (J)."""
-    P, U = history.loads, history.x
+    P, U = history.loads, history.displacements
     return np.sum(0.5 * (P[1:] + P[:-1]) * np.diff(U, axis=0), axis=1)
 
 
@@ -90,8 +90,9 @@ def test_state_is_carried_over(example):
     loads = cq.linear_path([[0.0, -20.0], [7.0, -20.0], [0.0, -20.0]], 2)
     history = cq.solve_history(problem, loads)
     assert history.success
-    np.testing.assert_allclose(history.x[-1, 0], 7.0 - 4.0, atol=1e-10)
-    np.testing.assert_allclose(problem.with_loads(loads[-1]).solve().x[0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(history.displacements[-1, 0], 7.0 - 4.0, atol=1e-10)
+    np.testing.assert_allclose(problem.with_loads(loads[-1]).solve().displacements[0], 0.0,
+                               atol=1e-12)
     np.testing.assert_allclose(history.slip[:, 0, 0], [0.0, 0.0, 3.0, 0.0, 0.0], atol=1e-9)
     assert history.contact_status[:, 0].tolist() == [1, 1, 2, 1, 1]
 

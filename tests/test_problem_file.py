@@ -25,6 +25,7 @@ import scipy.sparse
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from contactqp.core.status import ContactStatus
 from contactqp import (
     ContactProblem,
     FileFormatError,
@@ -125,14 +126,14 @@ gaps = [{gap}]
     result = spec.solve()
     assert result.success
     U_true, F_true = min(r * P, gap), max(P - gap / r, 0.0)
-    np.testing.assert_allclose(result.x, [U_true], rtol=RTOL)
+    np.testing.assert_allclose(result.displacements, [U_true], rtol=RTOL)
     np.testing.assert_allclose(result.forces, [F_true], rtol=RTOL, atol=1e-9 * P)
-    assert bool(result.closed[0]) == (r * P > gap)
+    assert bool(result.contact_status[0] == ContactStatus.CLOSED) == (r * P > gap)
 
     # The same problem built in Python gives the same answer.
     direct = solve(ContactProblem(ReducedModel(flexibility=[[r]]), [P],
                                   [GapObstacle([0], [gap])]))
-    np.testing.assert_allclose(result.x, direct.x, rtol=1e-14)
+    np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
     np.testing.assert_allclose(result.forces, direct.forces, rtol=1e-14, atol=1e-12)
 
 
@@ -160,14 +161,14 @@ directions = [[1.0], [1.0]]
     assert spec.name == "coupled pair"
     result = spec.solve()
     assert result.success
-    np.testing.assert_allclose(result.x, [1e-3, 2e-4], rtol=RTOL)
+    np.testing.assert_allclose(result.displacements, [1e-3, 2e-4], rtol=RTOL)
     np.testing.assert_allclose(result.forces, [400.0, 0.0], rtol=RTOL, atol=1e-9 * 1000)
     assert result.status_labels == ["closed", "open"]
     np.testing.assert_allclose(result.gaps, [0.0, 8e-4], atol=1e-15)
 
     direct = solve(ContactProblem(ReducedModel(flexibility=R), [1000.0, -200.0],
                                   [GapObstacle([0, 1], [1e-3, 1e-3])]))
-    np.testing.assert_allclose(result.x, direct.x, rtol=1e-14)
+    np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
 
 
 def test_stiffness_from_npz_key_and_qp_solver(tmp_path):
@@ -199,7 +200,7 @@ max_iter = 300
     assert spec.problem.model.given == "stiffness"
     result = spec.solve()
     assert result.success, result.message
-    np.testing.assert_allclose(result.x, [1e-3, 2e-4], rtol=1e-7)
+    np.testing.assert_allclose(result.displacements, [1e-3, 2e-4], rtol=1e-7)
     np.testing.assert_allclose(result.forces, [400.0, 0.0], rtol=1e-7, atol=1e-6)
 
 
@@ -222,10 +223,10 @@ direction = [1.0]
     result = load_problem_file(path).solve()
     assert result.success
     np.testing.assert_allclose(result.forces, [125.0], rtol=RTOL)
-    np.testing.assert_allclose(result.x, [0.875e-3, 0.375e-3], rtol=RTOL)
+    np.testing.assert_allclose(result.displacements, [0.875e-3, 0.375e-3], rtol=RTOL)
     direct = solve(ContactProblem(ReducedModel(flexibility=np.diag([1e-6, 3e-6])),
                                   [1000.0, 0.0], [NodePairs([[0, 1]], [0.5e-3])]))
-    np.testing.assert_allclose(result.x, direct.x, rtol=1e-14)
+    np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
 
 
 def test_plane_obstacle_by_hand(tmp_path):
@@ -250,11 +251,11 @@ normal = [0.0, -1.0]
     result = load_problem_file(path).solve()
     assert result.success
     np.testing.assert_allclose(result.forces, [200.0], rtol=RTOL)
-    np.testing.assert_allclose(result.x, [-0.05e-3, -0.1e-3], rtol=RTOL)
+    np.testing.assert_allclose(result.displacements, [-0.05e-3, -0.1e-3], rtol=RTOL)
     direct = solve(ContactProblem(ReducedModel(flexibility=R, dofs_per_node=2,
                                                coordinates=[[0.0, 0.0]]),
                                   [0.0, -300.0], [PlaneObstacle([0.0, -1e-4], [0.0, -1.0])]))
-    np.testing.assert_allclose(result.x, direct.x, rtol=1e-14)
+    np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
 
 
 def test_example_two_springs_matches_its_derivation():
@@ -263,7 +264,7 @@ def test_example_two_springs_matches_its_derivation():
     assert spec.name == "two springs against two stops"
     result = spec.solve()
     assert result.success
-    np.testing.assert_allclose(result.x, [3e-4, 1e-3], rtol=RTOL)
+    np.testing.assert_allclose(result.displacements, [3e-4, 1e-3], rtol=RTOL)
     np.testing.assert_allclose(result.forces, [100.0, 300.0], rtol=RTOL)
     np.testing.assert_allclose(result.gaps, [0.0, 0.0], atol=1e-15)
     assert result.status_labels == ["closed", "closed"]
@@ -295,7 +296,8 @@ gaps = [{gap!r}]
     assert result.success
     scale_u = max(abs(r * P), abs(gap))
     scale_f = max(abs(P), abs(gap) / r)
-    np.testing.assert_allclose(result.x, [min(r * P, gap)], rtol=1e-9, atol=1e-12 * scale_u)
+    np.testing.assert_allclose(result.displacements, [min(r * P, gap)], rtol=1e-9,
+                               atol=1e-12 * scale_u)
     np.testing.assert_allclose(result.forces, [max(P - gap / r, 0.0)], rtol=1e-9,
                                atol=1e-9 * scale_f)
 
@@ -315,7 +317,7 @@ gaps = [0.0]
     result = load_problem_file(path).solve()
     assert result.success, result.message
     np.testing.assert_allclose(result.forces, [1.0], rtol=RTOL)
-    assert abs(result.x[0]) < 1e-15
+    assert abs(result.displacements[0]) < 1e-15
     assert result.success, result.message
 
 
@@ -510,7 +512,7 @@ def test_write_results_round_trip(tmp_path):
         rows = list(csv.DictReader(handle))
     assert list(rows[0]) == ["node", "freedom", "u"]
     assert [(int(r["node"]), int(r["freedom"])) for r in rows] == [(0, 0), (1, 1)]
-    np.testing.assert_array_equal([float(r["u"]) for r in rows], result.x)
+    np.testing.assert_array_equal([float(r["u"]) for r in rows], result.displacements)
 
     with open(out / "contacts.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
@@ -524,13 +526,13 @@ def test_write_results_round_trip(tmp_path):
     assert [r["status"] for r in rows] == ["closed", "closed"]
 
     with np.load(out / "result.npz") as data:
-        assert sorted(data.files) == sorted(["x", "forces", "nodal_forces", "gaps", "closed"])
-        np.testing.assert_array_equal(data["x"], result.x)
+        assert sorted(data.files) == sorted(["displacements", "forces", "nodal_forces", "gaps",
+                                             "contact_status"])
+        np.testing.assert_array_equal(data["displacements"], result.displacements)
         np.testing.assert_array_equal(data["forces"], result.forces)
         np.testing.assert_array_equal(data["nodal_forces"], result.nodal_forces)
         np.testing.assert_array_equal(data["gaps"], result.gaps)
-        assert data["closed"].dtype == bool
-        np.testing.assert_array_equal(data["closed"], result.closed)
+        np.testing.assert_array_equal(data["contact_status"], [ContactStatus.CLOSED] * 2)
     # nodal forces are the stop forces acting against +x: -[100, 300] N (hand derivation)
     np.testing.assert_allclose(result.nodal_forces, [-100.0, -300.0], rtol=RTOL)
 
@@ -608,8 +610,8 @@ def test_example_block_on_floor_matches_its_derivation():
     assert result.status_labels == ["stick", "slip"]
     np.testing.assert_allclose(result.normal_forces, N, rtol=1e-9)
     np.testing.assert_allclose(result.tangential_forces[:, 0], -np.minimum(T, limit), rtol=1e-9)
-    np.testing.assert_allclose(result.x[0::2], u_x, rtol=1e-9, atol=1e-9 * u_x.max())
-    np.testing.assert_allclose(result.x[1::2], [-gap, -gap], rtol=1e-9)
+    np.testing.assert_allclose(result.displacements[0::2], u_x, rtol=1e-9, atol=1e-9 * u_x.max())
+    np.testing.assert_allclose(result.displacements[1::2], [-gap, -gap], rtol=1e-9)
     np.testing.assert_allclose(result.slip[:, 0], u_x, rtol=1e-9, atol=1e-9 * u_x.max())
     np.testing.assert_allclose(result.dissipation, limit * u_x, rtol=1e-9,
                                atol=1e-9 * float(np.max(limit * u_x)))
@@ -659,7 +661,7 @@ def test_example_cyclic_block_matches_masing():
     assert isinstance(history, HistoryResult) and history.success
     assert len(history) == 13
     scale = np.max(np.abs(x))
-    np.testing.assert_allclose(history.x[:, 0::2], x, rtol=1e-9, atol=1e-9 * scale)
+    np.testing.assert_allclose(history.displacements[:, 0::2], x, rtol=1e-9, atol=1e-9 * scale)
     np.testing.assert_allclose(history.dissipated, dissipated, atol=1e-9 * dissipated.max())
     # the hand table of the file: 0.3 J in all, block 1 at +-x_max at the turning points
     np.testing.assert_allclose(history.dissipated.sum(), dissipated.sum(), rtol=1e-9)
@@ -721,7 +723,7 @@ def test_coupled_node_stick_and_slip_by_hand(tmp_path, route, T):
     assert result.status_labels == [status]
     rtol = 1e-9 if route == "coulomb" else 1e-7
     np.testing.assert_allclose(result.forces[0], [r_N, r_T], rtol=rtol)
-    np.testing.assert_allclose(result.x, [u_x, -g], rtol=rtol, atol=rtol * g)
+    np.testing.assert_allclose(result.displacements, [u_x, -g], rtol=rtol, atol=rtol * g)
 
 
 def test_per_contact_mu_and_cohesion_from_files(tmp_path):
@@ -742,7 +744,7 @@ def test_per_contact_mu_and_cohesion_from_files(tmp_path):
     assert result.success, result.message
     assert result.status_labels == ["stick", "slip"]
     np.testing.assert_allclose(result.tangential_forces[:, 0], -np.minimum(T, limit), rtol=1e-9)
-    np.testing.assert_allclose(result.x[2], (T[1] - limit[1]) / kx, rtol=1e-9)
+    np.testing.assert_allclose(result.displacements[2], (T[1] - limit[1]) / kx, rtol=1e-9)
 
 
 THREE_D = """
@@ -776,7 +778,7 @@ def test_three_d_exact_cone_slips_along_the_push(tmp_path):
     tangents = spec.problem.frames.tangents[0]                     # (2, 3)
     friction = result.tangential_forces[0] @ tangents               # global force vector
     np.testing.assert_allclose(friction[:2], -mu * N * direction, rtol=1e-9)
-    np.testing.assert_allclose(result.x[:2], (T - mu * N) / kt * direction, rtol=1e-9)
+    np.testing.assert_allclose(result.displacements[:2], (T - mu * N) / kt * direction, rtol=1e-9)
     assert result.status_labels == ["slip"]
 
 
@@ -797,7 +799,8 @@ def test_three_d_square_cone_slips_below_the_round_one(tmp_path, facets):
     assert result.success, result.message
     bound = mu * N * (1.0 if facets is None else np.cos(np.pi / facets))
     expected = max(T - bound, 0.0) / kt
-    np.testing.assert_allclose(result.x[:2], expected * t1[:2], rtol=1e-7, atol=1e-7 * T / kt)
+    np.testing.assert_allclose(result.displacements[:2], expected * t1[:2], rtol=1e-7,
+                               atol=1e-7 * T / kt)
     np.testing.assert_allclose(result.tangential_forces[0], [-min(T, bound), 0.0], rtol=1e-7,
                                atol=1e-7 * T)
     assert result.status_labels == ["stick" if facets is None else "slip"]
@@ -822,7 +825,8 @@ def test_points_history_equals_the_factors_history(tmp_path):
         np.testing.assert_allclose(spec.history, reference.history, rtol=1e-15, atol=1e-12)
         history = spec.solve()
         assert history.success
-        np.testing.assert_allclose(history.x[:, 0::2], x, rtol=1e-9, atol=1e-9 * np.abs(x).max())
+        np.testing.assert_allclose(history.displacements[:, 0::2], x, rtol=1e-9,
+                                   atol=1e-9 * np.abs(x).max())
         np.testing.assert_allclose(history.dissipated, dissipated, atol=1e-9 * dissipated.max())
         assert all(r["factor"] is None for r in spec.summary(history)["records"])
 
@@ -854,8 +858,8 @@ def test_write_friction_results(tmp_path):
         np.testing.assert_array_equal([float(r[name]) for r in rows], values, err_msg=name)
     with np.load(tmp_path / "result.npz") as data:
         assert sorted(data.files) == sorted([
-            "x", "forces", "nodal_forces", "gaps", "slip", "tangential_displacements",
-            "contact_status", "dissipation", "normals", "tangents"])
+            "displacements", "forces", "nodal_forces", "gaps", "slip",
+            "tangential_displacements", "contact_status", "dissipation", "normals", "tangents"])
         np.testing.assert_array_equal(data["forces"], result.forces)
         np.testing.assert_array_equal(data["contact_status"], [1, 2])
         # floor normal (0, -1) from the file; tangent: the normal turned by +90 degrees
@@ -876,7 +880,7 @@ def test_write_history_results(tmp_path):
     rows = read_rows(tmp_path / "displacements.csv")
     assert list(rows[0]) == ["step", "node", "freedom", "u"] and len(rows) == K * n
     u = np.array([float(r["u"]) for r in rows]).reshape(K, n)
-    np.testing.assert_array_equal(u, history.x)
+    np.testing.assert_array_equal(u, history.displacements)
     rows = read_rows(tmp_path / "contacts.csv")
     assert list(rows[0])[:2] == ["step", "row"] and len(rows) == K * k
     np.testing.assert_array_equal(
@@ -893,7 +897,7 @@ def test_write_history_results(tmp_path):
     np.testing.assert_allclose([float(r["cumulative_dissipated"]) for r in rows],
                                np.cumsum(dissipated), atol=1e-9 * dissipated.sum())
     with np.load(tmp_path / "result.npz") as data:
-        assert data["x"].shape == (K, n) and data["forces"].shape == (K, k, 2)
+        assert data["displacements"].shape == (K, n) and data["forces"].shape == (K, k, 2)
         assert data["slip"].shape == (K, k, 1) and data["contact_status"].shape == (K, k)
         np.testing.assert_array_equal(data["loads"], spec.history)
         np.testing.assert_array_equal(data["factors"], spec.factors)

@@ -29,9 +29,9 @@ def test_own_solver_agrees_with_primal_qp(n, seed):
     own = cq.solve(problem)
     reference = cq.solve(problem, "qp", backend="quadprog")
     assert own.success and reference.success, (own.message, reference.message)
-    scale_u = np.max(np.abs(reference.x))
+    scale_u = np.max(np.abs(reference.displacements))
     scale_f = max(np.max(np.abs(reference.forces)), np.max(np.abs(problem.loads)))
-    assert np.max(np.abs(own.x - reference.x)) <= 1e-8 * scale_u
+    assert np.max(np.abs(own.displacements - reference.displacements)) <= 1e-8 * scale_u
     assert np.max(np.abs(own.forces - reference.forces)) <= 1e-8 * scale_f
     assert own.certificate.worst < 1e-9
 
@@ -42,7 +42,8 @@ def test_qp_backends_agree_on_two_freedom_nodes(backend):
     own = cq.solve(problem)
     other = cq.solve(problem, "qp", backend=backend)
     assert own.success and other.success
-    np.testing.assert_allclose(other.x, own.x, atol=1e-7 * np.max(np.abs(own.x)))
+    np.testing.assert_allclose(other.displacements, own.displacements,
+                               atol=1e-7 * np.max(np.abs(own.displacements)))
 
 
 def test_single_contact_closed_form():
@@ -50,7 +51,7 @@ def test_single_contact_closed_form():
     r, P, g = 2e-6, 1500.0, 1e-3
     result = cq.solve_gaps([[r]], [P], [g])
     assert result.success
-    assert result.x[0] == pytest.approx(g, rel=1e-12)
+    assert result.displacements[0] == pytest.approx(g, rel=1e-12)
     assert result.forces[0] == pytest.approx(P - g / r, rel=1e-12)
     assert result.status_labels == ["closed"]
     assert result.energy == pytest.approx(0.5 * g * g / r - P * g, rel=1e-12)
@@ -59,8 +60,9 @@ def test_single_contact_closed_form():
 def test_certificate_rejects_a_wrong_answer():
     problem = random_problem(30, 3)
     good = cq.solve(problem)
-    wrong = problem.make_result(good.x * 1.01, good.forces, solver="test", converged=True,
-                                message="tampered", nit=0, wall_time=0.0)
+    wrong = problem.make_result(good.displacements * 1.01, good.forces, method="test",
+                                converged=True,
+                                message="tampered", iterations=0, seconds=0.0)
     assert good.success and not wrong.success and wrong.status == 2
     assert "certificate failed" in wrong.message
 
@@ -73,14 +75,15 @@ def test_stiffness_model_gives_the_same_answer():
                                                                   problem.constraints.matrix.toarray().sum(1)[:, None])])
     a, b = cq.solve(problem), cq.solve(twin)
     assert a.success and b.success
-    np.testing.assert_allclose(b.x, a.x, atol=1e-9 * np.max(np.abs(a.x)))
+    np.testing.assert_allclose(b.displacements, a.displacements,
+                               atol=1e-9 * np.max(np.abs(a.displacements)))
 
 
 def test_warm_start_reaches_the_same_answer_in_fewer_iterations():
     problem = random_problem(300, 5)
     cold = cq.solve(problem)
     warm = cq.solve(problem, forces0=cold.forces)
-    assert warm.success and warm.nit <= 1 < cold.nit
+    assert warm.success and warm.iterations <= 1 < cold.iterations
     np.testing.assert_allclose(warm.forces, cold.forces, atol=1e-10 * np.max(cold.forces))
 
 
@@ -107,7 +110,7 @@ def test_node_pairs_and_plane_obstacle():
     result = cq.solve(problem)
     assert result.forces[0] == pytest.approx((r0 * P - g) / (r0 + r1), rel=1e-12)
     plane = cq.ContactProblem(model, [P, 0.0], [cq.PlaneObstacle([0.0005], [1.0], nodes=[0])])
-    assert cq.solve(plane).x[0] == pytest.approx(0.0005, rel=1e-12)
+    assert cq.solve(plane).displacements[0] == pytest.approx(0.0005, rel=1e-12)
 
 
 def test_unknown_solver_is_a_clear_error():
@@ -124,10 +127,12 @@ def test_lawson_hanson_agrees_with_quadprog(seed):
     B = rng.standard_normal((n, n))
     S = B @ B.T + 0.1 * n * np.eye(n)
     q = rng.standard_normal(n) * 5
-    x, converged, _, _ = solve_nonnegative_qp(S, q)
+    solution = solve_nonnegative_qp(S, q)
+    x, converged = solution.x, solution.converged
     expected = qpsolvers.solve_qp(S, -q, lb=np.zeros(n), solver="quadprog")
     assert converged
     np.testing.assert_allclose(x, expected, atol=1e-9 * np.max(np.abs(expected)))
-    warm, converged, _, _ = solve_nonnegative_qp(S, q, x0=expected + 0.1)
+    solution = solve_nonnegative_qp(S, q, x0=expected + 0.1)
+    warm, converged = solution.x, solution.converged
     assert converged
     np.testing.assert_allclose(warm, expected, atol=1e-9 * np.max(np.abs(expected)))

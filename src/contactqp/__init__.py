@@ -14,7 +14,9 @@ from .core.model import ReducedModel, unit_load_compliance
 from .core.friction import FrictionLaw
 from .core.history import HistoryResult, linear_path, solve_history
 from .core.problem import ContactProblem, FrictionalProblem
-from .core.result import Certificate, ContactResult, FrictionalResult, FrictionCertificate
+from .core.certificate import Certificate, FrictionCertificate, LocalCertificate
+from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
+from .core.status import STATUS_LABELS, ContactStatus
 from .methods import SOLVERS, solve
 
 __all__ = [
@@ -22,7 +24,12 @@ __all__ = [
     "unit_load_compliance",
     "ContactProblem",
     "ContactResult",
+    "FastenedResult",
+    "LocalResult",
+    "ContactStatus",
+    "STATUS_LABELS",
     "Certificate",
+    "LocalCertificate",
     "FrictionalProblem",
     "FrictionalResult",
     "FrictionCertificate",

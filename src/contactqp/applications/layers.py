@@ -41,6 +41,7 @@ from ..errors import ContactError, InvalidInputError
 from ..core.history import MAX_STEPS, solve_history
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
+from ..core.status import ContactStatus
 
 __all__ = ["Layers", "LayersResult", "LayersError", "plot_layers"]
 
@@ -200,11 +201,12 @@ class Layers:
         if failed is not None:
             raise LayersError(f"step {failed} (actuator at {travel[failed]:.4g} m) not solved: "
                               f"{history.steps[failed].message}")
-        U = history.x.reshape(len(travel), -1, 2)
+        U = history.displacements.reshape(len(travel), -1, 2)
         load = (travel[:, None] - U[:, nodes, 0]) @ stiffness
         relative = (U[:, n:2 * n, 0] - U[:, :n, 0]).mean(axis=1)
         status = history.contact_status
-        sliding = np.all(status != 1, axis=1) & np.any(status == 2, axis=1)
+        sliding = (np.all(status != ContactStatus.STICK, axis=1)
+                   & np.any(status == ContactStatus.SLIP, axis=1))
         normal = history.forces[:, :, 0].sum(axis=1)
         return LayersResult(self, travel, load, relative, sliding, normal)
 

@@ -32,8 +32,8 @@ The dual QP is the frictionless one (:class:`~contactqp.core.problem.DualForm`) 
 of the fastener rows lifted to ``-inf``; :class:`FastenerClosure` eliminates the fastener
 multipliers (a Schur complement) and solves the remaining non-negative QP by Lawson and
 Hanson's active-set method (or the project's box-QP solver, or scipy's NNLS). The answer is
-returned as a certified :class:`~contactqp.core.result.ContactResult` of the contact problem in which
-the fastener tensions are external loads, and the closure of each fastener is checked
+returned as a certified :class:`~contactqp.core.result.FastenedResult`: the result of the contact
+problem in which the fastener tensions are external loads, the closure of each fastener checked
 separately. Fasteners are installed one after another (:meth:`RivetingModel.fasten`), each an
 increment warm-started from the previous one; without friction the final state does not depend
 on the order (a test checks it), the intermediate states do.
@@ -41,6 +41,7 @@ on the order (a test checks it), the intermediate states do.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -54,17 +55,14 @@ from ..core.contact import NodePairs
 from ..errors import InvalidInputError
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
-from ..core.result import ContactResult
+from ..core.result import CERTIFICATE_FAILED, ContactResult, FastenedResult
+from ..core.status import STATUS_LABELS, ContactStatus
 from ..methods import solve_box_qp
 from ..methods.lawson_hanson import solve_nonnegative_qp
 
-__all__ = ["Plate", "Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
+__all__ = ["Plate", "Assembly", "RivetingModel", "FasteningSequence",
            "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened",
-           "STATUS_LABELS",
            "write_vtu", "plot_status"]
-
-#: Pair status codes of :attr:`FastenedResult.status`, by index.
-STATUS_LABELS = ("open", "contact", "fastener")
 
 _EDGES = ("left", "right", "bottom", "top")
 
@@ -309,42 +307,6 @@ class RivetingModel:
 
 
 @dataclass
-class FastenedResult:
-    """The state after some fasteners are installed.
-
-    Attributes
-    ----------
-    contact : ContactResult
-        Certified result of the contact problem with the fastener tensions as loads: ``gaps``
-        (final, m), ``forces`` (contact compression per pair, N), ``x`` (deflections, m).
-    fasteners : ndarray of int, shape (f,)
-        Pairs closed by a fastener.
-    fastener_forces : ndarray, shape (f,)
-        Tension of each fastener (N, >= 0).
-    closure : float
-        Largest ``|gap|`` at the fasteners (m): zero up to round-off when the closure holds.
-    success : bool
-        Converged, certificate passed and closure within the certificate's tolerance.
-    multipliers : ndarray, shape (k,)
-        The dual solution: contact forces, minus the tension at fasteners (warm starts).
-    """
-
-    contact: ContactResult
-    fasteners: np.ndarray
-    fastener_forces: np.ndarray
-    closure: float
-    success: bool
-    multipliers: np.ndarray
-
-    @property
-    def status(self) -> np.ndarray:
-        """Status code per pair (index into :data:`STATUS_LABELS`): open, contact, fastener."""
-        codes = self.contact.closed.astype(int)
-        codes[self.fasteners] = 2
-        return codes
-
-
-@dataclass
 class FasteningSequence:
     """The states after each fastener of a sequence; ``steps[-1]`` is the assembled state."""
 
@@ -443,8 +405,9 @@ class FastenerClosure:
         q = dual.b[contacts] - self._eliminated.T @ q_rows
         x0 = None if forces0 is None else np.maximum(np.asarray(forces0, float)[contacts], 0)
         if method == "lawson-hanson":
-            forces, converged, nit, factorizations = solve_nonnegative_qp(
-                self.schur, q, x0, tol, max_iter=3 * len(q))
+            solution = solve_nonnegative_qp(self.schur, q, x0, tol, max_iter=3 * len(q))
+            forces, converged = solution.x, solution.converged
+            nit, factorizations = solution.iterations, solution.factorizations
             message = f"Lawson-Hanson {'converged' if converged else 'did not converge'}"
         elif method == "nnls":
             forces, converged, message, nit, factorizations = self._nnls(q)
@@ -463,15 +426,32 @@ class FastenerClosure:
         A = problem.constraints.matrix
         pulled = problem.variant(loads=problem.loads + A[rows].T @ tension)
         contact = pulled.make_result(
-            dual.displacements(multipliers), compression, solver=f"{method} (fastened)",
-            converged=converged, message=message, nit=nit, wall_time=time.perf_counter() - start,
-            info={"factorizations": factorizations, "method": method})
-        closure = float(np.max(np.abs(contact.gaps[rows])))
-        scale = max(float(np.max(np.abs(problem.constraints.gaps))),
-                    float(np.max(np.abs(contact.x))), np.finfo(float).tiny)
-        return FastenedResult(contact, rows, tension, closure,
-                              bool(contact.success and closure <= contact.certificate.tol * scale),
-                              multipliers)
+            dual.displacements(multipliers), compression, method=f"{method} (fastened)",
+            converged=converged, message=message, iterations=nit,
+            seconds=time.perf_counter() - start, info={"factorizations": factorizations})
+        return _fastened(contact, problem, rows, tension, multipliers)
+
+
+def _fastened(contact: ContactResult, problem: ContactProblem, rows, tension,
+              multipliers) -> FastenedResult:
+    """The :class:`FastenedResult` of ``contact``, the certified result of the problem pulled by
+    the fastener ``tension`` (N) at ``rows``: its closure checked, fastened pairs marked."""
+    closure = float(np.max(np.abs(contact.gaps[rows])))
+    scale = max(float(np.max(np.abs(problem.constraints.gaps))),
+                float(np.max(np.abs(contact.displacements))), np.finfo(float).tiny)
+    closed = bool(closure <= contact.certificate.tol * scale)
+    status, message = contact.status, contact.message
+    if contact.success and not closed:
+        status = CERTIFICATE_FAILED
+        message = (f"{message}; fastener closure failed (largest |gap| {closure:.2e} m > "
+                   f"{contact.certificate.tol:.0e} times {scale:.2e} m)")
+    codes = contact.contact_status.copy()
+    codes[rows] = ContactStatus.FASTENED
+    common = {f.name: getattr(contact, f.name) for f in dataclasses.fields(ContactResult)}
+    common.update(contact_status=codes, success=bool(contact.success and closed), status=status,
+                  message=message)
+    return FastenedResult(**common, fasteners=rows, fastener_forces=tension, closure=closure,
+                          multipliers=multipliers)
 
 
 def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson",
@@ -502,7 +482,7 @@ class FasteningCase(GapVariation):
 
     def solve_sample(self, gaps, warm):
         state = self.closure.solve(gaps, forces0=warm, **self.options)
-        record = self._record(state.contact)
+        record = self._record(state)
         record["fastener_force"] = state.fastener_forces
         record["success"] = state.success
         return record, state.multipliers
@@ -522,7 +502,8 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
     The lower grid at ``z = 0``, the upper one at ``z = thickness`` of the lower plate (for
     display). Point data: ``displacement`` (``w`` along ``z``, m), ``contact_force`` (N, on the
     node, along ``z``), ``initial_gap`` and ``gap`` (m), ``status`` (codes of
-    :data:`STATUS_LABELS`), ``fastener_force`` (N, zero away from fasteners).
+    :data:`~contactqp.core.status.STATUS_LABELS`: open, closed, fastened), ``fastener_force``
+    (N, zero away from fasteners).
     """
     from ..io.export import write_vtu as write_mesh
 
@@ -534,10 +515,10 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
     z = model.assembly.lower.thickness
     points = np.vstack([np.column_stack([model.points, np.zeros(k)]),
                         np.column_stack([model.points, np.full(k, z)])])
-    w = state.contact.x
+    w = state.displacements
     tension = np.zeros(k)
     tension[state.fasteners] = state.fastener_forces
-    force = state.contact.forces
+    force = state.forces
 
     def both(values):
         return np.concatenate([values, values])
@@ -546,7 +527,7 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
         "displacement": np.column_stack([np.zeros((2 * k, 2)), w]),
         "contact_force": np.column_stack([np.zeros((2 * k, 2)), np.concatenate([-force, force])]),
         "initial_gap": both(np.asarray(initial_gaps, dtype=float)),
-        "gap": both(state.contact.gaps), "status": both(state.status),
+        "gap": both(state.gaps), "status": both(state.contact_status),
         "fastener_force": both(tension),
     }
     return write_mesh(path, points, [("quad", np.vstack([quads, quads + k]))], data)
@@ -559,8 +540,10 @@ def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path)
     xy = model.points * 1e3
     figure, axes = subplots(3, 1, figsize=(7, 9.5), sharex=True)
     panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
-              (state.contact.gaps * 1e3, "residual gap (mm)", "viridis"),
-              (state.status, "status: " + " / ".join(STATUS_LABELS), "coolwarm")]
+              (state.gaps * 1e3, "residual gap (mm)", "viridis"),
+              (state.contact_status, "status: " + " / ".join(
+                  f"{code} {STATUS_LABELS[code]}" for code in FastenedResult.STATUSES),
+               "coolwarm")]
     for ax, (values, title, cmap) in zip(axes, panels):
         shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
         figure.colorbar(shown, ax=ax)

@@ -55,14 +55,12 @@ import scipy.linalg
 
 from ..core.contact import NodePairs
 from ..errors import InvalidInputError
-from ..core.friction import STATUS_LABELS
 from ..core.history import linear_path, solve_history
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import FrictionalProblem
 from ..core.result import FrictionalResult
 
-__all__ = ["Part", "FrictionAssembly", "FrictionRivetingModel", "FasteningStep",
-           "STATUS_LABELS"]
+__all__ = ["Part", "FrictionAssembly", "FrictionRivetingModel", "FasteningStep"]
 
 #: Freedoms per contact node: ``u_x, u_y, u_z``.
 _DOFS = 3
@@ -132,7 +130,7 @@ class FrictionAssembly:
         return FrictionRivetingModel(self, model, points, parts)
 
 
-@dataclass
+@dataclass(frozen=True)
 class FasteningStep:
     """The state after one step of a fastening sequence (or of the shear load after it).
 
@@ -140,41 +138,15 @@ class FasteningStep:
     ----------
     label : str
         What the step did, e.g. ``"fastener (3, 2)"`` or ``"shear 100 N"``.
-    gaps : ndarray, shape (k,)
-        Gap of each pair (m).
-    normal_forces : ndarray, shape (k,)
-        Compressive contact force of each pair (N).
-    tangential_forces : ndarray, shape (k, 2)
-        Friction force on the lower part along ``x`` and ``y`` (N).
-    status : ndarray of int, shape (k,)
-        Index into :data:`STATUS_LABELS`: open, stick, slip.
-    slip : ndarray, shape (k, 2)
-        Slip increment of the step, lower part relative to upper, along ``x`` and ``y`` (m).
-    dissipation : ndarray, shape (k,)
-        Energy dissipated by friction in the step per pair (J).
     result : FrictionalResult
-        The certified step (displacements, certificate, success).
+        The certified step: per pair (lower node first), ``gaps`` (m), ``forces`` (normal,
+        then the friction force on the lower part along ``x`` and ``y``, N),
+        ``contact_status`` (open, stick, slip), ``slip`` (lower part relative to upper, m) and
+        ``dissipation`` (J).
     """
 
     label: str
-    gaps: np.ndarray
-    normal_forces: np.ndarray
-    tangential_forces: np.ndarray
-    status: np.ndarray
-    slip: np.ndarray
-    dissipation: np.ndarray
     result: FrictionalResult
-
-    @classmethod
-    def from_result(cls, label: str, result: FrictionalResult) -> "FasteningStep":
-        """The step's fields read from a :class:`FrictionalResult` of the assembly."""
-        return cls(label, result.gaps, result.normal_forces, result.tangential_forces,
-                   result.contact_status, result.slip, result.dissipation, result)
-
-    @property
-    def status_labels(self) -> list[str]:
-        """``"open"``, ``"stick"`` or ``"slip"`` per pair."""
-        return [STATUS_LABELS[code] for code in self.status]
 
 
 class FrictionRivetingModel:
@@ -287,4 +259,4 @@ class FrictionRivetingModel:
         problem = FrictionalProblem(self.model, history[0], self.obstacles(gaps), mu,
                                     facets=facets)
         steps = solve_history(problem, np.array(history), **options).steps
-        return [FasteningStep.from_result(label, step) for label, step in zip(labels, steps)]
+        return [FasteningStep(label, step) for label, step in zip(labels, steps)]

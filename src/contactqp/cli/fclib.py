@@ -7,12 +7,13 @@ import sys
 from pathlib import Path
 
 import click
-import numpy as np
 
+from ..core.result import LocalResult
+from ..core.status import status_counts
 from ..errors import ContactError
 from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
 
-STATUSES = ("open", "stick", "slip")
+STATUSES = tuple(status.label for status in LocalResult.STATUSES)
 COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "seconds", *STATUSES)
 
 #: ``--solution-dir`` writes the solution of ``x.dat`` to ``DIR/x.dat`` + this suffix.
@@ -60,18 +61,21 @@ def fclib(files, tol, as_json, solution_dir):
             fail(message if message.startswith(str(path)) else f"{path}: {message}")
             exit_code = EXIT_BAD_INPUT
             continue
+        certificate = solution.certificate
+        counts = status_counts(solution.contact_status)
         record = {"file": str(path), "dim": problem.dim, "contacts": problem.n_contacts,
-                  "converged": solution.converged, "error": solution.error,
-                  "equilibrium": solution.equilibrium, **solution.limits.as_dict(),
+                  "converged": solution.success, "error": certificate.natural_map,
+                  "equilibrium": certificate.equilibrium, **certificate.limits.as_dict(),
                   "iterations": solution.iterations, "seconds": solution.seconds,
-                  **{s: int(np.count_nonzero(solution.status == s)) for s in STATUSES},
-                  "limits": solution.limits.describe(tol)}
-        if not solution.converged:
+                  **{s: counts[s] for s in STATUSES},
+                  "limits": certificate.limits.describe(tol)}
+        if not solution.success:
             fail(f"{path}: {solution.message}" + ("; no solution written" if solution_dir else ""))
             exit_code = max(exit_code, EXIT_NOT_SOLVED)
         elif solution_dir:
             solution_dir.mkdir(parents=True, exist_ok=True)
-            write_solution(targets[path], solution.r, solution.u, solution.v, source=path)
+            write_solution(targets[path], solution.forces, solution.displacements,
+                           solution.v, source=path)
         if as_json:
             click.echo(json.dumps(record))
         rows.append(record)

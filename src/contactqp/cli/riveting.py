@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..core.status import ContactStatus
 from .app import EXIT_NOT_SOLVED, cli, console, fail, warn
 
 
@@ -50,7 +51,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     """
     from ..studies.batch import GaussianGapField, load_batch, load_gap_samples, run_batch
     from ..io.export import write_csv
-    from ..applications.riveting import Assembly, FasteningCase, STATUS_LABELS, write_vtu
+    from ..applications.riveting import Assembly, FasteningCase, write_vtu
 
     model = Assembly().build()
     if gap_file is not None:
@@ -87,14 +88,15 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     xy = model.points
     write_vtu(model, final, out / "nominal.vtu", nominal_gaps)
     write_csv(out / "nominal_contacts.csv", {
-        "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.contact.gaps,
-        "force": final.contact.forces, "status": [STATUS_LABELS[s] for s in final.status]})
+        "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.gaps,
+        "force": final.forces, "status": final.status_labels})
     pairs = model.fasteners[sequence.order]
     write_csv(out / "nominal_sequence.csv", {
         "step": np.arange(1, len(pairs) + 1), "pair": pairs, "x": xy[pairs, 0], "y": xy[pairs, 1],
         "tension": [step.fastener_forces[-1] for step in sequence.steps],
-        "closed": [int(np.count_nonzero(step.contact.closed)) for step in sequence.steps],
-        "max_gap": [float(step.contact.gaps.max()) for step in sequence.steps]})
+        "closed": [int(np.count_nonzero(step.contact_status != ContactStatus.OPEN))
+                   for step in sequence.steps],
+        "max_gap": [float(step.gaps.max()) for step in sequence.steps]})
 
     summary = _run(case, source, samples, out / "samples.h5", workers, scheduler)
     data = load_batch(out / "samples.h5", samples)  # not the rest of a longer past study
@@ -119,7 +121,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
         _tables(model, sequence, summary, stats)
     if not sequence.success:
         fail("the nominal fastening sequence failed: "
-             + next(s.contact.message for s in sequence.steps if not s.success))
+             + next(s.message for s in sequence.steps if not s.success))
         sys.exit(EXIT_NOT_SOLVED)
     if summary.failed:
         fail(f"{summary.failed} of {summary.samples} samples failed (see 'success' in "
@@ -155,8 +157,8 @@ def _tables(model, sequence, summary, stats):
         pair = step.fasteners[-1]
         table.add_row(str(n), f"{model.points[pair, 0] * 1e3:.4g}",
                       f"{model.points[pair, 1] * 1e3:.4g}", f"{step.fastener_forces[-1]:.4g}",
-                      str(int(np.count_nonzero(step.contact.closed))),
-                      f"{step.contact.gaps.max() * 1e3:.4g}")
+                      str(int(np.count_nonzero(step.contact_status != ContactStatus.OPEN))),
+                      f"{step.gaps.max() * 1e3:.4g}")
     out.print(table)
     final = sequence.final
     out.print("final fastener tensions (N): "

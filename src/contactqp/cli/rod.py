@@ -73,7 +73,7 @@ def _rod_tables(model, comparisons):
         for column in ("x (mm)", "gap (mm)", "uy (mm)", "uy ref (mm)", "eps_x (%)", "eps_y (%)",
                        "force (N)"):
             table.add_column(column, justify="right")
-        uy = c.reduced.x.reshape(-1, 2)[:, 1]
+        uy = c.reduced.displacements.reshape(-1, 2)[:, 1]
         uy_ref = c.reference.displacements[model.node_indices, 1]
         for i in range(len(x)):
             table.add_row(

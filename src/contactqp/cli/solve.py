@@ -16,7 +16,11 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..core.status import ContactStatus, status_counts
 from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
+
+#: The status counts of a load history's table, in its column order.
+_HISTORY_STATUSES = (ContactStatus.STICK, ContactStatus.SLIP, ContactStatus.OPEN)
 
 
 @cli.command()
@@ -80,21 +84,22 @@ def _result_table(spec, result, title):
     constraints = spec.problem.constraints
     out = console()
     cert = result.certificate
+    work = (f"potential energy {result.energy:.6g} J, {result.iterations} iterations, "
+            f"{result.seconds * 1e3:.3g} ms; certificate worst residual {cert.worst:.2e} "
+            f"({'passed' if cert.passed else 'FAILED'}")
     if not spec.frictional:
-        table = _table(f"{title}: {result.solver}, {result.message}",
+        table = _table(f"{title}: {result.method}, {result.message}",
                        ("contact", "gap0 (m)", "gap (m)", "force (N)", "status"))
         for k in range(constraints.n_constraints):
             table.add_row(constraints.labels[k], f"{constraints.gaps[k]:.6g}",
                           f"{result.gaps[k]:.6g}", f"{result.forces[k]:.6g}",
                           result.status_labels[k])
         out.print(table)
-        out.print(f"energy {result.energy:.6g} J, {result.nit} iterations, "
-                  f"{result.wall_time * 1e3:.3g} ms; certificate worst residual {cert.worst:.2e} "
-                  f"({'passed' if cert.passed else 'FAILED'})")
+        out.print(f"{work})")
         return
     planar = spec.problem.dim == 2
     tangents = ["tangential (N)"] if planar else ["t1 (N)", "t2 (N)"]
-    table = _table(f"{title}: {result.solver}, {result.message}", (
+    table = _table(f"{title}: {result.method}, {result.message}", (
         "contact", "gap (m)", "normal (N)", *tangents, "slip (m)" if planar else "|slip| (m)",
         "status"))
     slips = result.slip[:, 0] if planar else np.linalg.norm(result.slip, axis=1)
@@ -106,23 +111,21 @@ def _result_table(spec, result, title):
     residuals = ", ".join(f"{name} {getattr(cert, name):.1e}" for name in (
         "cone", "complementarity", "dissipation", "equilibrium", "natural_map"))
     out.print(f"dissipated {result.dissipated:.6g} J, elastic energy "
-              f"{result.elastic_energy:.6g} J, {result.nit} iterations, "
-              f"{result.wall_time * 1e3:.3g} ms; certificate worst "
-              f"residual {cert.worst:.2e} ({'passed' if cert.passed else 'FAILED'}; {residuals})")
+              f"{result.elastic_energy:.6g} J, {work}; {residuals})")
 
 
 def _history_table(spec, result, summary, written):
     """Per-step table, totals and the final state of a load history."""
     table = _table(f"{spec.name}: {spec.solver}, {summary['steps']} steps", (
-        "step", "factor", "stick", "slip", "open", "dissipated (J)", "cumulative (J)", "iter",
-        "residual"), number_width=None)
+        "step", "factor", *(status.label for status in _HISTORY_STATUSES), "dissipated (J)",
+        "cumulative (J)", "iter", "residual"), number_width=None)
     cumulative = np.cumsum(result.dissipated)
     for k, step in enumerate(result.steps):
         factor = spec.step_factor(k)
-        counts = np.bincount(step.contact_status, minlength=3)
-        table.add_row(str(k), "-" if factor is None else f"{factor:g}", str(counts[1]),
-                      str(counts[2]), str(counts[0]), f"{step.dissipated:.4g}",
-                      f"{cumulative[k]:.4g}", str(step.nit),
+        counts = status_counts(step.contact_status)
+        table.add_row(str(k), "-" if factor is None else f"{factor:g}",
+                      *(str(counts[status.label]) for status in _HISTORY_STATUSES),
+                      f"{step.dissipated:.4g}", f"{cumulative[k]:.4g}", str(step.iterations),
                       f"{step.certificate.worst:.1e}" if step.success else "FAILED")
     out = console()
     out.print(table)

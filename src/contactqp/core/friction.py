@@ -35,13 +35,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidInputError
-from .model import finite_array
 from ..methods.polygonal import polygon_normals
+from .model import finite_array
+from .status import ContactStatus
 
-__all__ = ["FrictionLaw", "STATUS_LABELS", "apex_distance"]
-
-#: Contact status codes of :meth:`FrictionLaw.status`, by index.
-STATUS_LABELS = ("open", "stick", "slip")
+__all__ = ["FrictionLaw", "apex_distance"]
 
 
 def _per_contact(value, name: str, count: int) -> np.ndarray:
@@ -169,11 +167,12 @@ class FrictionLaw:
         return self.bound(r[:, 0]) * self.support(-s) + np.sum(r[:, 1:] * s, axis=1)
 
     def status(self, forces, slips, force_tol: float, slip_tol: float) -> np.ndarray:
-        """Status code per contact (index into :data:`STATUS_LABELS`).
+        """:class:`~contactqp.core.status.ContactStatus` code per contact: open, stick or slip.
 
         Open: the force measured from the apex is zero (``||r~|| <= force_tol``, N). Slip:
         closed and ``||s_T|| > slip_tol`` (m). Stick otherwise.
         """
         carries = np.linalg.norm(self.apex_forces(forces), axis=1) > force_tol
         slipping = np.linalg.norm(np.asarray(slips, dtype=float), axis=1) > slip_tol
-        return np.where(carries, np.where(slipping, 2, 1), 0)
+        return np.where(carries, np.where(slipping, ContactStatus.SLIP, ContactStatus.STICK),
+                        ContactStatus.OPEN)

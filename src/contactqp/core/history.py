@@ -107,9 +107,19 @@ class HistoryResult:
         return np.array([step.loads for step in self.steps])
 
     @property
-    def x(self) -> np.ndarray:
+    def iterations(self) -> int:
+        """Iterations of all the steps."""
+        return sum(step.iterations for step in self.steps)
+
+    @property
+    def seconds(self) -> float:
+        """Wall time of all the steps (s)."""
+        return float(sum(step.seconds for step in self.steps))
+
+    @property
+    def displacements(self) -> np.ndarray:
         """Displacements after each step (m), shape (K, n)."""
-        return np.array([step.x for step in self.steps])
+        return np.array([step.displacements for step in self.steps])
 
     @property
     def forces(self) -> np.ndarray:
@@ -123,7 +133,8 @@ class HistoryResult:
 
     @property
     def contact_status(self) -> np.ndarray:
-        """Status codes (open, stick, slip) per step and contact, shape (K, k)."""
+        """Status codes (:class:`~contactqp.core.status.ContactStatus`: open, stick, slip) per
+        step and contact, shape (K, k)."""
         return np.array([step.contact_status for step in self.steps])
 
     @property

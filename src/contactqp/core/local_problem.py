@@ -725,7 +725,8 @@ def _row_squares(x, d):
 
 
 def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.ndarray:
-    """Per-contact status of a solution: ``"open"``, ``"stick"`` or ``"slip"``.
+    """Per-contact status of a solution: open, stick or slip
+    (:class:`~contactqp.core.status.ContactStatus` codes).
 
     A contact is open when its reaction, measured from the cone apex
     (``r + apex_shift``), is zero; otherwise it slips when its tangential velocity is nonzero,
@@ -747,10 +748,8 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
 
     Returns
     -------
-    numpy.ndarray of str, shape (n_contacts,)
+    numpy.ndarray of int, shape (n_contacts,)
     """
-    from .friction import STATUS_LABELS
-
     d = problem.dim
     nc = problem.n_contacts
     rv, uv = _candidate(problem, r, u)
@@ -759,9 +758,8 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     force = max(np.linalg.norm(rv), np.linalg.norm(rv + problem.apex_shift),
                 np.linalg.norm(problem.q) / w, np.linalg.norm(uv) / w)
     force = force if force > 0 else 1.0
-    codes = problem.law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
-                               rtol * w * force)
-    return np.array(STATUS_LABELS)[codes]
+    return problem.law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
+                              rtol * w * force)
 
 
 #: A sparse matrix of at most this size, or at least this full, is factored dense (LAPACK beats

@@ -43,8 +43,9 @@ from .friction import FrictionLaw
 from .local_problem import LocalProblem
 from .model import (MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance,
                     real_array)
-from .result import (CERTIFICATE_TOL, ContactResult, FrictionalResult, certify, certify_friction,
-                     contact_scales)
+from .certificate import CERTIFICATE_TOL, certify, certify_friction, contact_scales
+from .result import CERTIFICATE_FAILED, NOT_CONVERGED, SUCCESS, ContactResult, FrictionalResult
+from .status import ContactStatus
 
 __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "LocalForm",
            "friction_route"]
@@ -139,6 +140,12 @@ class ContactProblem:
             self._dual = DualForm(self.model, self.constraints, self.loads)
         return self._dual
 
+    def free_displacements(self) -> np.ndarray:
+        """``R P`` (m): the displacements under the loads alone (the dual's, once assembled)."""
+        if self._dual is not None:
+            return self._dual.free_displacements
+        return self.model.displacements(self.loads)
+
     def variant(self, *, loads=None, gaps=None) -> "ContactProblem":
         """The same model and constraints under other loads and/or initial gaps.
 
@@ -177,18 +184,19 @@ class ContactProblem:
         internal = self.loads - self.constraints.matrix.T @ np.asarray(forces, dtype=float)
         return float(0.5 * U @ internal - self.loads @ U)
 
-    def make_result(self, displacements, forces, *, solver: str, converged: bool, message: str,
-                    nit: int, wall_time: float, info: dict | None = None) -> ContactResult:
+    def make_result(self, displacements, forces, *, method: str, converged: bool, message: str,
+                    iterations: int, seconds: float, info: dict | None = None) -> ContactResult:
         """Wrap a solver's answer in a :class:`ContactResult` with its certificate.
 
         An answer holding NaN or inf (an overflow, or a backend that found nothing) fails the
         certificate (status 2) and the message says so; numpy's warnings are kept inside.
         """
         with np.errstate(all="ignore"):
-            return self._result(displacements, forces, solver=solver, converged=converged,
-                                message=message, nit=nit, wall_time=wall_time, info=info)
+            return self._result(displacements, forces, method=method, converged=converged,
+                                message=message, iterations=iterations, seconds=seconds,
+                                info=info)
 
-    def _result(self, displacements, forces, *, solver, converged, message, nit, wall_time,
+    def _result(self, displacements, forces, *, method, converged, message, iterations, seconds,
                 info) -> ContactResult:
         U = np.asarray(displacements, dtype=float)
         lam = np.asarray(forces, dtype=float)
@@ -196,11 +204,14 @@ class ContactProblem:
         force_scale = max(np.max(np.abs(self.loads), initial=0.0), np.max(np.abs(lam), initial=0.0))
         status, success, message = _verdict(converged, certificate, message, self.model)
         A = self.constraints.matrix
+        closed = lam > CLOSED_RTOL * force_scale
         return ContactResult(
-            x=U, forces=lam, nodal_forces=-(A.T @ lam), gaps=self.constraints.gaps - A @ U,
-            closed=lam > CLOSED_RTOL * force_scale, energy=self.energy(U, lam), success=success,
-            status=status, message=message, nit=int(nit), wall_time=float(wall_time),
-            solver=solver, certificate=certificate, info=dict(info or {}),
+            displacements=U, forces=lam, nodal_forces=-(A.T @ lam),
+            gaps=self.constraints.gaps - A @ U,
+            contact_status=np.where(closed, ContactStatus.CLOSED, ContactStatus.OPEN),
+            energy=self.energy(U, lam), success=success, status=status, message=message,
+            iterations=int(iterations), seconds=float(seconds), method=method,
+            certificate=certificate, info=dict(info or {}),
         )
 
     def __repr__(self) -> str:
@@ -399,8 +410,8 @@ class FrictionalProblem:
                              cohesion=self.law.cohesion)
         return FrictionStep(tangential, local)
 
-    def make_result(self, forces, previous=None, *, solver: str, converged: bool, message: str,
-                    nit: int, wall_time: float, info: dict | None = None,
+    def make_result(self, forces, previous=None, *, method: str, converged: bool, message: str,
+                    iterations: int, seconds: float, info: dict | None = None,
                     step: "FrictionStep | None" = None) -> FrictionalResult:
         """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`.
 
@@ -409,11 +420,11 @@ class FrictionalProblem:
         message says so; numpy's warnings are kept inside.
         """
         with np.errstate(all="ignore"):
-            return self._result(forces, previous, solver=solver, converged=converged,
-                                message=message, nit=nit, wall_time=wall_time, info=info,
-                                step=step)
+            return self._result(forces, previous, method=method, converged=converged,
+                                message=message, iterations=iterations, seconds=seconds,
+                                info=info, step=step)
 
-    def _result(self, forces, previous, *, solver, converged, message, nit, wall_time, info,
+    def _result(self, forces, previous, *, method, converged, message, iterations, seconds, info,
                 step) -> FrictionalResult:
         r = real_array(forces, "forces").reshape(-1)
         if r.shape != (self.n_contacts * self.dim,):
@@ -441,16 +452,16 @@ class FrictionalProblem:
             warnings.warn(note, ContactWarning, stacklevel=4)
             message = f"{message}; {note}"
         nodal = local.operator.T @ r
+        elastic = float(0.5 * U @ (self.loads + nodal))
         return FrictionalResult(
-            x=U, forces=R, nodal_forces=nodal, gaps=gaps, slip=slip,
-            tangential_displacements=HU[:, 1:],
+            displacements=U, forces=R, nodal_forces=nodal, gaps=gaps,
             contact_status=self.law.status(R, slip, CLOSED_RTOL * force,
                                            self.certificate_tol * length),
-            dissipation=-np.sum(R[:, 1:] * slip, axis=1),
-            elastic_energy=float(0.5 * U @ (self.loads + nodal)), loads=self.loads.copy(),
-            success=success, status=status, message=message, nit=int(nit),
-            wall_time=float(wall_time), solver=solver, certificate=certificate,
-            info=dict(info or {}),
+            energy=elastic - float(self.loads @ U), success=success, status=status,
+            message=message, iterations=int(iterations), seconds=float(seconds), method=method,
+            certificate=certificate, info=dict(info or {}), slip=slip,
+            tangential_displacements=HU[:, 1:], dissipation=-np.sum(R[:, 1:] * slip, axis=1),
+            elastic_energy=elastic, loads=self.loads.copy(),
         )
 
     def solve(self, previous=None, *, solver: str | None = None, tol: float = 1e-10,
@@ -485,10 +496,10 @@ class FrictionalProblem:
             options = {"check_psd": False, **options}
         with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite r
             solution = method(problem, tol=tol, r0=r0, **options)
-        return self.make_result(unit * solution.r - shift, previous, solver=name,
-                                converged=solution.converged, message=solution.message,
-                                nit=solution.iterations, wall_time=time.perf_counter() - start,
-                                step=step)
+        return self.make_result(unit * solution.forces - shift, previous, method=name,
+                                converged=solution.success, message=solution.message,
+                                iterations=solution.iterations,
+                                seconds=time.perf_counter() - start, step=step)
 
     def __repr__(self) -> str:
         return (f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
@@ -502,19 +513,20 @@ def _verdict(converged: bool, certificate, message: str, model) -> tuple[int, bo
     judges the matrix as given, so its asymmetry bounds the equilibrium residual attainable.
     """
     if not certificate.finite:
-        return 2, False, (f"{message}; certificate failed: the answer holds NaN or inf "
-                          f"(overflow or a failed solve)")
+        return CERTIFICATE_FAILED, False, (f"{message}; certificate failed: the answer holds "
+                                           f"NaN or inf (overflow or a failed solve)")
     if not converged:
-        return 1, False, message
+        return NOT_CONVERGED, False, message
     if not certificate.passed:
         note = ""
         if model.asymmetry > 0.0 and certificate.equilibrium > certificate.tol:
             note = (f"; the model's matrix was solved as its symmetric part (relative asymmetry "
                     f"{model.asymmetry:.1e} as given), which limits the equilibrium residual "
                     f"on the matrix as given")
-        return 2, False, (f"{message}; certificate failed (worst relative residual "
-                          f"{certificate.worst:.2e} > {certificate.tol:.0e}){note}")
-    return 0, True, message
+        return CERTIFICATE_FAILED, False, (f"{message}; certificate failed (worst relative "
+                                           f"residual {certificate.worst:.2e} > "
+                                           f"{certificate.tol:.0e}){note}")
+    return SUCCESS, True, message
 
 
 def friction_route(law: FrictionLaw, solver: str | None):

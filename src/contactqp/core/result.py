@@ -1,471 +1,179 @@
-"""Results and the certificates that check an answer independently of the solver.
+"""Results: one shape for every answer, shaped like :class:`scipy.optimize.OptimizeResult`.
 
-:class:`ContactResult` and :func:`certify` for frictionless problems, :class:`FrictionalResult`
-and :func:`certify_friction` for problems with friction.
+:class:`ContactResult` holds the fields every answer has: the displacements, contact forces and
+gaps, a per-contact status (:class:`~contactqp.core.status.ContactStatus` codes), the energy,
+the verdict (``success``, ``status``, ``message``), the work done (``iterations``, ``seconds``,
+``method``) and the certificate that checked the answer independently of the method. A
+frictionless answer is a :class:`ContactResult`; the subclasses add what their physics adds:
+
+* :class:`FrictionalResult`: slips, tangential displacements, dissipation, elastic energy;
+* :class:`LocalResult`: an FCLIB problem's answer (and a global problem's velocities ``v``);
+* :class:`FastenedResult`: the fastener forces and the closure of an assembly.
+
+The certificates are in :mod:`contactqp.core.certificate`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
-from .friction import STATUS_LABELS
-from .local_problem import CONTACT_FLOOR, natural_map_error
+from .certificate import Certificate, FrictionCertificate, LocalCertificate
+from .status import ContactStatus, status_counts, status_labels
 
-__all__ = ["Certificate", "ContactResult", "certify", "FrictionCertificate", "FrictionalResult",
-           "certify_friction", "scales", "contact_scales"]
+__all__ = ["ContactResult", "FrictionalResult", "LocalResult", "FastenedResult",
+           "SUCCESS", "NOT_CONVERGED", "CERTIFICATE_FAILED"]
 
-#: Default largest accepted relative residual of a certificate.
-CERTIFICATE_TOL = 1e-7
-
-
-@dataclass(frozen=True)
-class Certificate:
-    """Residuals of the contact conditions, each relative to the problem's scale.
-
-    Computed from the model's own matrix, the constraints and the returned displacements and
-    forces, never from the solver's internal quantities, so that a wrong answer cannot look right.
-
-    Attributes
-    ----------
-    penetration : float
-        ``max(A U - Delta, 0)`` over each contact's length scale: the largest of its ``|A U|``,
-        ``|Delta|`` and ``|A R P|`` (at least :data:`~contactqp.core.local_problem.CONTACT_FLOOR` times
-        the largest over the contacts).
-    force_sign : float
-        ``max(-lambda, 0)`` over the force scale (contact forces push, never pull).
-    complementarity : float
-        ``max |lambda_i (Delta - A U)_i|`` over the force scale times the contact's length
-        scale.
-    equilibrium : float
-        ``max |U - R (P - A^T lambda)|`` over the length scale (or ``K U`` against the forces over
-        the force scale when the model was given by its stiffness).
-    tol : float
-        The tolerance ``passed`` compares each residual with.
-    """
-
-    penetration: float
-    force_sign: float
-    complementarity: float
-    equilibrium: float
-    tol: float = CERTIFICATE_TOL
-
-    @property
-    def worst(self) -> float:
-        """The largest of the four residuals (inf when the answer holds NaN or inf)."""
-        return max(self.penetration, self.force_sign, self.complementarity, self.equilibrium)
-
-    @property
-    def passed(self) -> bool:
-        """True when every residual is within ``tol``."""
-        return bool(self.worst <= self.tol)
-
-    @property
-    def finite(self) -> bool:
-        """False when the answer or a residual overflowed, or holds NaN."""
-        return bool(np.isfinite(self.worst))
-
-    def as_dict(self) -> dict:
-        """Plain dictionary (for JSON)."""
-        return {"penetration": self.penetration, "force_sign": self.force_sign,
-                "complementarity": self.complementarity, "equilibrium": self.equilibrium,
-                "tol": self.tol, "passed": self.passed}
+#: Values of :attr:`ContactResult.status`: solved, the method did not converge, the certificate
+#: (or, for an assembly, the fastener closure) failed.
+SUCCESS, NOT_CONVERGED, CERTIFICATE_FAILED = 0, 1, 2
 
 
-def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Certificate:
-    """Check displacements and contact forces against a :class:`~contactqp.ContactProblem`.
-
-    Parameters
-    ----------
-    problem : ContactProblem
-    displacements : ndarray, shape (n_freedoms,)
-        ``U`` in metres.
-    forces : ndarray, shape (n_constraints,)
-        Contact force magnitudes ``lambda`` in newtons (the force on the body is ``-A^T lambda``).
-    tol : float
-
-    Every residual is inf when ``U`` or ``lambda`` holds NaN or inf, or a residual overflows.
-    """
-    with np.errstate(all="ignore"):  # an overflow shows as an infinite residual
-        return _certify(problem, np.asarray(displacements, dtype=float),
-                        np.asarray(forces, dtype=float), tol)
-
-
-def _certify(problem, U, lam, tol) -> Certificate:
-    if not (np.all(np.isfinite(U)) and np.all(np.isfinite(lam))):
-        return Certificate(np.inf, np.inf, np.inf, np.inf, tol)
-    A, gaps, P = problem.constraints.matrix, problem.constraints.gaps, problem.loads
-    force, length = scales(problem.model, P, U, lam, gaps)
-    AU = A @ U
-    final_gaps = gaps - AU
-    dual = getattr(problem, "_dual", None)
-    free = dual.free_displacements if dual is not None else problem.model.displacements(P)
-    # gaps are judged on each contact's own length: its displacement, initial gap and the
-    # interpenetration the loads alone would cause there (not max diag(R) times the largest
-    # force, which a soft freedom away from the contacts makes metres long, nor another
-    # contact's wide gap)
-    contact_length = _floored(np.maximum.reduce([np.abs(AU), np.abs(gaps), np.abs(A @ free)]))
-    return Certificate(
-        penetration=_worst(-final_gaps / contact_length),
-        force_sign=_worst(-lam / force),
-        complementarity=_worst(np.abs(lam * final_gaps) / (force * contact_length)),
-        equilibrium=_equilibrium(problem.model, U, P - A.T @ lam, force, length),
-        tol=tol,
-    )
-
-
-def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
-    """``(force, length)``: the scales (N, m) that make a certificate's residuals relative.
-
-    The force scale is the largest load or contact force; the length scale the largest
-    displacement or gap, or the displacement the force scale would cause, which keeps it
-    meaningful when gaps and displacements are both (near) zero, e.g. a closed contact with zero
-    initial gap.
-    """
-    tiny = np.finfo(float).tiny
-    force = max(np.max(np.abs(loads), initial=0.0), np.max(np.abs(forces), initial=0.0), tiny)
-    compliance = (np.max(np.diag(model.flexibility)) if model.given == "flexibility"
-                  else 1.0 / np.max(np.diag(model.stiffness)))
-    length = max(np.max(np.abs(displacements), initial=0.0), np.max(np.abs(gaps), initial=0.0),
-                 compliance * force, tiny)
-    return float(force), float(length)
-
-
-def contact_scales(problem, local_displacements, forces, step) -> tuple[float, np.ndarray]:
-    """``(force, length)``: the force scale (N) of the contacts and each one's length scale (m).
-
-    Measured on the contacts only, so that a soft or heavily loaded freedom away from them does
-    not loosen the contact checks (nor turn real slips into "stick"). The force scale is the
-    largest local contact force, tensile strength ``c / mu`` or ``max |q~ - w| / max diag(W)``
-    (the force that takes up the largest local displacement the loads cause, initial gaps ``w``
-    left out, at the softest contact): one figure for all contacts, since whether a force is
-    zero is a question about the whole problem's forces (an open contact's force is the
-    solver's rounding of them). Never ``max diag(R)`` times a force, which mixes the softest
-    freedom with the largest load, nor the largest load, which may not reach the contacts.
-
-    The length scale is each contact's own: the largest of its local displacement ``H U``,
-    initial gap and local displacement the loads cause with the apex forces applied (``q~``,
-    :attr:`~contactqp.core.problem.FrictionStep.q_apex`), so that another contact's wide gap does
-    not loosen its gap checks; at least :data:`~contactqp.core.local_problem.CONTACT_FLOOR` times the
-    largest over the contacts.
-
-    Parameters
-    ----------
-    problem : FrictionalProblem
-    local_displacements : ndarray, shape (k, d)
-        ``H U`` (m).
-    forces : ndarray, shape (d k,) or (k, d)
-        Local forces ``r`` (N).
-    step : FrictionStep
-        The step (:meth:`~contactqp.FrictionalProblem.step`).
-    """
-    k, d = problem.n_contacts, problem.dim
-    free = step.q_apex.reshape(k, d)
-    compliance = float(np.max(np.abs(step.local.W.diagonal()), initial=0.0))
-    # the floor left when no contact carries force: what the loads (and the previous state)
-    # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
-    loaded = step.q_apex - problem.local().offset
-    force = max(np.max(np.abs(forces), initial=0.0), np.max(step.apex_shift, initial=0.0),
-                np.max(np.abs(loaded), initial=0.0) / compliance if compliance > 0 else 0.0,
-                np.finfo(float).tiny)
-    length = np.maximum.reduce([np.abs(free).max(axis=1),
-                                np.abs(local_displacements).max(axis=1),
-                                np.abs(problem.constraints.gaps)])
-    return float(force), _floored(length)
-
-
-def _floored(scale):
-    """``scale`` raised to :data:`~contactqp.core.local_problem.CONTACT_FLOOR` times its largest value."""
-    tiny = np.finfo(float).tiny
-    return np.maximum(scale, max(CONTACT_FLOOR * float(np.max(scale, initial=0.0)), tiny))
-
-
-def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
-    """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model).
-
-    ``R`` (``K``) is the matrix as the user gave it (:attr:`~contactqp.ReducedModel.as_given`),
-    not its symmetric part, which the solvers use.
-    """
-    if model.given == "flexibility":
-        residual = displacements - model.as_given @ net_load
-        return _worst(np.abs(residual) / length)
-    return _worst(np.abs(model.as_given @ displacements - net_load) / force)
-
-
-@dataclass
+@dataclass(kw_only=True)
 class ContactResult:
-    """The answer to a contact problem, shaped like :class:`scipy.optimize.OptimizeResult`.
+    """The answer to a contact problem; a frictionless answer is one of these.
 
     Attributes
     ----------
-    x : ndarray, shape (n_freedoms,)
-        Displacements ``U`` of the computational freedoms (m).
-    forces : ndarray, shape (n_constraints,)
-        Contact force of each constraint (N, >= 0).
-    nodal_forces : ndarray, shape (n_freedoms,)
-        Contact forces on the body's freedoms, ``-A^T lambda`` (N).
-    gaps : ndarray, shape (n_constraints,)
-        Final gaps ``Delta - A U`` (m).
-    closed : ndarray of bool, shape (n_constraints,)
-        Contact status: True where the contact carries force (closed), False where open.
+    displacements : ndarray, shape (n,)
+        The displacements of the solved freedoms (m): ``U`` of the model's computational
+        freedoms; for an FCLIB problem (:class:`LocalResult`), whose unknowns are per contact,
+        the local velocities (or displacement increments) ``u = W r + q``, shape (d k,).
+    forces : ndarray
+        Contact forces (N): one magnitude per constraint, shape (m,), without friction; the
+        local forces ``r``, shape (k, d), normal first, with friction; for an FCLIB problem
+        FCLIB's reactions ``r``, shape (d k,).
+    nodal_forces : ndarray, shape (n,)
+        The contact forces acting on the freedoms of ``displacements`` (N): ``-A^T lambda``
+        without friction, ``H^T r`` with; ``r`` itself for an FCLIB problem.
+    gaps : ndarray, shape (k,)
+        Final gap of each contact (m; ``u_N`` for an FCLIB problem).
+    contact_status : ndarray of int, shape (k,)
+        One :class:`~contactqp.core.status.ContactStatus` code per contact;
+        :attr:`status_labels` gives their labels.
     energy : float
-        Potential energy ``1/2 U^T K U - P^T U`` (J).
+        Total potential energy ``1/2 U^T K U - P^T U`` (J) at the answer, ``P`` the loads
+        (with friction too; the stored elastic energy alone is
+        :attr:`FrictionalResult.elastic_energy`). NaN for an FCLIB problem, whose data carry no
+        loads.
     success : bool
-        The solver converged *and* the certificate passed.
+        The method converged *and* the certificate passed.
     status : int
-        0 success, 1 the solver did not converge, 2 the certificate failed.
+        0 (:data:`SUCCESS`), 1 (:data:`NOT_CONVERGED`: the method did not converge) or 2
+        (:data:`CERTIFICATE_FAILED`).
     message : str
-    nit : int
-        Iterations.
-    wall_time : float
-        Seconds spent in the solve (assembly of the dual included, reading files excluded).
-    solver : str
-    certificate : Certificate
+        The method's account and the verdict.
+    iterations : int
+        Iterations of the method.
+    seconds : float
+        Wall time of the solve (assembly of the dual or local form included, reading files
+        excluded).
+    method : str
+        Name of the method that found the answer.
+    certificate : Certificate, FrictionCertificate or LocalCertificate
+        The independent check.
     info : dict
-        Solver-specific extras (e.g. factorisations).
+        Method-specific extras (e.g. factorisation counts).
     """
 
-    x: np.ndarray
+    #: The statuses this kind of result reports, counted by :meth:`summary`.
+    STATUSES: ClassVar[tuple[ContactStatus, ...]] = (ContactStatus.OPEN, ContactStatus.CLOSED)
+
+    displacements: np.ndarray
     forces: np.ndarray
     nodal_forces: np.ndarray
     gaps: np.ndarray
-    closed: np.ndarray
+    contact_status: np.ndarray
     energy: float
     success: bool
     status: int
     message: str
-    nit: int
-    wall_time: float
-    solver: str
-    certificate: Certificate
+    iterations: int
+    seconds: float
+    method: str
+    certificate: Certificate | FrictionCertificate | LocalCertificate
     info: dict = field(default_factory=dict)
 
     @property
-    def displacements(self) -> np.ndarray:
-        """Alias of ``x``."""
-        return self.x
+    def n_contacts(self) -> int:
+        """Number of contacts."""
+        return int(np.size(self.contact_status))
 
     @property
     def status_labels(self) -> list[str]:
-        """``"closed"`` or ``"open"`` per constraint."""
-        return ["closed" if c else "open" for c in self.closed]
+        """The label of each contact's status, e.g. ``"closed"`` or ``"slip"``."""
+        return status_labels(self.contact_status)
+
+    def as_dict(self) -> dict:
+        """Every field, by name (arrays included; the certificate as its ``as_dict()``)."""
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        fields["certificate"] = self.certificate.as_dict()
+        return fields
 
     def summary(self) -> dict:
-        """A JSON-ready summary (no arrays)."""
+        """A JSON-ready summary (no arrays): the scalar fields, the count of each status of
+        :attr:`STATUSES` under its label, what the subclass adds and the certificate."""
+        counts = status_counts(self.contact_status)
         return {"success": self.success, "status": self.status, "message": self.message,
-                "solver": self.solver, "iterations": self.nit, "seconds": self.wall_time,
-                "contacts": int(self.forces.size), "closed": int(np.count_nonzero(self.closed)),
-                "energy": self.energy, "max_force": float(np.max(self.forces, initial=0.0)),
-                "min_gap": float(np.min(self.gaps, initial=np.inf)),
+                "method": self.method, "iterations": self.iterations, "seconds": self.seconds,
+                "contacts": self.n_contacts, "energy": self.energy,
+                **{s.label: counts[s.label] for s in self.STATUSES}, **self._summary_extra(),
                 "certificate": self.certificate.as_dict()}
 
+    def _summary_extra(self) -> dict:
+        return {"max_force": float(np.max(self.forces, initial=0.0)),
+                "min_gap": float(np.min(self.gaps, initial=np.inf))}
+
     def __repr__(self) -> str:
-        return (f"ContactResult(success={self.success}, solver={self.solver!r}, "
-                f"closed={int(np.count_nonzero(self.closed))}/{self.forces.size}, nit={self.nit}, "
+        counts = status_counts(self.contact_status)
+        shown = "/".join(s.label for s in self.STATUSES)
+        numbers = "/".join(str(counts[s.label]) for s in self.STATUSES)
+        return (f"{type(self).__name__}(success={self.success}, method={self.method!r}, "
+                f"{shown}={numbers}, iterations={self.iterations}, "
                 f"message={self.message!r})")
 
 
-@dataclass(frozen=True)
-class FrictionCertificate:
-    """Residuals of the frictional contact conditions, each relative to the problem's scale.
+@dataclass(kw_only=True, repr=False)
+class FrictionalResult(ContactResult):
+    """The answer to one step of a frictional problem.
 
-    Computed from the model's own matrix, the local frames and the returned displacements and
-    forces (see :func:`certify_friction`), never from the solver's internal quantities. The
-    contact residuals are relative to the contacts' force scale and to each contact's own
-    length scale (:func:`contact_scales`), the largest over the contacts kept; the equilibrium
-    is relative to the model's scales (:func:`scales`).
-
-    Attributes
-    ----------
-    penetration : float
-        ``max(-gap_i, 0)`` over the contact's length scale.
-    force_sign : float
-        ``max(-r~_N, 0)`` over the force scale, ``r~`` the force from the cone's apex.
-    cone : float
-        Largest excess of a tangential force over its friction set (disc or polygon of radius
-        ``mu r_N + c``), over the force scale.
-    complementarity : float
-        ``max ||r~_i|| |gap_i|`` over the force scale times the contact's length: an open
-        contact carries no force (beyond the tension ``c / mu`` of a cohesive one).
-    dissipation : float
-        Largest maximum-dissipation gap ``(mu r_N + c) support(-s_T) + r_T . s_T`` over the
-        force scale times the contact's length: zero when every slip is opposed by a friction
-        force on the bound.
-    equilibrium : float
-        ``max |U - R (P + H^T r)|`` over the model's length scale (``K U`` against the forces
-        over its force scale for a stiffness model).
-    natural_map : float
-        :func:`~contactqp.core.local_problem.natural_map_error` of the step's dimensionless FCLIB problem
-        (:attr:`~contactqp.core.problem.FrictionStep.fclib`, exact cones), each contact also on its
-        own scale (``per_contact=True``). For a polygonal law it measures the distance the
-        linearisation puts between the answer and the Coulomb one.
-    exact_cone : bool
-        True for the exact cone, or any cone in 2-D (where the polygonal law is exact):
-        ``natural_map`` is then one of the checked residuals.
-    tol : float
-    """
-
-    penetration: float
-    force_sign: float
-    cone: float
-    complementarity: float
-    dissipation: float
-    equilibrium: float
-    natural_map: float
-    exact_cone: bool
-    tol: float = CERTIFICATE_TOL
-
-    @property
-    def finite(self) -> bool:
-        """False when the answer or a residual overflowed, or holds NaN."""
-        return bool(np.isfinite(self.worst))
-
-    @property
-    def worst(self) -> float:
-        """The largest checked residual (inf when the answer holds NaN or inf)."""
-        checked = [self.penetration, self.force_sign, self.cone, self.complementarity,
-                   self.dissipation, self.equilibrium]
-        return max(checked + [self.natural_map] * self.exact_cone)
-
-    @property
-    def passed(self) -> bool:
-        """True when every checked residual is within ``tol``."""
-        return bool(self.worst <= self.tol)
-
-    def as_dict(self) -> dict:
-        """Plain dictionary (for JSON)."""
-        return {"penetration": self.penetration, "force_sign": self.force_sign,
-                "cone": self.cone, "complementarity": self.complementarity,
-                "dissipation": self.dissipation, "equilibrium": self.equilibrium,
-                "natural_map": self.natural_map, "exact_cone": self.exact_cone,
-                "tol": self.tol, "passed": self.passed}
-
-
-def certify_friction(problem, displacements, forces, step,
-                     tol: float = CERTIFICATE_TOL) -> FrictionCertificate:
-    """Check displacements and local forces against a :class:`~contactqp.FrictionalProblem`.
-
-    Parameters
-    ----------
-    problem : FrictionalProblem
-    displacements : ndarray, shape (n_freedoms,)
-        ``U`` (m).
-    forces : ndarray, shape (d k,)
-        Local forces ``r`` (N), normal first per contact; the force on the body is ``H^T r``.
-    step : FrictionStep
-        The step (:meth:`~contactqp.FrictionalProblem.step`); its tangential displacements are
-        the origin of the slip increments.
-    tol : float
-
-    Every residual is inf when ``U`` or ``r`` holds NaN or inf, or a residual overflows.
-    """
-    with np.errstate(all="ignore"):  # an overflow shows as an infinite residual
-        return _certify_friction(problem, np.asarray(displacements, dtype=float),
-                                 np.asarray(forces, dtype=float), step, tol)
-
-
-def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
-    if not (np.all(np.isfinite(U)) and np.all(np.isfinite(r))):
-        return FrictionCertificate(*[np.inf] * 7, exact_cone=problem.law.facets is None
-                                   or problem.dim == 2, tol=tol)
-    k, d = problem.n_contacts, problem.dim
-    R = r.reshape(k, d)
-    H, gaps, P, law = problem.frames.operator, problem.constraints.gaps, problem.loads, problem.law
-    HU = (H @ U).reshape(k, d)
-    final_gaps = gaps + HU[:, 0]
-    slip = HU[:, 1:] - step.tangential
-    apex = law.apex_forces(R)
-    force, length = contact_scales(problem, HU, r, step)
-    # the equilibrium of every freedom is measured on the model's own scales
-    global_force, global_length = scales(problem.model, P, U, r, gaps)
-    return FrictionCertificate(
-        penetration=_worst(-final_gaps / length),
-        force_sign=_worst(-apex[:, 0] / force),
-        cone=_worst(law.cone_excess(R) / force),
-        complementarity=_worst(np.linalg.norm(apex, axis=1) * np.abs(final_gaps)
-                               / (force * length)),
-        dissipation=_worst(np.abs(law.dissipation_gap(R, slip)) / (force * length)),
-        equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
-        natural_map=_finite_or_inf(natural_map_error(
-            step.fclib, (r + step.apex_shift) / step.force_unit, per_contact=True)),
-        exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
-        tol=tol,
-    )
-
-
-def _worst(relative) -> float:
-    """The largest of per-contact relative residuals, 0 when none is positive, inf when one is
-    NaN or inf."""
-    relative = np.asarray(relative, dtype=float)
-    if not np.all(np.isfinite(relative)):
-        return np.inf
-    return float(max(0.0, np.max(relative, initial=0.0)))
-
-
-def _finite_or_inf(value: float) -> float:
-    """``value``, or inf when it is NaN or inf."""
-    return float(value) if np.isfinite(value) else np.inf
-
-
-@dataclass
-class FrictionalResult:
-    """The answer to one step of a frictional problem, shaped like :class:`ContactResult`.
+    The common fields are those of :class:`ContactResult`: ``displacements`` ``U`` (m) and
+    ``forces`` ``r`` (N, shape (k, d): compressive normal force, then the tangential force on
+    the body, on the first node of a pair, along each tangent of the frame) are totals;
+    ``contact_status`` is open, stick or slip: "open" when the force from the cone's apex is
+    below ``1e-10`` times the contacts' force scale, "slip" when the slip exceeds
+    ``certificate_tol`` times the contact's length scale (both of
+    :func:`~contactqp.core.certificate.contact_scales`), below which the certificate could not
+    tell a slip from none; ``certificate`` is a
+    :class:`~contactqp.core.certificate.FrictionCertificate`.
 
     Attributes
     ----------
-    x : ndarray, shape (n_freedoms,)
-        Displacements ``U`` (m), totals.
-    forces : ndarray, shape (k, d)
-        Local contact forces ``r`` (N): compressive normal force, then the tangential force on
-        the body (on the first node of a pair) along each tangent of the frame. Totals.
-    nodal_forces : ndarray, shape (n_freedoms,)
-        Contact forces on the freedoms, ``H^T r`` (N).
-    gaps : ndarray, shape (k,)
-        Final gaps (m).
     slip : ndarray, shape (k, d - 1)
         Slip increment of the step along the tangents (m).
     tangential_displacements : ndarray, shape (k, d - 1)
         ``(H U)_T``, total tangential displacement (m): the origin of the next step's slips.
-    contact_status : ndarray of int, shape (k,)
-        Index into :data:`~contactqp.core.friction.STATUS_LABELS` (open, stick, slip). "Open": the
-        force from the cone's apex is below ``1e-10`` times the contacts' force scale; "slip":
-        the slip exceeds ``certificate_tol`` times the contact's length scale (both of
-        :func:`contact_scales`), below which the certificate could not tell a slip from none.
     dissipation : ndarray, shape (k,)
         Energy dissipated by friction during the step, ``-r_T . s_T`` per contact (J), with the
         end-of-step force (exact when the friction bound is constant during the slip).
     elastic_energy : float
-        ``1/2 U^T K U`` (J), from ``K U = P + H^T r``.
+        Stored elastic energy ``1/2 U^T K U`` (J), from ``K U = P + H^T r``: with the
+        dissipation, the energy balance of a load path.
     loads : ndarray, shape (n_freedoms,)
         The loads of the step (N).
-    success, status, message, nit, wall_time, solver, certificate, info
-        As in :class:`ContactResult`; ``certificate`` is a :class:`FrictionCertificate`.
     """
 
-    x: np.ndarray
-    forces: np.ndarray
-    nodal_forces: np.ndarray
-    gaps: np.ndarray
+    STATUSES: ClassVar[tuple[ContactStatus, ...]] = (
+        ContactStatus.OPEN, ContactStatus.STICK, ContactStatus.SLIP)
+
     slip: np.ndarray
     tangential_displacements: np.ndarray
-    contact_status: np.ndarray
     dissipation: np.ndarray
     elastic_energy: float
     loads: np.ndarray
-    success: bool
-    status: int
-    message: str
-    nit: int
-    wall_time: float
-    solver: str
-    certificate: FrictionCertificate
-    info: dict = field(default_factory=dict)
-
-    @property
-    def displacements(self) -> np.ndarray:
-        """Alias of ``x``."""
-        return self.x
 
     @property
     def normal_forces(self) -> np.ndarray:
@@ -482,23 +190,68 @@ class FrictionalResult:
         """Energy dissipated in the step by all contacts (J)."""
         return float(np.sum(self.dissipation))
 
-    @property
-    def status_labels(self) -> list[str]:
-        """``"open"``, ``"stick"`` or ``"slip"`` per contact."""
-        return [STATUS_LABELS[code] for code in self.contact_status]
+    def _summary_extra(self) -> dict:
+        return {"dissipated": self.dissipated, "elastic_energy": self.elastic_energy}
 
-    def summary(self) -> dict:
-        """A JSON-ready summary (no arrays)."""
-        counts = np.bincount(self.contact_status, minlength=3)
-        return {"success": self.success, "status": self.status, "message": self.message,
-                "solver": self.solver, "iterations": self.nit, "seconds": self.wall_time,
-                "contacts": int(self.contact_status.size), "open": int(counts[0]),
-                "stick": int(counts[1]), "slip": int(counts[2]),
-                "dissipated": self.dissipated, "elastic_energy": self.elastic_energy,
-                "certificate": self.certificate.as_dict()}
 
-    def __repr__(self) -> str:
-        counts = np.bincount(self.contact_status, minlength=3)
-        return (f"FrictionalResult(success={self.success}, solver={self.solver!r}, "
-                f"open/stick/slip={counts[0]}/{counts[1]}/{counts[2]}, nit={self.nit}, "
-                f"message={self.message!r})")
+@dataclass(kw_only=True, repr=False)
+class LocalResult(ContactResult):
+    """The answer to an FCLIB problem ``u = W r + q`` (local) or ``M v = H r + f`` (global).
+
+    The common fields in FCLIB's terms: ``displacements`` is ``u`` and ``forces`` is ``r``
+    (both of shape (d k,), contact by contact, normal first; ``nodal_forces`` is ``r`` too, the
+    problem's freedoms being the contacts'); ``gaps`` is ``u_N``; ``contact_status`` is open,
+    stick or slip (:func:`~contactqp.core.local_problem.contact_status`); ``energy`` is NaN;
+    ``certificate`` is a :class:`~contactqp.core.certificate.LocalCertificate` (natural-map
+    error, the global equilibrium, the accuracy limits, all computed from ``r``). ``success``
+    (status 0, else 1) is the route's verdict: that certificate passed at the method's tolerance
+    for the Coulomb and box-QP routes and the Tresca fixed point; for the polygonal cones, whose
+    answer the exact-cone natural map does not judge, the fixed point reached.
+
+    Attributes
+    ----------
+    v : ndarray or None, shape (ndof,)
+        Global velocities solving ``M v = H r + f`` for a global problem, else None.
+    """
+
+    STATUSES: ClassVar[tuple[ContactStatus, ...]] = (
+        ContactStatus.OPEN, ContactStatus.STICK, ContactStatus.SLIP)
+
+    v: np.ndarray | None = None
+
+    def _summary_extra(self) -> dict:
+        return {"error": self.certificate.natural_map}
+
+
+@dataclass(kw_only=True, repr=False)
+class FastenedResult(ContactResult):
+    """The state of an assembly after some fasteners are installed.
+
+    The common fields are those of the contact problem in which the fastener tensions are
+    external loads (``gaps`` final, ``forces`` the contact compression per pair, N); the
+    status of a fastened pair is ``fastened``, the others ``open`` or ``closed``. ``success``
+    also asks that the closure hold within the certificate's tolerance (status 2 otherwise).
+
+    Attributes
+    ----------
+    fasteners : ndarray of int, shape (f,)
+        Pairs closed by a fastener.
+    fastener_forces : ndarray, shape (f,)
+        Tension of each fastener (N, >= 0).
+    closure : float
+        Largest ``|gap|`` at the fasteners (m): zero up to round-off when the closure holds.
+    multipliers : ndarray, shape (k,)
+        The dual solution: contact forces, minus the tension at fasteners (warm starts).
+    """
+
+    STATUSES: ClassVar[tuple[ContactStatus, ...]] = (
+        ContactStatus.OPEN, ContactStatus.CLOSED, ContactStatus.FASTENED)
+
+    fasteners: np.ndarray
+    fastener_forces: np.ndarray
+    closure: float
+    multipliers: np.ndarray
+
+    def _summary_extra(self) -> dict:
+        return {**super()._summary_extra(), "closure": self.closure,
+                "max_fastener_force": float(np.max(self.fastener_forces, initial=0.0))}

@@ -95,7 +95,7 @@ def plot_rod(rod, comparisons, path) -> Path:
         deformed = rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2]
         axes.plot(deformed[:, 0] * 1e3, deformed[:, 1] * 1e3, color="C0", lw=2,
                   label="full FE contact")
-        U = c.reduced.x.reshape(-1, 2)
+        U = c.reduced.displacements.reshape(-1, 2)
         axes.plot((x[nodes] + U[:, 0] * 1e3), U[:, 1] * 1e3, "o", color="C1",
                   label="reduced model (nodes)")
         axes.plot([x[-1]] * 2, [-arrow, arrow], color="k", lw=4)

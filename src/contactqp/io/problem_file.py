@@ -204,13 +204,13 @@ Results
   (m), compressive normal force (N), tangential force on the body along the tangent(s) (N),
   slip of the step along the tangent(s) (m), total tangential displacement (m), energy
   dissipated by friction in the step (J), ``open``, ``stick`` or ``slip``.
-* ``result.npz``: frictionless, ``x`` (m), ``forces`` (N), ``nodal_forces`` (N), ``gaps`` (m),
-  ``closed`` (bool), as in :class:`~contactqp.ContactResult`. With friction, the fields of
-  :class:`~contactqp.core.result.FrictionalResult`: ``x`` (m, shape (n,)), ``forces`` (N, (k, d),
-  normal first), ``nodal_forces`` (N, (n,)), ``gaps`` (m, (k,)), ``slip`` and
-  ``tangential_displacements`` (m, (k, d - 1)), ``contact_status`` (int, (k,): 0 open,
-  1 stick, 2 slip), ``dissipation`` (J, (k,)), with the frames ``normals`` ((k, d)) and
-  ``tangents`` ((k, d - 1, d)).
+* ``result.npz``: the fields of :class:`~contactqp.ContactResult`, ``displacements`` (m,
+  shape (n,)), ``forces`` (N: (k,) frictionless, (k, d) normal first with friction),
+  ``nodal_forces`` (N, (n,)), ``gaps`` (m, (k,)) and ``contact_status`` (int, (k,), the codes
+  of :class:`~contactqp.core.status.ContactStatus`: 0 open, 1 stick, 2 slip, 3 closed). With
+  friction also those of :class:`~contactqp.core.result.FrictionalResult`: ``slip`` and
+  ``tangential_displacements`` (m, (k, d - 1)), ``dissipation`` (J, (k,)), with the frames
+  ``normals`` ((k, d)) and ``tangents`` ((k, d - 1, d)).
 * ``summary.json``: ``name``, ``problem`` (absolute path of the problem file), ``solver``,
   ``options``, ``friction`` (with friction: ``mu`` and ``cohesion`` per contact, ``facets``)
   and ``result`` (:meth:`ProblemSpec.summary`); NaN and inf are written as ``null``.
@@ -249,13 +249,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.certificate import CERTIFICATE_TOL
 from ..core.contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
-from ..core.friction import STATUS_LABELS, FrictionLaw
+from ..core.friction import FrictionLaw
 from ..core.history import HistoryResult, linear_path, solve_history
 from ..core.model import ReducedModel
 from ..core.problem import ContactProblem, FrictionalProblem, friction_route
-from ..core.result import CERTIFICATE_TOL, ContactResult, FrictionalResult
+from ..core.result import ContactResult, FrictionalResult
+from ..core.status import status_counts
 from ..methods import SOLVERS, solve
 from .arrays import read_csv_array, read_numpy_array
 from .export import write_rows
@@ -288,6 +290,10 @@ RESULT_FILES = ("displacements.csv", "contacts.csv", "result.npz", "summary.json
 
 #: The files :func:`write_results` writes for a load history, in order.
 HISTORY_FILES = RESULT_FILES + ("steps.csv",)
+
+#: The arrays of ``result.npz`` every result has (the common fields of
+#: :class:`~contactqp.core.result.ContactResult`).
+COMMON_FIELDS = ("displacements", "forces", "nodal_forces", "gaps", "contact_status")
 
 _TOP_KEYS = ("name", "model", "loads", "obstacle", "friction", "loading", "solver")
 _FRICTION_LAW_KEYS = ("mu", "cohesion", "facets")
@@ -1111,11 +1117,10 @@ class ProblemSpec:
         return _json_ready({
             "success": result.success, "solver": self.solver, "steps": len(steps),
             "failed_steps": [k for k, step in enumerate(steps) if not step.success],
-            "iterations": sum(step.nit for step in steps),
-            "seconds": sum(step.wall_time for step in steps),
+            "iterations": result.iterations, "seconds": result.seconds,
             "dissipated": float(np.sum(result.dissipated)),
             "certificate_worst": max(step.certificate.worst for step in steps),
-            "final": {label: last[label] for label in STATUS_LABELS},
+            "final": {status.label: last[status.label] for status in FrictionalResult.STATUSES},
             "records": [{"step": k, "factor": self.step_factor(k), **step.summary()}
                         for k, step in enumerate(steps)],
         })
@@ -1215,7 +1220,7 @@ def _expected_steps(spec: ProblemSpec, result) -> list:
         kind, steps = HistoryResult, getattr(result, "steps", [])
     else:
         kind, steps = FrictionalResult if spec.frictional else ContactResult, [result]
-    if not isinstance(result, kind):
+    if type(result) is not kind:
         raise InvalidInputError(f"result must be a {kind.__name__} for this problem, got "
                                 f"{type(result).__name__}")
     if spec.history is not None and len(steps) != len(spec.history):
@@ -1223,9 +1228,10 @@ def _expected_steps(spec: ProblemSpec, result) -> list:
                                 f"{len(spec.history)}")
     n, m = problem.model.n_freedoms, problem.constraints.n_constraints
     for step in steps:
-        if np.shape(step.x) != (n,) or np.shape(step.forces)[:1] != (m,):
+        if np.shape(step.displacements) != (n,) or np.shape(step.forces)[:1] != (m,):
             raise InvalidInputError(
-                f"result has {np.size(step.x)} displacements and {len(step.forces)} contacts; "
+                f"result has {np.size(step.displacements)} displacements and "
+                f"{len(step.forces)} contacts; "
                 f"the problem has {n} freedoms and {m} constraints")
     return steps
 
@@ -1271,8 +1277,8 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
 
     freedoms = [(node, int(freedom)) for node in range(model.n_nodes)
                 for freedom in model.freedoms(node)]
-    displacements = rows_of(lambda step: [[node, freedom, _float_text(step.x[freedom])]
-                                          for node, freedom in freedoms])
+    displacements = rows_of(lambda step: [
+        [node, freedom, _float_text(step.displacements[freedom])] for node, freedom in freedoms])
     base = ["row", "node", "label", "gap0", "gap"]
     fixed = [[row, int(constraints.nodes[row]), constraints.labels[row],
               _float_text(constraints.gaps[row])] for row in range(constraints.n_constraints)]
@@ -1286,15 +1292,14 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
                 step.gaps[row], *step.forces[row], *step.slip[row],
                 *step.tangential_displacements[row], step.dissipation[row])]
             + [step.status_labels[row]] for row in range(constraints.n_constraints)])
-        fields = ("x", "forces", "nodal_forces", "gaps", "slip", "tangential_displacements",
-                  "contact_status", "dissipation")
+        fields = COMMON_FIELDS + ("slip", "tangential_displacements", "dissipation")
         arrays = {"normals": problem.frames.normals, "tangents": problem.frames.tangents}
     else:
         header = base + ["force", "status"]
         contacts = rows_of(lambda step: [
             fixed[row] + [_float_text(step.gaps[row]), _float_text(step.forces[row]),
                           step.status_labels[row]] for row in range(constraints.n_constraints)])
-        fields = ("x", "forces", "nodal_forces", "gaps", "closed")
+        fields = COMMON_FIELDS
         arrays = {}
     for name in fields:
         stacked = np.array([getattr(step, name) for step in steps])
@@ -1325,12 +1330,13 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
             handle.write("\n")
         if history:
             cumulative = np.cumsum([step.dissipated for step in steps])
-            write_rows(paths[4], ["step", "factor", *STATUS_LABELS, "dissipated",
+            labels = [status.label for status in FrictionalResult.STATUSES]
+            write_rows(paths[4], ["step", "factor", *labels, "dissipated",
                                   "cumulative_dissipated", "iterations", "certificate_worst",
                                   "success"], [
                 [k, "" if spec.factors is None else _float_text(spec.factors[k]),
-                 *np.bincount(step.contact_status, minlength=3).tolist(),
-                 _float_text(step.dissipated), _float_text(cumulative[k]), step.nit,
+                 *[status_counts(step.contact_status)[label] for label in labels],
+                 _float_text(step.dissipated), _float_text(cumulative[k]), step.iterations,
                  _float_text(step.certificate.worst), step.success]
                 for k, step in enumerate(steps)])
     except OSError as exc:

@@ -67,8 +67,8 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     displacements = dual.displacements(forces)
     elapsed = time.perf_counter() - start
     return problem.make_result(
-        displacements, forces, solver="active-set", converged=solution.converged,
-        message=solution.message, nit=solution.iterations, wall_time=elapsed,
+        displacements, forces, method="active-set", converged=solution.converged,
+        message=solution.message, iterations=solution.iterations, seconds=elapsed,
         info={"factorizations": solution.factorizations, "updates": solution.updates,
               "residual": solution.residual},
     )

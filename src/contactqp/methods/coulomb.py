@@ -346,9 +346,9 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
 
     Returns
     -------
-    LocalSolution
-        ``converged`` is True exactly when the independently computed natural-map error is at
-        most ``tol``; otherwise ``r`` is the best point found and ``message`` says where each
+    LocalResult
+        ``success`` is True exactly when the independently computed natural-map error is at
+        most ``tol``; otherwise the forces are the best point found and ``message`` says where each
         stage stopped. ``iterations`` counts Newton iterations plus Gauss-Seidel sweeps.
         ``status`` gives open / stick / slip per contact.
 
@@ -403,4 +403,4 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
             stages.append(f"max_iter = {max_iter} reached")
             break
     return finish(problem, r - shift, tol, iterations, start, ", ".join(stages),
-                  per_contact=per_contact)
+                  method="coulomb", per_contact=per_contact)

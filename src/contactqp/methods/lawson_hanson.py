@@ -2,11 +2,35 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
 
-__all__ = ["solve_nonnegative_qp"]
+__all__ = ["NonnegativeQPSolution", "solve_nonnegative_qp"]
+
+
+@dataclass(frozen=True)
+class NonnegativeQPSolution:
+    """Outcome of :func:`solve_nonnegative_qp`.
+
+    Attributes
+    ----------
+    x : ndarray, shape (n,)
+        The minimiser (>= 0), or the last iterate when not converged.
+    converged : bool
+        No entry of ``q - S x`` off the passive set exceeds the tolerance.
+    iterations : int
+        Outer steps (contacts added).
+    factorizations : int
+        Cholesky factorisations of passive blocks (a bordering is not one).
+    """
+
+    x: np.ndarray
+    converged: bool
+    iterations: int
+    factorizations: int
 
 
 def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None = None):
@@ -22,7 +46,7 @@ def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None
     costs a bordering of a small factor, where the primal-dual active set of
     :func:`~contactqp.methods.box_qp.solve_box_qp` may take many steps on a strongly coupled
     ``S`` (plates). ``max_iter`` defaults to ``3 len(q)``.
-    Returns ``(x, converged, iterations, factorizations)``.
+    Returns a :class:`NonnegativeQPSolution`.
 
     References: C. L. Lawson, R. J. Hanson, Solving Least Squares Problems, ch. 23 (1974).
     """
@@ -69,15 +93,15 @@ def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None
         gradient[passive] = -np.inf
         j = int(np.argmax(gradient))
         if gradient[j] <= threshold:
-            return x, True, iteration, factorizations
+            return NonnegativeQPSolution(x, True, iteration, factorizations)
         border = (scipy.linalg.lapack.dtrtrs(L, S[passive, j], lower=1)[0] if passive
                   else np.zeros(0))
         pivot = S[j, j] - border @ border
         if not pivot > 0:
-            return x, False, iteration, factorizations
+            return NonnegativeQPSolution(x, False, iteration, factorizations)
         k = len(passive)
         grown = np.zeros((k + 1, k + 1))
         grown[:k, :k], grown[k, :k], grown[k, k] = L, border, np.sqrt(pivot)
         L = grown
         passive.append(j)
-    return x, False, max_iter, factorizations
+    return NonnegativeQPSolution(x, False, max_iter, factorizations)

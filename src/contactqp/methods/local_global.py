@@ -14,10 +14,10 @@ conditioning of ``M``) and the data's written digits limit its error.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..core.certificate import LocalCertificate
 from ..core.local_problem import (
     AccuracyLimits,
     GlobalProblem,
@@ -27,49 +27,33 @@ from ..core.local_problem import (
     contact_status,
     natural_map_error,
 )
+from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
 from .box_qp import solve_box_qp
 
-__all__ = ["LocalSolution", "solve_global", "solve_local"]
+__all__ = ["local_result", "solve_global", "solve_local"]
 
 
-@dataclass(frozen=True)
-class LocalSolution:
-    """Solution of a local problem, checked by the natural-map error.
+def local_result(problem: LocalProblem, r, u, *, converged: bool, error: float, tol: float,
+                 iterations: int, seconds: float, message: str, method: str,
+                 limits: AccuracyLimits | None = None, equilibrium: float | None = None,
+                 v: np.ndarray | None = None) -> LocalResult:
+    """The :class:`~contactqp.core.result.LocalResult` of reactions ``r`` and velocities ``u``
+    (shape (m,)) of ``problem``, with the contact status computed from them.
 
-    Attributes
-    ----------
-    r, u : numpy.ndarray, shape (m,)
-        Reactions and velocities (or gap increments), ``u = W r + q``.
-    error : float
-        :func:`~contactqp.core.local_problem.natural_map_error` of ``(r, u)``.
-    converged : bool
-        ``error <= tol``.
-    iterations : int
-    seconds : float
-        Wall time of the solve.
-    message : str
-    status : numpy.ndarray of str, shape (n_contacts,)
-        ``"open"``, ``"stick"`` or ``"slip"`` (:func:`~contactqp.core.local_problem.contact_status`).
-    limits : AccuracyLimits
-        How far rounding and the data's digits limit ``error``; the message says so where a
-        limit exceeds ``tol``.
-    v : numpy.ndarray or None, shape (ndof,)
-        Global velocities (:func:`solve_global`), else None.
-    equilibrium : float or None
-        Relative residual of ``M v = H r + f`` (:func:`solve_global`), else None.
+    ``error`` (natural-map), ``equilibrium``, ``limits`` and ``tol`` make its certificate;
+    ``converged`` is the method's verdict (status 0, else 1).
     """
-
-    r: np.ndarray
-    u: np.ndarray
-    error: float
-    converged: bool
-    iterations: int
-    seconds: float
-    message: str
-    status: np.ndarray
-    limits: AccuracyLimits = field(default_factory=lambda: AccuracyLimits(0.0, 0.0))
-    v: np.ndarray | None = None
-    equilibrium: float | None = None
+    r = np.asarray(r, dtype=float)
+    u = np.asarray(u, dtype=float)
+    certificate = LocalCertificate(
+        natural_map=float(error), equilibrium=equilibrium, tol=float(tol),
+        limits=AccuracyLimits(0.0, 0.0) if limits is None else limits)
+    return LocalResult(
+        displacements=u, forces=r, nodal_forces=r, gaps=u[::problem.dim],
+        contact_status=contact_status(problem, r, u), energy=float("nan"),
+        success=bool(converged), status=SUCCESS if converged else NOT_CONVERGED,
+        message=message, iterations=int(iterations), seconds=float(seconds), method=method,
+        certificate=certificate, v=v)
 
 
 def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
@@ -104,15 +88,15 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
 
 
 def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
-                max_iter: int | None = None) -> LocalSolution:
+                 max_iter: int | None = None) -> LocalResult:
     """Solve a local problem to natural-map error ``tol``.
 
     Parameters
     ----------
     problem : LocalProblem
     tol : float
-        Target of :func:`~contactqp.core.local_problem.natural_map_error`; ``converged`` is True only when the
-        error, computed independently of the solver, is at most ``tol``.
+        Target of :func:`~contactqp.core.local_problem.natural_map_error`; ``success`` is True
+        only when the error, computed independently of the solver, is at most ``tol``.
     max_iter : int, optional
         Cap on all the iterations of the route: the box-QP solver (default 500) or, with
         friction, every Newton run and Gauss-Seidel sweep of
@@ -140,14 +124,16 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
     reactions = _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
-    return finish(problem, r, tol, solution.iterations, start, solution.message)
+    return finish(problem, r, tol, solution.iterations, start, solution.message,
+                  method="active-set")
 
 
 def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
-           detail: str, *, per_contact: bool = False) -> LocalSolution:
-    """The :class:`LocalSolution` of reactions ``r``, checked by the natural-map error.
+           detail: str, *, method: str, per_contact: bool = False) -> LocalResult:
+    """The :class:`~contactqp.core.result.LocalResult` of reactions ``r``, checked by the
+    natural-map error.
 
-    ``u``, the error, ``converged`` and the contact status are computed here from ``r`` alone,
+    ``u``, the error, the verdict and the contact status are computed here from ``r`` alone,
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
     ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
@@ -157,14 +143,12 @@ def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     limits = accuracy_limits(problem, r, u)
-    return LocalSolution(
-        r=r, u=u, error=error, converged=converged, iterations=iterations,
-        seconds=time.perf_counter() - start,
+    return local_result(
+        problem, r, u, converged=converged, error=error, tol=tol, iterations=iterations,
+        seconds=time.perf_counter() - start, method=method, limits=limits,
         message=_with_limits(f"{verdict}: {detail}; natural-map error {error:.2e}"
                              + (" (largest of the problem's and each contact's)"
-                                if per_contact else ""), limits, tol),
-        status=contact_status(problem, r, u), limits=limits,
-    )
+                                if per_contact else ""), limits, tol))
 
 
 def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
@@ -173,29 +157,29 @@ def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
 
 
 def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
-                 max_iter: int | None = None) -> LocalSolution:
+                 max_iter: int | None = None) -> LocalResult:
     """Solve a global problem ``M v = H r + f, u = H^T v + w`` as given, certified on it.
 
     The problem is condensed (:meth:`~contactqp.core.local_problem.GlobalProblem.condense`, ``W`` not
     symmetrised) and solved by :func:`solve_local`; the reactions are then judged on the written
     equations by :meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``v`` solves ``M v = H r + f``,
-    ``u = H^T v + w``, and ``error`` is the natural-map error of that ``(r, u)``.
+    ``u = H^T v + w``, and the certificate's natural-map error is that of ``(r, u)``.
 
     Parameters
     ----------
     problem : GlobalProblem
     tol : float
-        ``converged`` is True when the certified natural-map error and the relative
+        ``success`` is True when the certified natural-map error and the relative
         equilibrium residual are both at most ``tol``.
     max_iter : int
         As :func:`solve_local`.
 
     Returns
     -------
-    LocalSolution
-        With ``v`` and ``equilibrium``; ``limits`` gives the attainable error set by the
-        conditioning of ``M`` and the limit set by the data's digits, and the message names
-        any above ``tol``.
+    LocalResult
+        With ``v``, and the certificate's ``equilibrium``; its ``limits`` give the attainable
+        error set by the conditioning of ``M`` and the limit set by the data's digits, and the
+        message names any above ``tol``.
 
     Raises
     ------
@@ -204,16 +188,15 @@ def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
     """
     start = time.perf_counter()
     local = solve_local(problem.condense(), tol=tol, max_iter=max_iter)
-    certificate = problem.certify(local.r)
+    r = local.forces
+    certificate = problem.certify(r)
     error, equilibrium = certificate.error, certificate.equilibrium
     converged = bool(error <= tol and equilibrium <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     message = (f"{verdict} on the global equations as written: natural-map error {error:.2e}, "
                f"equilibrium residual {equilibrium:.1e} (condensed problem: {local.message})")
-    return replace(
-        local, u=certificate.u, error=error, converged=converged,
-        seconds=time.perf_counter() - start,
-        message=_with_limits(message, certificate.limits, tol),
-        status=contact_status(problem.condense(), local.r, certificate.u),
-        limits=certificate.limits, v=certificate.v, equilibrium=equilibrium,
-    )
+    return local_result(
+        problem.condense(), r, certificate.u, converged=converged, error=error, tol=tol,
+        iterations=local.iterations, seconds=time.perf_counter() - start, method=local.method,
+        message=_with_limits(message, certificate.limits, tol), limits=certificate.limits,
+        equilibrium=equilibrium, v=certificate.v)

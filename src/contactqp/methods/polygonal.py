@@ -40,7 +40,7 @@ from scipy.sparse.linalg import splu
 
 from ..errors import InvalidInputError
 from ..core.local_problem import LocalProblem
-from .local_global import LocalSolution
+from ..core.result import LocalResult
 from .qp import _qpsolvers, available_backends, backend_options
 from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
                      run_fixed_point)
@@ -172,7 +172,7 @@ def _polish_active_set(P, c, G, h, normal, x):
 
 def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",
                     tol: float = 1e-8, max_iter: int = 50, r0=None, *,
-                    per_contact: bool = False, **options) -> LocalSolution:
+                    per_contact: bool = False, **options) -> LocalResult:
     """Solve a local problem with polygonal friction cones by a fixed point of QPs (qpsolvers).
 
     Parameters
@@ -200,9 +200,9 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
 
     Returns
     -------
-    LocalSolution
-        ``error`` is the natural-map error against the exact Coulomb cones (it does not reach
-        ``tol`` in 3-D: see the module notes); ``message`` states it.
+    LocalResult
+        The certificate's ``natural_map`` is the error against the exact Coulomb cones (it
+        does not reach ``tol`` in 3-D: see the module notes); ``message`` states it.
 
     Raises
     ------
@@ -217,4 +217,4 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
     data = FixedPointData(problem)
     return run_fixed_point(problem, data, _PolygonalTresca(data, facets, backend, options),
                            tol=tol, max_iter=max_iter, r0=start, exact=problem.dim == 2,
-                           per_contact=per_contact)
+                           per_contact=per_contact, method="polygonal")

@@ -97,9 +97,9 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
     message = "backend found a solution" if found else "backend found no solution"
     notes = list(dict.fromkeys(" ".join(str(w.message).split()) for w in said))
     return problem.make_result(
-        U, forces, solver=f"qp:{backend}", converged=bool(found),
+        U, forces, method=f"qp:{backend}", converged=bool(found),
         message=f"{message} ({'; '.join(notes)})" if notes else message,
-        nit=int(getattr(solution, "extras", {}).get("iter", 0) or 0), wall_time=elapsed,
+        iterations=int(getattr(solution, "extras", {}).get("iter", 0) or 0), seconds=elapsed,
     )
 
 

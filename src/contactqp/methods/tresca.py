@@ -42,10 +42,11 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
 from ..errors import InvalidInputError
-from ..core.local_problem import LocalProblem, contact_status, natural_map_error
+from ..core.local_problem import LocalProblem, natural_map_error
 from ..core.model import iteration_cap, positive_tolerance
 from ..optional import require
-from .local_global import LocalSolution
+from ..core.result import LocalResult
+from .local_global import local_result
 
 __all__ = ["solve_tresca_fixed_point"]
 
@@ -115,7 +116,8 @@ class FixedPointData:
         self.dim, self.n_contacts = problem.dim, problem.n_contacts
 
 
-def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_contact=False):
+def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, method: str,
+                    per_contact=False):
     """Iterate ``s = mu r'_N`` over a Tresca sub-solver; the loop shared by the fixed-point routes.
 
     Parameters
@@ -137,15 +139,18 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
         relative change of ``r'`` between two iterations at most ``tol`` (or the exact-cone
         error, when no polygon constraint binds; with a singular ``W`` the reactions need not
         settle while the velocities do).
+    method : str
+        The route's name, recorded in the result.
     per_contact : bool
         Measure the natural map on each contact's own scale too
         (:func:`~contactqp.core.local_problem.natural_map_error`).
 
     Returns
     -------
-    LocalSolution
-        The best iterate by natural-map error when ``exact``, the last one otherwise; ``error``
-        is always the natural-map error against the exact cones.
+    LocalResult
+        The best iterate by natural-map error when ``exact``, the last one otherwise; the
+        certificate's ``natural_map`` is always the error against the exact cones, and
+        ``success`` the route's convergence.
     """
     start_time = time.perf_counter()
     d = problem.dim
@@ -191,9 +196,9 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, per_cont
     error, r = best
     r = r - data.shift
     u = np.asarray(problem.W @ r).ravel() + problem.q
-    return LocalSolution(r=r, u=u, error=float(error), converged=converged, iterations=solved,
-                         seconds=time.perf_counter() - start_time, message=message,
-                         status=contact_status(problem, r, u))
+    return local_result(problem, r, u, converged=converged, error=error, tol=tol,
+                        iterations=solved, seconds=time.perf_counter() - start_time,
+                        message=message, method=method)
 
 
 def _rescale(data, r) -> bool:
@@ -345,7 +350,7 @@ class _ClarabelTresca:
 
 
 def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
-                             r0=None, *, per_contact: bool = False) -> LocalSolution:
+                             r0=None, *, per_contact: bool = False) -> LocalResult:
     """Solve a local Coulomb problem by a fixed point on Tresca cone programs (Clarabel).
 
     Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the
@@ -372,8 +377,8 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
 
     Returns
     -------
-    LocalSolution
-        The iterate of least natural-map error; ``converged`` when it is at most ``tol``. The
+    LocalResult
+        The iterate of least natural-map error; ``success`` when it is at most ``tol``. The
         loop also stops when the error has not halved in 4 iterations: the fixed point does not
         contract (large ``mu``, or a singular ``W`` as in rigid multibody problems).
 
@@ -388,4 +393,4 @@ def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter:
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
     data = FixedPointData(problem)
     return run_fixed_point(problem, data, _ClarabelTresca(data), tol=tol, max_iter=max_iter,
-                           r0=start, exact=True, per_contact=per_contact)
+                           r0=start, exact=True, per_contact=per_contact, method="tresca")

@@ -36,6 +36,7 @@ from ..errors import FileFormatError, InvalidInputError
 from ..core.model import MAX_MAGNITUDE, finite_array
 from ..optional import require
 from ..core.problem import ContactProblem
+from ..core.status import ContactStatus
 from ..methods import solve
 
 __all__ = ["BatchData", "BatchSummary", "GapSamples", "GapStatistics", "GapVariation",
@@ -57,7 +58,8 @@ class GapVariation:
     """A frictionless :class:`~contactqp.ContactProblem` whose initial gaps vary by sample.
 
     Records (one row per sample in the store): ``gap`` final gaps (m), ``force`` contact forces
-    (N), ``closed`` contact status, ``success``, ``iterations``. The warm start of a sample is the
+    (N), ``closed`` (the contact is not open: closed, or fastened), ``success``,
+    ``iterations``. The warm start of a sample is the
     previous sample's ``force``.
 
     Parameters
@@ -89,8 +91,9 @@ class GapVariation:
 
     @staticmethod
     def _record(result) -> dict:
-        return {"gap": result.gaps, "force": result.forces, "closed": result.closed,
-                "success": result.success, "iterations": result.nit}
+        return {"gap": result.gaps, "force": result.forces,
+                "closed": result.contact_status != ContactStatus.OPEN,
+                "success": result.success, "iterations": result.iterations}
 
     def solve_sample(self, gaps, warm):
         """Solve one sample: ``(record, warm start of the next sample)``."""
