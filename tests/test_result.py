@@ -159,3 +159,14 @@ def test_no_method_returns_a_bare_tuple():
     solution = solve_nonnegative_qp(np.array([[2.0, 0.5], [0.5, 1.0]]), np.array([1.0, -1.0]))
     assert isinstance(solution, NonnegativeQPSolution) and solution.converged
     np.testing.assert_allclose(solution.x, [0.5, 0.0])
+
+
+def test_a_fastener_that_does_not_close_fails_the_verdict():
+    contact = frictionless()  # contact 0 closed (gap 0), contact 1 open
+    assert contact.gaps[1] > 1e-5 and abs(contact.gaps[0]) < 1e-15
+    held = cq.FastenedResult.from_contact(contact, [0], [0.0], contact.forces, [1e-3, 1e-3])
+    assert held.success and held.status == 0 and held.status_labels == ["fastened", "open"]
+    loose = cq.FastenedResult.from_contact(contact, [1], [0.0], contact.forces, [1e-3, 1e-3])
+    assert not loose.success and loose.status == 2 and "fastener closure failed" in loose.message
+    assert loose.closure == pytest.approx(contact.gaps[1])
+    assert contact.status_labels == ["closed", "open"]  # the contact result is left as it was

@@ -41,7 +41,6 @@ on the order (a test checks it), the intermediate states do.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -55,8 +54,8 @@ from ..core.contact import NodePairs
 from ..errors import InvalidInputError
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
-from ..core.result import CERTIFICATE_FAILED, ContactResult, FastenedResult
-from ..core.status import STATUS_LABELS, ContactStatus
+from ..core.result import FastenedResult
+from ..core.status import STATUS_LABELS
 from ..methods import solve_box_qp
 from ..methods.lawson_hanson import solve_nonnegative_qp
 
@@ -429,29 +428,8 @@ class FastenerClosure:
             dual.displacements(multipliers), compression, method=f"{method} (fastened)",
             converged=converged, message=message, iterations=nit,
             seconds=time.perf_counter() - start, info={"factorizations": factorizations})
-        return _fastened(contact, problem, rows, tension, multipliers)
-
-
-def _fastened(contact: ContactResult, problem: ContactProblem, rows, tension,
-              multipliers) -> FastenedResult:
-    """The :class:`FastenedResult` of ``contact``, the certified result of the problem pulled by
-    the fastener ``tension`` (N) at ``rows``: its closure checked, fastened pairs marked."""
-    closure = float(np.max(np.abs(contact.gaps[rows])))
-    scale = max(float(np.max(np.abs(problem.constraints.gaps))),
-                float(np.max(np.abs(contact.displacements))), np.finfo(float).tiny)
-    closed = bool(closure <= contact.certificate.tol * scale)
-    status, message = contact.status, contact.message
-    if contact.success and not closed:
-        status = CERTIFICATE_FAILED
-        message = (f"{message}; fastener closure failed (largest |gap| {closure:.2e} m > "
-                   f"{contact.certificate.tol:.0e} times {scale:.2e} m)")
-    codes = contact.contact_status.copy()
-    codes[rows] = ContactStatus.FASTENED
-    common = {f.name: getattr(contact, f.name) for f in dataclasses.fields(ContactResult)}
-    common.update(contact_status=codes, success=bool(contact.success and closed), status=status,
-                  message=message)
-    return FastenedResult(**common, fasteners=rows, fastener_forces=tension, closure=closure,
-                          multipliers=multipliers)
+        return FastenedResult.from_contact(contact, rows, tension, multipliers,
+                                           problem.constraints.gaps)
 
 
 def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson",

@@ -252,6 +252,29 @@ class FastenedResult(ContactResult):
     closure: float
     multipliers: np.ndarray
 
+    @classmethod
+    def from_contact(cls, contact: ContactResult, fasteners, fastener_forces, multipliers,
+                     initial_gaps) -> "FastenedResult":
+        """The state whose contact problem, pulled by the ``fastener_forces`` (N) at the
+        ``fasteners`` rows, has the certified result ``contact``: the closure is checked against
+        the certificate's tolerance times the largest initial gap or displacement (m), and the
+        fastened pairs are marked ``fastened``."""
+        rows = np.asarray(fasteners, dtype=int)
+        closure = float(np.max(np.abs(contact.gaps[rows])))
+        scale = max(float(np.max(np.abs(initial_gaps))),
+                    float(np.max(np.abs(contact.displacements))), np.finfo(float).tiny)
+        closed = bool(closure <= contact.certificate.tol * scale)
+        common = {f.name: getattr(contact, f.name) for f in dataclasses.fields(ContactResult)}
+        if contact.success and not closed:
+            common.update(status=CERTIFICATE_FAILED, message=(
+                f"{contact.message}; fastener closure failed (largest |gap| {closure:.2e} m > "
+                f"{contact.certificate.tol:.0e} times {scale:.2e} m)"))
+        codes = contact.contact_status.copy()
+        codes[rows] = ContactStatus.FASTENED
+        common.update(contact_status=codes, success=bool(contact.success and closed))
+        return cls(**common, fasteners=rows, fastener_forces=np.asarray(fastener_forces),
+                   closure=closure, multipliers=np.asarray(multipliers))
+
     def _summary_extra(self) -> dict:
         return {**super()._summary_extra(), "closure": self.closure,
                 "max_fastener_force": float(np.max(self.fastener_forces, initial=0.0))}
