@@ -38,12 +38,17 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ..errors import InvalidInputError
 from ..core.local_problem import LocalProblem
 from ..core.result import LocalResult
+from ..errors import InvalidInputError
 from .qp import _qpsolvers, available_backends, backend_options
-from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
-                     run_fixed_point)
+from .tresca import (
+    FixedPointData,
+    check_fixed_point_arguments,
+    free_unknowns,
+    polish,
+    run_fixed_point,
+)
 
 __all__ = ["solve_polygonal", "polygon_normals", "MAX_FACETS"]
 
