@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 
 from contactqp import InvalidInputError
+from contactqp.core.friction import polygon_normals
 from contactqp.core.local_problem import LocalProblem, natural_map_error
 from contactqp.methods.coulomb import solve_coulomb
-from contactqp.methods.polygonal import polygon_normals, solve_polygonal
+from contactqp.methods.polygonal import solve_polygonal
 from contactqp.methods.tresca import solve_tresca_fixed_point
 
 TOL = 1e-8

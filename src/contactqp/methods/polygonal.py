@@ -31,40 +31,26 @@ law), which is not Coulomb friction.
 
 from __future__ import annotations
 
-import numbers
 import warnings
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ..errors import InvalidInputError
+from ..core.friction import polygon_normals
 from ..core.local_problem import LocalProblem
+from ..errors import InvalidInputError
 from .local_global import LocalSolution
 from .qp import _qpsolvers, available_backends, backend_options
-from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
-                     run_fixed_point)
+from .tresca import (
+    FixedPointData,
+    check_fixed_point_arguments,
+    free_unknowns,
+    polish,
+    run_fixed_point,
+)
 
-__all__ = ["solve_polygonal", "polygon_normals", "MAX_FACETS"]
-
-#: Most sides of a polygonal cone: 1024 sides are within 5e-6 of the circle, and more would only
-#: add rows to every cone program; the exact cone (``facets=None``) is the route beyond that.
-MAX_FACETS = 1024
-
-
-def polygon_normals(facets: int) -> np.ndarray:
-    """Outward unit normals of the regular polygon of ``facets`` sides, shape (facets, 2).
-
-    Side ``k`` is orthogonal to the angle ``2 pi k / facets`` (side 0 across the first tangent
-    axis) at the distance ``cos(pi / facets)`` from the centre of the unit circle.
-    """
-    if (isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3
-            or facets > MAX_FACETS):
-        raise InvalidInputError(f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
-                                f"the exact cone), got {facets!r}")
-    angles = 2.0 * np.pi * np.arange(int(facets)) / int(facets)
-    return np.column_stack([np.cos(angles), np.sin(angles)])
-
+__all__ = ["solve_polygonal"]
 
 class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
