@@ -131,6 +131,8 @@ class LocalProblem:
         cohesion on a frictionless contact, or ``dim`` is not 2 or 3.
     """
 
+    kind = "local"  # the problem kind (contactqp.methods.registry); not a field
+
     W: sp.csr_matrix | np.ndarray
     q: np.ndarray
     mu: np.ndarray
@@ -426,6 +428,8 @@ class GlobalProblem:
         Significant digits of the arrays ``"M"``, ``"H"``, ``"f"``, ``"w"`` written with fewer
         than 16, as :attr:`LocalProblem.digits`.
     """
+
+    kind = "global"  # the problem kind (contactqp.methods.registry); not a field
 
     M: sp.csr_matrix | np.ndarray
     H: sp.csr_matrix | np.ndarray

@@ -31,7 +31,6 @@ law), which is not Coulomb friction.
 
 from __future__ import annotations
 
-import numbers
 import warnings
 
 import numpy as np
@@ -39,6 +38,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..errors import InvalidInputError
+from ..core.friction import MAX_FACETS, polygon_normals
 from ..core.local_problem import LocalProblem
 from .local_global import LocalSolution
 from .qp import _qpsolvers, available_backends, backend_options
@@ -46,25 +46,6 @@ from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns,
                      run_fixed_point)
 
 __all__ = ["solve_polygonal", "polygon_normals", "MAX_FACETS"]
-
-#: Most sides of a polygonal cone: 1024 sides are within 5e-6 of the circle, and more would only
-#: add rows to every cone program; the exact cone (``facets=None``) is the route beyond that.
-MAX_FACETS = 1024
-
-
-def polygon_normals(facets: int) -> np.ndarray:
-    """Outward unit normals of the regular polygon of ``facets`` sides, shape (facets, 2).
-
-    Side ``k`` is orthogonal to the angle ``2 pi k / facets`` (side 0 across the first tangent
-    axis) at the distance ``cos(pi / facets)`` from the centre of the unit circle.
-    """
-    if (isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3
-            or facets > MAX_FACETS):
-        raise InvalidInputError(f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
-                                f"the exact cone), got {facets!r}")
-    angles = 2.0 * np.pi * np.arange(int(facets)) / int(facets)
-    return np.column_stack([np.cos(angles), np.sin(angles)])
-
 
 class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
@@ -170,9 +151,9 @@ def _polish_active_set(P, c, G, h, normal, x):
     return refined if feasible else x
 
 
-def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",
-                    tol: float = 1e-8, max_iter: int = 50, r0=None, *,
-                    per_contact: bool = False, **options) -> LocalSolution:
+def solve_polygonal(problem: LocalProblem, *, r0=None, facets: int = 8, backend: str = "clarabel",
+                    tol: float = 1e-8, max_iter: int = 50, per_contact: bool = False,
+                    **options) -> LocalSolution:
     """Solve a local problem with polygonal friction cones by a fixed point of QPs (qpsolvers).
 
     Parameters
