@@ -295,6 +295,55 @@ def test_local_and_global_problems_without_friction_take_the_frictionless_route(
         cq.solve(local_problem(mu=0.3), "normal-qp")
 
 
+def test_mu_zero_goes_frictionless_from_every_entry_point(tmp_path, capsys):
+    from contactqp.io import write_problem
+    from contactqp.io.problem_file import load_problem_file
+    from contactqp.methods.coulomb import solve_coulomb
+
+    # contactqp fclib: the record's iterations are those of the box QP, not of Newton
+    problem = local_problem(mu=0.0)
+    write_problem(tmp_path / "p.hdf5", problem)
+    assert main(["fclib", str(tmp_path / "p.hdf5"), "--json"]) == 0
+    record = json.loads(capsys.readouterr().out.splitlines()[0])
+    frictionless, newton = cq.solve(problem), solve_coulomb(problem)
+    assert record["converged"] and record["iterations"] == frictionless.iterations
+    assert frictionless.iterations != newton.iterations
+    # a problem file with mu = 0 (its route defaults to coulomb), alone and along a history
+    text = FRICTION_FILE.replace("mu = 0.3", "mu = 0.0")
+    (tmp_path / "p.toml").write_text(text)
+    spec = load_problem_file(tmp_path / "p.toml")
+    assert spec.solver == "coulomb"
+    result = spec.solve()
+    assert result.success and result.solver == "normal-qp"
+    (tmp_path / "h.toml").write_text(text + "\n[loading]\nfactors = [0.5, 1.0]\n")
+    history = load_problem_file(tmp_path / "h.toml").solve()
+    assert history.success and {step.solver for step in history.steps} == {"normal-qp"}
+    # solve_history directly
+    problem = frictional_problem(mu=0.0)
+    steps = cq.solve_history(problem, np.array([0.5 * problem.loads, problem.loads])).steps
+    assert [step.solver for step in steps] == ["normal-qp", "normal-qp"]
+
+
+FRICTION_FILE = """
+[model]
+flexibility = [[1e-6, 0.0, 0.0, 0.0], [0.0, 1e-8, 0.0, 0.0], [0.0, 0.0, 1e-6, 0.0],
+               [0.0, 0.0, 0.0, 1e-8]]
+dofs_per_node = 2
+
+[loads]
+values = [100.0, -1000.0, 100.0, -1000.0]
+
+[[obstacle]]
+type = "gaps"
+nodes = [0, 1]
+gaps = [0.0, 0.0]
+direction = [0.0, -1.0]
+
+[friction]
+mu = 0.3
+"""
+
+
 # --- the registry against the functions ------------------------------------------------------
 
 @pytest.mark.parametrize("name", list(registry.METHODS))

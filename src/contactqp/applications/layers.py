@@ -18,7 +18,8 @@ reported, to be compared with the weight).
 Both layers are condensed (:func:`~contactqp.compliance.condensation.condense`) to the interface
 nodes and the nodes of the upper layer's left side; gravity enters through the loads that give,
 on these nodes, the displacements of the full model under gravity alone. The history
-``d = 0 .. d_max`` (gravity first) is solved by :func:`~contactqp.methods.history.solve_history`, the
+``d = 0 .. d_max`` (gravity first) is solved by
+:func:`~contactqp.methods.history.solve_history`, the
 friction state carried over.
 
 The analytic limit of the sliding block: when no contact sticks, the interface carries

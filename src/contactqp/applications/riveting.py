@@ -35,8 +35,9 @@ the remaining non-negative QP by Lawson and Hanson's active-set method (or the p
 solver, or scipy's NNLS, see :mod:`contactqp.methods.fastened`). The answer is a
 :class:`~contactqp.core.fastened.FastenedResult` holding a certified
 :class:`~contactqp.core.result.ContactResult` of the contact problem in which the fastener
-tensions are external loads, the closure of each fastener checked separately. Fasteners are installed one after another (:meth:`RivetingModel.fasten`), each an
-increment warm-started from the previous one; without friction the final state does not depend
+tensions are external loads, the closure of each fastener checked separately. Fasteners are
+installed one after another (:meth:`RivetingModel.fasten`), each an increment warm-started
+from the previous one; without friction the final state does not depend
 on the order (a test checks it), the intermediate states do.
 """
 

@@ -286,8 +286,8 @@ class FrictionalProblem:
     r"""A contact problem with friction on a reduced model, solved from a given state.
 
     From the state of a previous result (``previous``, or from rest), the loads ``P`` are
-    applied in one increment. The normal law acts on the total gap and the friction law on the slip increment
-    ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see :meth:`local_problem`) is
+    applied in one increment. The normal law acts on the total gap and the friction law on the
+    slip increment ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see :meth:`local_problem`) is
 
     .. math::
 

@@ -8,8 +8,15 @@ import numpy as np
 
 from .frictional import solve_frictional
 from .local_global import certify_global
-from .registry import (FRICTIONLESS_ROUTE, METHODS, Method, check_options, get_kind, get_method,
-                       kind_of)
+from .registry import (
+    FRICTIONLESS_ROUTE,
+    METHODS,
+    Method,
+    check_options,
+    get_kind,
+    get_method,
+    kind_of,
+)
 
 __all__ = ["solve", "resolve"]
 
