@@ -287,7 +287,8 @@ class FrictionalProblem:
 
     From the state of a previous result (``previous``, or from rest), the loads ``P`` are
     applied in one increment. The normal law acts on the total gap and the friction law on the
-    slip increment ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see :meth:`local_problem`) is
+    slip increment ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see
+    :meth:`local_problem`) is
 
     .. math::
 

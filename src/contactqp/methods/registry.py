@@ -7,14 +7,14 @@ function's signature (a test checks that the two agree).
 
 A problem carries its kind as the attribute ``kind``:
 
-======================  =====================================================================
-``frictionless``        :class:`~contactqp.ContactProblem`
-``frictional``          :class:`~contactqp.FrictionalProblem`, exact cone
+========================  ===================================================================
+``frictionless``          :class:`~contactqp.ContactProblem`
+``frictional``            :class:`~contactqp.FrictionalProblem`, exact cone
 ``frictional-polygonal``  :class:`~contactqp.FrictionalProblem` with ``facets``
-``local``               :class:`~contactqp.core.local_problem.LocalProblem` (FCLIB local)
-``global``              :class:`~contactqp.core.local_problem.GlobalProblem` (FCLIB global)
-``fastened``            :class:`~contactqp.core.fastened.FastenedProblem`
-======================  =====================================================================
+``local``                 :class:`~contactqp.core.local_problem.LocalProblem` (FCLIB local)
+``global``                :class:`~contactqp.core.local_problem.GlobalProblem` (FCLIB global)
+``fastened``              :class:`~contactqp.core.fastened.FastenedProblem`
+========================  ===================================================================
 """
 
 from __future__ import annotations
