@@ -12,7 +12,8 @@ Rows:
 * ``<method>, cold``: every sample from the solver's own cold start;
 * ``<method>, warm``: each sample warm started from the previous one of its chunk;
 
-for the methods of :meth:`contactqp.applications.riveting.FastenerClosure.solve` on the Schur-reduced dual:
+for the methods of fastened problems (:func:`contactqp.solve` on a
+:class:`~contactqp.core.fastened.FastenedProblem`, the Schur-reduced dual):
 ``lawson-hanson`` (the default, bordered Cholesky factors), ``active-set`` (the project's
 primal-dual box-QP solver) and ``nnls`` (scipy's, cold only),
 

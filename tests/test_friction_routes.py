@@ -248,8 +248,8 @@ def test_polygonal_cone_converges_on_the_hex_block_where_the_exact_cone_does():
     model = fe.reduced_model(fe.select_nodes(where="bottom"))
     floor = cq.PlaneObstacle([0.0, 0.0, 1e-5], [0.0, 0.0, -1.0])
     loads = np.tile([4000.0, 1500.0, 0.0], model.n_nodes)
-    exact = cq.FrictionalProblem(model, loads, floor, mu=0.3).solve()
-    polygon = cq.FrictionalProblem(model, loads, floor, mu=0.3, facets=8).solve()
+    exact = cq.solve(cq.FrictionalProblem(model, loads, floor, mu=0.3))
+    polygon = cq.solve(cq.FrictionalProblem(model, loads, floor, mu=0.3, facets=8))
     assert exact.success and polygon.success, polygon.message
     assert polygon.nit < 50 and "fixed point reached" in polygon.message
     assert not polygon.certificate.exact_cone

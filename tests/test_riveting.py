@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import contactqp as cq
 from contactqp.errors import InvalidInputError
-from contactqp.applications.riveting import (Assembly, FastenerClosure, Plate, plate_flexibility, plot_status,
-                                write_vtu)
+from contactqp.applications.riveting import (Assembly, Plate, plate_flexibility, plot_status,
+                                             write_vtu)
 
 ALL_EDGES = ("left", "right", "bottom", "top")
 
@@ -67,9 +68,9 @@ def test_one_fastener_closing_a_uniform_gap_matches_the_direct_solve(small):
     W = sum(plate_flexibility(p, small.points, cells, held)
             for p in (small.assembly.lower, small.assembly.upper))
     assert np.all(np.delete(W[:, f], f) < W[f, f])  # the premise: no other pair closes
-    closure = FastenerClosure(small.problem(np.full(k, g)), [f])
+    fastened = cq.FastenedProblem(small.problem(np.full(k, g)), [f])
     for method in ("lawson-hanson", "nnls", "active-set"):
-        state = closure.solve(method=method)
+        state = cq.solve(fastened, method)
         assert state.success
         np.testing.assert_allclose(state.fastener_forces, [g / W[f, f]], rtol=1e-9)
         np.testing.assert_allclose(state.contact.gaps, g * (1 - W[:, f] / W[f, f]), rtol=1e-9,
@@ -100,13 +101,13 @@ def test_sequence_order_changes_the_path_not_the_end_without_friction(small, rou
 
 
 def test_three_routes_agree_on_a_rough_gap_field(small, rough_gaps):
-    closure = FastenerClosure(small.problem(rough_gaps), small.fasteners)
-    reference = closure.solve(method="nnls")  # scipy's NNLS on the factor: independent
+    fastened = cq.FastenedProblem(small.problem(rough_gaps), small.fasteners)
+    reference = cq.solve(fastened, "nnls")  # scipy's NNLS on the factor: independent
     assert reference.success and np.count_nonzero(reference.contact.closed) > 0
     warm = reference.multipliers * (1 + 0.3 * np.cos(np.arange(small.n_pairs)))  # a nearby start
     for method, start in [("lawson-hanson", None), ("lawson-hanson", warm),
                           ("active-set", None), ("active-set", warm)]:
-        state = closure.solve(method=method, forces0=start)
+        state = cq.solve(fastened, method, r0=start)
         assert state.success, (method, state.contact.message)
         np.testing.assert_allclose(state.multipliers, reference.multipliers, rtol=1e-6,
                                    atol=1e-8 * np.max(np.abs(reference.multipliers)))
@@ -143,8 +144,9 @@ def test_bad_assemblies(kwargs, match):
 def test_bad_fastening(small, rough_gaps):
     with pytest.raises(InvalidInputError, match="permutation"):
         small.fasten(rough_gaps, order=[0, 0, 1])
-    with pytest.raises(InvalidInputError, match="method"):
-        FastenerClosure(small.problem(rough_gaps), [3]).solve(method="simplex")
+    with pytest.raises(InvalidInputError, match="unknown method 'simplex' for fastened problems; "
+                                                "choose one of lawson-hanson \\(default\\)"):
+        cq.solve(cq.FastenedProblem(small.problem(rough_gaps), [3]), "simplex")
     with pytest.raises(InvalidInputError, match="gaps"):
         small.problem(rough_gaps[:-1])
 

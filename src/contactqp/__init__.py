@@ -12,10 +12,12 @@ from .errors import (
 )
 from .core.model import ReducedModel, unit_load_compliance
 from .core.friction import FrictionLaw
-from .core.history import HistoryResult, linear_path, solve_history
+from .core.fastened import FastenedProblem, FastenedResult
+from .core.history import HistoryResult, linear_path
+from .core.local_problem import GlobalProblem, LocalProblem
 from .core.problem import ContactProblem, FrictionalProblem
 from .core.result import Certificate, ContactResult, FrictionalResult, FrictionCertificate
-from .methods import SOLVERS, solve
+from .methods import METHODS, default_method, is_installed, methods_for, solve, solve_history
 
 __all__ = [
     "ReducedModel",
@@ -27,6 +29,10 @@ __all__ = [
     "FrictionalResult",
     "FrictionCertificate",
     "FrictionLaw",
+    "LocalProblem",
+    "GlobalProblem",
+    "FastenedProblem",
+    "FastenedResult",
     "solve_history",
     "linear_path",
     "HistoryResult",
@@ -36,7 +42,10 @@ __all__ = [
     "NodePairs",
     "solve",
     "solve_gaps",
-    "SOLVERS",
+    "METHODS",
+    "methods_for",
+    "default_method",
+    "is_installed",
     "ContactError",
     "ContactWarning",
     "InvalidInputError",
@@ -50,7 +59,7 @@ __version__ = "0.1.0"
 
 
 def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_per_node=1,
-               solver="active-set", **options) -> ContactResult:
+               method: str | None = None, **options) -> ContactResult:
     """Solve the common case in one call: a flexibility matrix, loads and per-node gaps.
 
     Parameters
@@ -66,8 +75,8 @@ def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_
     nodes : sequence of int, optional
         Contact nodes (default: every node, then ``k`` must equal the node count).
     dofs_per_node : int
-    solver : str
-        See :func:`solve`.
+    method : str, optional
+        A frictionless method (default ``"active-set"``), see :func:`solve`.
 
     Returns
     -------
@@ -77,4 +86,4 @@ def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_
     if nodes is None:
         nodes = range(model.n_nodes)
     problem = ContactProblem(model, loads, [GapObstacle(list(nodes), gaps, directions)])
-    return solve(problem, solver=solver, **options)
+    return solve(problem, method, **options)

@@ -18,7 +18,8 @@ reported, to be compared with the weight).
 Both layers are condensed (:func:`~contactqp.compliance.condensation.condense`) to the interface
 nodes and the nodes of the upper layer's left side; gravity enters through the loads that give,
 on these nodes, the displacements of the full model under gravity alone. The history
-``d = 0 .. d_max`` (gravity first) is solved by :func:`~contactqp.core.history.solve_history`, the
+``d = 0 .. d_max`` (gravity first) is solved by
+:func:`~contactqp.methods.history.solve_history`, the
 friction state carried over.
 
 The analytic limit of the sliding block: when no contact sticks, the interface carries
@@ -38,9 +39,10 @@ import scipy.sparse
 
 from ..core.contact import NodePairs
 from ..errors import ContactError, InvalidInputError
-from ..core.history import MAX_STEPS, solve_history
+from ..core.history import MAX_STEPS
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
+from ..methods import solve_history
 
 __all__ = ["Layers", "LayersResult", "LayersError", "plot_layers"]
 
@@ -176,8 +178,8 @@ class Layers:
         ``d_max`` (m) defaults to twice the travel that brings the load to the analytic limit
         when the spring and the upper layer stretched over its length act in series,
         ``2 H_lim (1 / k_a + length / (E h_upper depth))``: beyond the onset of sliding.
-        ``options`` go to :func:`~contactqp.core.history.solve_history` (``progress``) and
-        :meth:`~contactqp.FrictionalProblem.solve`.
+        ``options`` go to :func:`~contactqp.methods.history.solve_history` (``method``,
+        ``progress``, the method's options).
 
         Raises
         ------

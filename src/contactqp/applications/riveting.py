@@ -29,19 +29,20 @@ A fastener imposes closure: at its pair the gap is brought to zero and held ther
 constraint). Its multiplier ``lambda_f`` is free in sign: ``lambda_f >= 0`` is a contact
 compression at the fastener, ``lambda_f < 0`` a tension ``-lambda_f`` carried by the fastener.
 The dual QP is the frictionless one (:class:`~contactqp.core.problem.DualForm`) with the lower bound
-of the fastener rows lifted to ``-inf``; :class:`FastenerClosure` eliminates the fastener
-multipliers (a Schur complement) and solves the remaining non-negative QP by Lawson and
-Hanson's active-set method (or the project's box-QP solver, or scipy's NNLS). The answer is
-returned as a certified :class:`~contactqp.core.result.ContactResult` of the contact problem in which
-the fastener tensions are external loads, and the closure of each fastener is checked
-separately. Fasteners are installed one after another (:meth:`RivetingModel.fasten`), each an
-increment warm-started from the previous one; without friction the final state does not depend
+of the fastener rows lifted to ``-inf``: a :class:`~contactqp.core.fastened.FastenedProblem`,
+which eliminates the fastener multipliers (a Schur complement); :func:`~contactqp.solve` solves
+the remaining non-negative QP by Lawson and Hanson's active-set method (or the project's box-QP
+solver, or scipy's NNLS, see :mod:`contactqp.methods.fastened`). The answer is a
+:class:`~contactqp.core.fastened.FastenedResult` holding a certified
+:class:`~contactqp.core.result.ContactResult` of the contact problem in which the fastener
+tensions are external loads, the closure of each fastener checked separately. Fasteners are
+installed one after another (:meth:`RivetingModel.fasten`), each an increment warm-started
+from the previous one; without friction the final state does not depend
 on the order (a test checks it), the intermediate states do.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from pathlib import Path
@@ -51,20 +52,15 @@ import scipy.linalg
 
 from ..studies.batch import GapVariation
 from ..core.contact import NodePairs
+from ..core.fastened import STATUS_LABELS, FastenedProblem, FastenedResult
 from ..errors import InvalidInputError
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
-from ..core.result import ContactResult
-from ..methods import solve_box_qp
-from ..methods.lawson_hanson import solve_nonnegative_qp
+from ..methods import solve
+from ..methods.registry import get_method
 
 __all__ = ["Plate", "Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
-           "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened",
-           "STATUS_LABELS",
-           "write_vtu", "plot_status"]
-
-#: Pair status codes of :attr:`FastenedResult.status`, by index.
-STATUS_LABELS = ("open", "contact", "fastener")
+           "FasteningCase", "plate_flexibility", "STATUS_LABELS", "write_vtu", "plot_status"]
 
 _EDGES = ("left", "right", "bottom", "top")
 
@@ -286,9 +282,12 @@ class RivetingModel:
             Initial gaps (m), negative for interference.
         order : sequence of int, optional
             Positions in :attr:`fasteners` in installation order (default: as listed).
-        method, tol
-            See :meth:`FastenerClosure.solve`; each step is warm started from the previous one
-            (except with ``method="nnls"``).
+        method : str
+            A method for fastened problems (``"lawson-hanson"``, ``"active-set"``, ``"nnls"``,
+            see :func:`~contactqp.solve`); each step is warm started from the previous one
+            (except with ``"nnls"``).
+        tol : float
+            The method's tolerance (``"nnls"`` has none).
 
         Returns
         -------
@@ -301,47 +300,17 @@ class RivetingModel:
         problem = self.problem(self.check_gaps(gaps))
         steps, forces = [], None
         for count in range(1, len(order) + 1):
-            step = solve_fastened(problem, self.fasteners[order[:count]], method=method,
-                                  forces0=forces, tol=tol)
+            fastened = FastenedProblem(problem, self.fasteners[order[:count]])
+            step = solve(fastened, method, **_fastening_options(method, tol, forces))
             forces = step.multipliers
             steps.append(step)
         return FasteningSequence(steps, order)
 
 
-@dataclass
-class FastenedResult:
-    """The state after some fasteners are installed.
-
-    Attributes
-    ----------
-    contact : ContactResult
-        Certified result of the contact problem with the fastener tensions as loads: ``gaps``
-        (final, m), ``forces`` (contact compression per pair, N), ``x`` (deflections, m).
-    fasteners : ndarray of int, shape (f,)
-        Pairs closed by a fastener.
-    fastener_forces : ndarray, shape (f,)
-        Tension of each fastener (N, >= 0).
-    closure : float
-        Largest ``|gap|`` at the fasteners (m): zero up to round-off when the closure holds.
-    success : bool
-        Converged, certificate passed and closure within the certificate's tolerance.
-    multipliers : ndarray, shape (k,)
-        The dual solution: contact forces, minus the tension at fasteners (warm starts).
-    """
-
-    contact: ContactResult
-    fasteners: np.ndarray
-    fastener_forces: np.ndarray
-    closure: float
-    success: bool
-    multipliers: np.ndarray
-
-    @property
-    def status(self) -> np.ndarray:
-        """Status code per pair (index into :data:`STATUS_LABELS`): open, contact, fastener."""
-        codes = self.contact.closed.astype(int)
-        codes[self.fasteners] = 2
-        return codes
+def _fastening_options(method: str, tol: float, r0) -> dict:
+    """``tol`` and the warm start ``r0`` for the fastened ``method``, where it takes them."""
+    taken = get_method(method, FastenedProblem.kind).option_names
+    return {name: value for name, value in (("tol", tol), ("r0", r0)) if name in taken}
 
 
 @dataclass
@@ -362,132 +331,12 @@ class FasteningSequence:
         return all(step.success for step in self.steps)
 
 
-class FastenerClosure:
-    r"""The dual of a contact problem with some rows closed by fasteners, reduced once.
-
-    The fastener multipliers ``lambda_f`` are free in sign, so they are eliminated: with
-    ``W`` split into fastener (``f``) and contact (``c``) blocks and ``q = A R P - Delta``,
-
-    .. math::
-
-        \lambda_f = W_{ff}^{-1} (q_f - W_{fc} \lambda_c), \qquad
-        \min_{\lambda_c \ge 0} \tfrac12 \lambda_c^T S \lambda_c
-            - \lambda_c^T (q_c - W_{cf} W_{ff}^{-1} q_f),
-        \quad S = W_{cc} - W_{cf} W_{ff}^{-1} W_{fc},
-
-    a frictionless contact dual whose Delassus operator ``S`` (a Schur complement, positive
-    definite) is that of the assembly with the fasteners closed. ``S`` depends on the fasteners
-    only, so a variation study reduces once and solves every sample on it.
-
-    Parameters
-    ----------
-    problem : ContactProblem
-        Node pairs; ``fasteners`` index its constraint rows.
-    fasteners : array_like of int, shape (f,)
-        Rows whose gap the fasteners close to zero.
-    """
-
-    def __init__(self, problem: ContactProblem, fasteners):
-        rows = np.asarray(fasteners, dtype=int).reshape(-1)
-        m = problem.n_constraints
-        if rows.size == 0 or rows.min() < 0 or rows.max() >= m or np.unique(rows).size != rows.size:
-            raise InvalidInputError(f"fasteners must be distinct rows in 0..{m - 1}, at least one")
-        self.problem, self.fasteners = problem, rows
-        self.contacts = np.setdiff1d(np.arange(m), rows)
-        W = problem.dual().W
-        self._factor = scipy.linalg.cho_factor(W[np.ix_(rows, rows)])
-        self._coupling = W[np.ix_(rows, self.contacts)]
-        self._eliminated = scipy.linalg.cho_solve(self._factor, self._coupling)
-        self.schur = W[np.ix_(self.contacts, self.contacts)] - self._coupling.T @ self._eliminated
-        self._schur_factor = None
-
-    def _nnls(self, q):
-        """``(forces, converged, message, iterations, factorizations)`` by NNLS."""
-        from scipy.optimize import nnls
-
-        if self._schur_factor is None:
-            self._schur_factor = np.linalg.cholesky(self.schur)
-        lower = self._schur_factor
-        target = scipy.linalg.solve_triangular(lower, q, lower=True, check_finite=False)
-        try:
-            forces, _ = nnls(lower.T, target)
-        except RuntimeError as exc:  # iteration limit
-            return np.zeros(len(q)), False, f"nnls: {exc}", 0, 1
-        return forces, True, "nnls converged (iterations not reported)", 0, 1
-
-    def solve(self, gaps=None, *, method: str = "lawson-hanson", forces0=None,
-              tol: float = 1e-10) -> "FastenedResult":
-        """Solve for the initial ``gaps`` (m, shape (m,); default: the problem's).
-
-        Parameters
-        ----------
-        gaps : array_like, shape (m,), optional
-        method : {"lawson-hanson", "active-set", "nnls"}
-            ``"lawson-hanson"`` (default): Lawson and Hanson's active-set method on ``S``
-            directly, adding one contact at a time, warm started from the support of
-            ``forces0``. ``"active-set"``: the project's primal-dual box-QP solver
-            (:func:`~contactqp.methods.solve_box_qp`) on ``S``, warm started from ``forces0``.
-            ``"nnls"``: :func:`scipy.optimize.nnls` (Lawson and Hanson too, cold) on
-            ``min ||L^T lambda_c - L^-1 q||`` with ``S = L L^T``: an independent route.
-        forces0 : array_like, shape (m,), optional
-            Warm start, e.g. :attr:`FastenedResult.multipliers`.
-        tol : float
-            Relative tolerance of ``"lawson-hanson"`` (on ``q - S lambda``, relative to
-            ``max|q|``) and of ``"active-set"`` (its natural residual).
-        """
-        start = time.perf_counter()
-        problem = self.problem if gaps is None else self.problem.variant(gaps=gaps)
-        dual = problem.dual()
-        rows, contacts = self.fasteners, self.contacts
-        q_rows = dual.b[rows]
-        q = dual.b[contacts] - self._eliminated.T @ q_rows
-        x0 = None if forces0 is None else np.maximum(np.asarray(forces0, float)[contacts], 0)
-        if method == "lawson-hanson":
-            forces, converged, nit, factorizations = solve_nonnegative_qp(
-                self.schur, q, x0, tol, max_iter=3 * len(q))
-            message = f"Lawson-Hanson {'converged' if converged else 'did not converge'}"
-        elif method == "nnls":
-            forces, converged, message, nit, factorizations = self._nnls(q)
-        elif method == "active-set":
-            solution = solve_box_qp(self.schur, -q, lower=0.0, x0=x0, tol=tol, check_finite=False)
-            forces, converged, message = solution.x, solution.converged, solution.message
-            nit, factorizations = solution.iterations, solution.factorizations
-        else:
-            raise InvalidInputError(f"method must be 'lawson-hanson', 'active-set' or 'nnls', "
-                                    f"got {method!r}")
-        multipliers = np.empty(problem.n_constraints)
-        multipliers[contacts] = forces
-        multipliers[rows] = scipy.linalg.cho_solve(self._factor, q_rows - self._coupling @ forces)
-        tension = np.maximum(-multipliers[rows], 0.0)
-        compression = np.maximum(multipliers, 0.0)
-        A = problem.constraints.matrix
-        pulled = problem.variant(loads=problem.loads + A[rows].T @ tension)
-        contact = pulled.make_result(
-            dual.displacements(multipliers), compression, solver=f"{method} (fastened)",
-            converged=converged, message=message, nit=nit, wall_time=time.perf_counter() - start,
-            info={"factorizations": factorizations, "method": method})
-        closure = float(np.max(np.abs(contact.gaps[rows])))
-        scale = max(float(np.max(np.abs(problem.constraints.gaps))),
-                    float(np.max(np.abs(contact.x))), np.finfo(float).tiny)
-        return FastenedResult(contact, rows, tension, closure,
-                              bool(contact.success and closure <= contact.certificate.tol * scale),
-                              multipliers)
-
-
-def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson",
-                   forces0=None, tol: float = 1e-10) -> FastenedResult:
-    """Solve a frictionless contact problem whose ``fasteners`` rows are closed (bilateral).
-
-    One call of :class:`FastenerClosure`; see there for the parameters.
-    """
-    return FastenerClosure(problem, fasteners).solve(method=method, forces0=forces0, tol=tol)
-
-
 class FasteningCase(GapVariation):
     """A riveted assembly, every fastener installed: a case of :func:`~contactqp.studies.batch.run_batch`.
 
-    Each sample is solved by :meth:`FastenerClosure.solve` (``method``, ``tol``) with all the
-    fasteners at once (without friction the final state does not depend on the order), warm
+    Each sample is a :class:`~contactqp.core.fastened.FastenedProblem` (its Schur complement
+    reduced once for all samples) solved by :func:`~contactqp.solve` (``method``, ``tol``) with
+    all the fasteners at once (without friction the final state does not depend on the order), warm
     started from the previous sample (except with ``method="nnls"``). Records add ``fastener_force``
     (tension per fastener, N) to those of :class:`~contactqp.studies.batch.GapVariation`.
     """
@@ -495,13 +344,16 @@ class FasteningCase(GapVariation):
     def __init__(self, model: RivetingModel, method: str = "lawson-hanson", tol: float = 1e-10):
         super().__init__(model.base_problem, method=method, tol=tol)
         self.fasteners = model.fasteners
-        self.closure = FastenerClosure(model.base_problem, model.fasteners)
+        self.fastened = FastenedProblem(model.base_problem, model.fasteners)
 
     def fields(self) -> dict:
         return {**super().fields(), "fastener_force": ((len(self.fasteners),), "f8")}
 
     def solve_sample(self, gaps, warm):
-        state = self.closure.solve(gaps, forces0=warm, **self.options)
+        options = dict(self.options)
+        method = options.pop("method")
+        state = solve(self.fastened.variant(gaps=gaps), method,
+                      **_fastening_options(method, options.pop("tol"), warm), **options)
         record = self._record(state.contact)
         record["fastener_force"] = state.fastener_forces
         record["success"] = state.success

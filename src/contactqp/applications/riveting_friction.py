@@ -41,8 +41,8 @@ A fastener at pair ``i`` is a clamping force ``F`` (N): ``+F e_z`` on the lower 
 ``-F e_z`` on the upper one. Fasteners are installed one after another, each a load increment;
 then, optionally, an in-plane shear ``T`` (N, along ``x``, shared equally by the upper part's
 interface nodes) is applied and removed in increments. The whole is one load history solved by
-:func:`~contactqp.core.history.solve_history` (each step
-:meth:`~contactqp.core.problem.FrictionalProblem.solve` from the previous result), so the friction
+:func:`~contactqp.methods.history.solve_history` (each step solved by
+:func:`~contactqp.solve` from the previous result), so the friction
 law acts on each step's slip increment.
 """
 
@@ -56,10 +56,11 @@ import scipy.linalg
 from ..core.contact import NodePairs
 from ..errors import InvalidInputError
 from ..core.friction import STATUS_LABELS
-from ..core.history import linear_path, solve_history
+from ..core.history import linear_path
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import FrictionalProblem
 from ..core.result import FrictionalResult
+from ..methods import solve_history
 
 __all__ = ["Part", "FrictionAssembly", "FrictionRivetingModel", "FasteningStep",
            "STATUS_LABELS"]
@@ -261,7 +262,8 @@ class FrictionRivetingModel:
         facets : int, optional
             Polygonal friction cone (see :class:`FrictionalProblem`).
         **options
-            Passed to :meth:`FrictionalProblem.solve` (``solver``, ``tol``, ...).
+            Passed to :func:`~contactqp.methods.history.solve_history` (``method``,
+            ``tol``, ...).
 
         Returns
         -------

@@ -235,7 +235,7 @@ def solve_reduced(rod: Rod, case: RodLoadCase, solver: str = "active-set") -> tu
     x = rod.frame.coordinates[rod.node_indices, 0]
     problem = ContactProblem(model, P, [GapObstacle(range(model.n_nodes), rod.normal_gap(x),
                                                     rod.normal)])
-    result = solve(problem, solver=solver)
+    result = solve(problem, solver)
     return result, time.perf_counter() - start
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..methods.registry import default_method, methods_for
 from .app import EXIT_NOT_SOLVED, cli, console, fail, warn
 
 
@@ -33,8 +34,8 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail, warn
 @click.option("--correlation-length", type=click.FloatRange(min=0, min_open=True, max=1e3),
               default=0.04,
               show_default=True, help="Correlation length of the gap field (m).")
-@click.option("--method", type=click.Choice(["lawson-hanson", "active-set", "nnls"]),
-              default="lawson-hanson", show_default=True,
+@click.option("--method", type=click.Choice([m.name for m in methods_for("fastened")]),
+              default=default_method("fastened"), show_default=True,
               help="Solver of each sample (nnls: scipy's, not warm started).")
 @click.option("--json", "as_json", is_flag=True,
               help="End with one JSON line: samples, computed, reused, failed, seconds, "

@@ -18,7 +18,7 @@ gap :math:`\ge 0`, and :math:`\tilde r = 0` where the gap is open.
 
 The *polygonal* law of the method replaces the disc :math:`\|r_T\| \le s` by the inscribed
 regular polygon of ``facets`` sides :math:`n_k \cdot r_T \le s \cos(\pi / F)`, with the outward
-normals :math:`n_k` of :func:`~contactqp.core.friction.polygon_normals` (vertices on the circle
+normals :math:`n_k` of :func:`polygon_normals` (vertices on the circle
 at the angles :math:`(2k + 1)\pi / F`). In 2-D the tangential "disc" is the segment
 :math:`|r_T| \le s`, which every polygon reproduces: the polygonal law is then exact.
 
@@ -107,7 +107,7 @@ class FrictionLaw:
     InvalidInputError
         ``mu`` or ``cohesion`` negative, NaN, inf or of the wrong length; cohesion where
         ``mu = 0`` (the cone has no apex); ``facets`` not an integer from 3 to
-        :data:`~MAX_FACETS`.
+        :data:`MAX_FACETS`.
     """
 
     mu: np.ndarray

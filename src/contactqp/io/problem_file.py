@@ -86,7 +86,7 @@ Friction needs contact nodes with 2 freedoms (2-D) or 3 (3-D), the same number a
                choice, when ``facets`` is given).
 ``tol``        Solver tolerance (default 1e-10): natural-map error, or the fixed-point change
                of ``"polygonal"``.
-other keys     Keyword options of the chosen route, checked against its signature:
+other keys     Keyword options of the chosen route, checked against the registry:
                ``max_iter`` for every route, ``backend`` for ``"polygonal"``.
 [friction.backend_options]
                ``"polygonal"`` only: settings for its qpsolvers backend, as in ``[solver]``.
@@ -119,10 +119,10 @@ Step 0 is the first turning point, then ``steps`` increments lead to each next o
 ``certificate_tol``).
 
 =====================  ======================================================================
-``name``               A name from :data:`contactqp.SOLVERS`: ``"active-set"`` (default) or
-                       ``"qp"``.
+``name``               A method for frictionless problems (``contactqp methods``):
+                       ``"active-set"`` (default) or ``"qp"``.
 ``certificate_tol``    Largest relative residual the certificate accepts (default 1e-7).
-other keys             Keyword options of the chosen solver, checked against its signature:
+other keys             Keyword options of the chosen solver, checked against the registry:
                        ``tol`` and ``max_iter`` for ``"active-set"``, ``backend`` for ``"qp"``.
 [solver.backend_options]
                        Only for solvers that pass extra settings on (``"qp"``): a table given
@@ -237,7 +237,6 @@ the key as a prefix and their class kept (e.g.
 from __future__ import annotations
 
 import difflib
-import inspect
 import json
 import math
 import os
@@ -252,11 +251,12 @@ import numpy as np
 from ..core.contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
 from ..errors import FileFormatError, InvalidInputError
 from ..core.friction import STATUS_LABELS, FrictionLaw
-from ..core.history import HistoryResult, linear_path, solve_history
+from ..core.history import HistoryResult, linear_path
 from ..core.model import ReducedModel
-from ..core.problem import ContactProblem, FrictionalProblem, friction_route
+from ..core.problem import ContactProblem, FrictionalProblem
 from ..core.result import CERTIFICATE_TOL, ContactResult, FrictionalResult
-from ..methods import SOLVERS, solve
+from ..methods import solve, solve_history
+from ..methods.registry import default_method, get_method, method_options
 from .arrays import read_csv_array, read_numpy_array
 from .export import write_rows
 
@@ -795,18 +795,10 @@ def _obstacles(where: _Where, doc: dict, model: ReducedModel) -> list:
     return [_obstacle(where, table, number, model) for number, table in enumerate(tables, 1)]
 
 
-def _solver_parameters(method) -> tuple[dict, bool]:
-    """Keyword options of a solver function and whether it passes extra ones on."""
-    named, extra = {}, False
-    for index, parameter in enumerate(inspect.signature(method).parameters.values()):
-        if index == 0:
-            continue  # the problem
-        if parameter.kind is inspect.Parameter.VAR_KEYWORD:
-            extra = True
-        elif parameter.kind in (inspect.Parameter.KEYWORD_ONLY,
-                                inspect.Parameter.POSITIONAL_OR_KEYWORD):
-            named[parameter.name] = parameter.default
-    return named, extra
+def _solver_parameters(name: str, kind: str) -> tuple[dict, bool]:
+    """``({option: default}, passes backend settings on)`` of method ``name`` on problems of
+    ``kind``, from the registry (:func:`~contactqp.methods.registry.method_options`)."""
+    return method_options(name, kind), get_method(name, kind).backend_settings
 
 
 def _option(where: _Where, name: str, value, default, key: str):
@@ -910,13 +902,13 @@ def _solver(where: _Where, doc: dict, frictional: bool) -> tuple[str, dict, floa
                 raise where.error(f"[solver].{key}", "with [friction], [solver] holds only "
                                   "certificate_tol; solver options go in [friction]")
         return "", {}, certificate_tol
-    name = table.get("name", "active-set")
+    name = table.get("name", default_method(ContactProblem.kind))
     if not isinstance(name, str):
         raise where.error("[solver].name", f"must be a string, got {_describe(name)}")
-    if name not in SOLVERS:
-        expected = ", ".join(SOLVERS)
-        raise where.error("[solver].name", f"unknown solver {name!r} (expected one of {expected})")
-    named, extra = _solver_parameters(SOLVERS[name])
+    try:
+        named, extra = _solver_parameters(name, ContactProblem.kind)
+    except InvalidInputError as exc:
+        raise where.rewrap("[solver].name", exc) from None
     options = _route_options(where, table, "[solver]", f"solver '{name}'", named, extra,
                              ("name", "certificate_tol"))
     return name, options, certificate_tol
@@ -962,14 +954,13 @@ def _friction(where: _Where, table, model: ReducedModel, loads: np.ndarray, obst
     route = table.get("solver")
     if route is not None and not isinstance(route, str):
         raise where.error("[friction].solver", f"must be a string, got {_describe(route)}")
+    kind = "frictional" if law.facets is None else "frictional-polygonal"
     try:
-        route, method = friction_route(law, route)
+        route = get_method(route, kind).name
+        named, extra = _solver_parameters(route, kind)
     except InvalidInputError as exc:
         raise where.rewrap("[friction].solver", exc) from None
-    named, extra = _solver_parameters(method)
-    for fixed in ("r0", "facets"):  # set by FrictionalProblem.solve
-        named.pop(fixed, None)
-    named["tol"] = inspect.signature(FrictionalProblem.solve).parameters["tol"].default
+    named.pop("r0", None)  # the warm start is the previous step's state
     options = _route_options(where, table, "[friction]", f"friction solver '{route}'", named,
                              extra, ("solver", *_FRICTION_LAW_KEYS))
     try:
@@ -1042,8 +1033,8 @@ class ProblemSpec:
         :class:`~contactqp.FrictionalProblem` when the file has ``[friction]``, whose loads are
         the first of ``[loading].points`` when these replace ``[loads]``.
     solver : str
-        A name from :data:`contactqp.SOLVERS`, or the friction route (``"coulomb"``,
-        ``"tresca"`` or ``"polygonal"``).
+        A method name (:data:`contactqp.METHODS`): frictionless, or the friction route
+        (``"coulomb"``, ``"tresca"`` or ``"polygonal"``).
     options : dict
         Keyword options for the solver (``[solver]``'s, or ``[friction]``'s for friction).
     name : str
@@ -1084,11 +1075,9 @@ class ProblemSpec:
             Frictionless, with friction, or one certified result per step of the history.
         """
         if self.history is not None:
-            return solve_history(self.problem, self.history, solver=self.solver,
-                                 progress=progress, **self.options)
-        if self.frictional:
-            return self.problem.solve(solver=self.solver, **self.options)
-        return solve(self.problem, solver=self.solver, **self.options)
+            return solve_history(self.problem, self.history, self.solver, progress=progress,
+                                 **self.options)
+        return solve(self.problem, self.solver, **self.options)
 
     def step_factor(self, step: int) -> float | None:
         """Multiple of ``[loads]`` at ``step`` of a ``factors`` history, else None."""

@@ -344,8 +344,8 @@ class _ClarabelTresca:
         return f * polish(self.W, q / (f * self.w), s / f, x, d)
 
 
-def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
-                             r0=None, *, per_contact: bool = False) -> LocalSolution:
+def solve_tresca_fixed_point(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
+                             max_iter: int = 50, per_contact: bool = False) -> LocalSolution:
     """Solve a local Coulomb problem by a fixed point on Tresca cone programs (Clarabel).
 
     Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the

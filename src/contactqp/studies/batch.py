@@ -94,7 +94,7 @@ class GapVariation:
 
     def solve_sample(self, gaps, warm):
         """Solve one sample: ``(record, warm start of the next sample)``."""
-        result = solve(self.problem.variant(gaps=gaps), "active-set", forces0=warm,
+        result = solve(self.problem.variant(gaps=gaps), "active-set", r0=warm,
                        **self.options)
         return self._record(result), result.forces
 
