@@ -156,9 +156,9 @@ def _polish_active_set(P, c, G, h, normal, x):
     return refined if feasible else x
 
 
-def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",
-                    tol: float = 1e-8, max_iter: int = 50, r0=None, *,
-                    per_contact: bool = False, **options) -> LocalSolution:
+def solve_polygonal(problem: LocalProblem, *, r0=None, facets: int = 8, backend: str = "clarabel",
+                    tol: float = 1e-8, max_iter: int = 50, per_contact: bool = False,
+                    **options) -> LocalSolution:
     """Solve a local problem with polygonal friction cones by a fixed point of QPs (qpsolvers).
 
     Parameters
