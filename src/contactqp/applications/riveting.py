@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
-from ..studies.batch import GapVariation
+from ..studies.cases import GapVariation
 from ..core.contact import NodePairs
 from ..errors import InvalidInputError
 from ..core.model import ReducedModel, finite_array
@@ -489,7 +489,7 @@ class FasteningCase(GapVariation):
     Each sample is solved by :meth:`FastenerClosure.solve` (``method``, ``tol``) with all the
     fasteners at once (without friction the final state does not depend on the order), warm
     started from the previous sample (except with ``method="nnls"``). Records add ``fastener_force``
-    (tension per fastener, N) to those of :class:`~contactqp.studies.batch.GapVariation`.
+    (tension per fastener, N) to those of :class:`~contactqp.studies.cases.GapVariation`.
     """
 
     def __init__(self, model: RivetingModel, method: str = "lawson-hanson", tol: float = 1e-10):

@@ -48,7 +48,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     gap, fasteners installed one by one), samples.h5 (one row per sample, resumable) and
     statistics.csv (mean, quantiles of the final gap and probability of contact per pair).
     """
-    from ..studies.batch import GaussianGapField, load_batch, load_gap_samples, run_batch
+    from ..studies import GaussianGapField, load_batch, load_gap_samples, run_batch
     from ..io.export import write_csv
     from ..applications.riveting import Assembly, FasteningCase, STATUS_LABELS, write_vtu
 
@@ -108,7 +108,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
         **{f"gap_q{level * 100:g}": q for level, q in zip(stats.levels, stats.quantiles)},
         "contact_probability": stats.contact_probability})
     if plot:
-        from ..studies.batch import plot_statistics
+        from ..studies import plot_statistics
         from ..applications.riveting import plot_status
 
         plot_status(model, final, nominal_gaps, out / "nominal.png")
@@ -133,7 +133,7 @@ def _run(case, source, samples, path, workers, scheduler):
     from rich.console import Console
     from rich.progress import Progress
 
-    from ..studies.batch import run_batch
+    from ..studies import run_batch
 
     terminal = Console(stderr=True)
     if not terminal.is_terminal:
