@@ -124,6 +124,9 @@ def test_process_pool_gives_the_serial_results(riveted, source, serial, tmp_path
                         tmp_path / "p.h5", workers=2, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(tmp_path / "p.h5"), serial)
+    from contactqp.studies import executors
+
+    assert executors._worker_state is None  # the workers' state stays in the workers
 
 
 def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path):
