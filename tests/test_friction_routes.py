@@ -256,3 +256,30 @@ def test_polygonal_cone_converges_on_the_hex_block_where_the_exact_cone_does():
     # the linearisation's distance from Coulomb: O(pi / facets) on the sliding contacts
     assert 1e-3 < polygon.certificate.natural_map < np.pi / 8
     np.testing.assert_array_equal(polygon.contact_status, exact.contact_status)
+
+
+@pytest.mark.parametrize("route", ["tresca", "polygonal"])
+def test_the_fixed_point_does_not_change_the_data_it_is_given(route):
+    # was: run_fixed_point set data.f to its first iterate's force scale, so a second run on
+    # the same FixedPointData skipped the rescaled first solve and gave another answer
+    from contactqp.methods.polygonal import _PolygonalTresca
+    from contactqp.methods.tresca import FixedPointData, _ClarabelTresca, run_fixed_point
+
+    rng = np.random.default_rng(4)
+    nc, d = 4, 3
+    A = rng.standard_normal((nc * d, nc * d))
+    q = -1e-6 * np.abs(rng.standard_normal(nc * d))
+    q[0] = 1e3  # one contact far from its obstacle: the first iterate is rescaled
+    problem = LocalProblem(A @ A.T / (nc * d) + np.eye(nc * d), q, np.full(nc, 0.3), d)
+    data = FixedPointData(problem)
+    scale = data.f
+    make = {"tresca": lambda: _ClarabelTresca(data),
+            "polygonal": lambda: _PolygonalTresca(data, 8, "clarabel", {})}[route]
+    runs = [run_fixed_point(problem, data, make(), tol=TOL, max_iter=30, r0=None,
+                            exact=route == "tresca") for _ in range(2)]
+    assert data.f == scale
+    assert runs[0].iterations == runs[1].iterations
+    np.testing.assert_array_equal(runs[0].r, runs[1].r)
+    fresh = (solve_tresca_fixed_point(problem, tol=TOL, max_iter=30) if route == "tresca"
+             else solve_polygonal(problem, facets=8, tol=TOL, max_iter=30))
+    np.testing.assert_array_equal(fresh.r, runs[0].r)

@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 
 import contactqp as cq
+from contactqp.applications.assembly import Part
+from contactqp.applications.riveting import Assembly, plate_flexibility, plot_status, write_vtu
 from contactqp.errors import InvalidInputError
-from contactqp.applications.riveting import (Assembly, Plate, plate_flexibility, plot_status,
-                                             write_vtu)
 
 ALL_EDGES = ("left", "right", "bottom", "top")
 
 
-def navier(points, plate: Plate, terms: int = 200) -> np.ndarray:
+def navier(points, plate: Part, terms: int = 200) -> np.ndarray:
     """Deflection at ``points`` under unit forces at ``points``, simply supported rectangle.
 
     Navier's double sine series (Timoshenko & Woinowsky-Krieger, Theory of plates and shells,
@@ -32,7 +32,7 @@ def navier(points, plate: Plate, terms: int = 200) -> np.ndarray:
 def test_plate_flexibility_converges_to_navier_at_second_order():
     # 7 x 3 interior points, 25 mm apart, of a plate simply supported on its four edges; the
     # Morley element converges as h^2 (a halving of h divides the error by about 4)
-    plate = Plate()
+    plate = Part()
     xs, ys = np.meshgrid(np.arange(1, 8) * 0.025, np.arange(1, 4) * 0.025)
     points = np.column_stack([xs.ravel(), ys.ravel()])
     exact = navier(points, plate)
@@ -45,7 +45,7 @@ def test_plate_flexibility_converges_to_navier_at_second_order():
 @pytest.fixture(scope="module")
 def small():
     """11 x 7 pairs, plates of different thickness, fasteners in a row."""
-    assembly = Assembly(lower=Plate(thickness=0.002), upper=Plate(thickness=0.0016),
+    assembly = Assembly(lower=Part(thickness=0.002), upper=Part(thickness=0.0016),
                         grid=(11, 7), fasteners=((1, 3), (5, 3), (9, 3)), refine=2)
     return assembly.build()
 
@@ -134,7 +134,7 @@ def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
     ({"fasteners": ((11, 3),)}, "outside"),
     ({"fasteners": ((1, 3), (1, 3))}, "share"),
     ({"supports": ("left", "middle")}, "supports"),
-    ({"upper": Plate(length=0.3)}, "same length"),
+    ({"upper": Part(length=0.3)}, "same length"),
 ])
 def test_bad_assemblies(kwargs, match):
     with pytest.raises(InvalidInputError, match=match):
@@ -253,8 +253,8 @@ def test_cli_corrupt_gap_file_is_one_line_exit_2(tmp_path, capsys):
 
 
 def test_cli_every_sample_failing_exits_1(tmp_path, capsys, monkeypatch):
-    from contactqp.cli import main
     from contactqp.applications.riveting import FasteningCase
+    from contactqp.cli import main
 
     solve_sample = FasteningCase.solve_sample
 

@@ -44,52 +44,33 @@ on the order (a test checks it), the intermediate states do.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 
-from ..studies.batch import GapVariation
-from ..core.contact import NodePairs
+from ..studies.cases import GapVariation
 from ..core.fastened import STATUS_LABELS, FastenedProblem, FastenedResult
 from ..errors import InvalidInputError
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
 from ..methods import solve
 from ..methods.registry import get_method
+from .assembly import Part, StackedModel, StackedParts
 
-__all__ = ["Plate", "Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
+__all__ = ["Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
            "FasteningCase", "plate_flexibility", "STATUS_LABELS", "write_vtu", "plot_status"]
 
 _EDGES = ("left", "right", "bottom", "top")
 
 
-@dataclass(frozen=True)
-class Plate:
-    """A thin isotropic plate ``[0, length] x [0, width]`` (m) of uniform ``thickness`` (m).
-
-    Defaults: 200 x 100 x 2 mm aluminium (``E = 70 GPa``, ``nu = 0.33``).
-    """
-
-    length: float = 0.200
-    width: float = 0.100
-    thickness: float = 0.002
-    young: float = 70e9
-    poisson: float = 0.33
-
-    @property
-    def rigidity(self) -> float:
-        """Flexural rigidity ``D = E t^3 / (12 (1 - nu^2))`` (N m)."""
-        return self.young * self.thickness ** 3 / (12.0 * (1.0 - self.poisson ** 2))
-
-
-def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -> np.ndarray:
+def plate_flexibility(plate: Part, points, cells, supports=("left", "right")) -> np.ndarray:
     """Out-of-plane flexibility of points of a Kirchhoff plate (Morley elements, condensed).
 
     Parameters
     ----------
-    plate : Plate
+    plate : Part
     points : array_like, shape (k, 2)
         Positions (m) of the computational nodes; each must be a vertex of the mesh.
     cells : (int, int)
@@ -138,11 +119,6 @@ def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -
     return condense(K[free][:, free], np.searchsorted(free, freedoms))
 
 
-@lru_cache(maxsize=4)
-def _cached_flexibility(plate: Plate, points: tuple, cells: tuple, supports: tuple) -> np.ndarray:
-    return plate_flexibility(plate, np.array(points), cells, supports)
-
-
 def _axis(count: int, length: float, low_held: bool, high_held: bool, refine: int):
     """Contact positions along one side (held edges excluded) and the mesh cells along it."""
     intervals = count - 1 + low_held + high_held
@@ -151,13 +127,13 @@ def _axis(count: int, length: float, low_held: bool, high_held: bool, refine: in
 
 
 @dataclass(frozen=True)
-class Assembly:
+class Assembly(StackedParts):
     """Definition of a riveted assembly of two plates; :meth:`build` makes the reduced model.
 
     Parameters
     ----------
-    lower, upper : Plate
-        The two parts (same outline).
+    lower, upper : Part
+        The two plates (same outline).
     grid : (int, int)
         Contact node pairs along ``x`` and ``y``: a regular grid over the plate, supported edges
         excluded (25 x 21 = 525 pairs by default).
@@ -170,8 +146,6 @@ class Assembly:
         Mesh cells between neighbouring contact nodes.
     """
 
-    lower: Plate = Plate()
-    upper: Plate = Plate()
     grid: tuple = (25, 21)
     supports: tuple = ("left", "right")
     fasteners: tuple | None = None
@@ -184,10 +158,10 @@ class Assembly:
         nx, ny = self.grid
         return tuple((i, ny // 2) for i in range(2, nx - 2, 4))
 
-    def build(self) -> "RivetingModel":
-        """Assemble and condense both plates (seconds for the default grid; cached)."""
-        if (self.lower.length, self.lower.width) != (self.upper.length, self.upper.width):
-            raise InvalidInputError("lower and upper plates must have the same length and width")
+    @cached_property
+    def _layout(self) -> tuple:
+        """``(points, cells)``: pair positions (m, shape (k, 2)) and mesh cells along x, y."""
+        self.check_outline()
         nx, ny = (int(n) for n in self.grid)
         if nx < 1 or ny < 1 or int(self.refine) < 1:
             raise InvalidInputError(f"grid and refine must be positive, got {self.grid}, "
@@ -196,9 +170,28 @@ class Assembly:
         xs, cx = _axis(nx, self.lower.length, "left" in held, "right" in held, self.refine)
         ys, cy = _axis(ny, self.lower.width, "bottom" in held, "top" in held, self.refine)
         gx, gy = np.meshgrid(xs, ys)  # pair i + nx j at (xs[i], ys[j])
-        points = np.column_stack([gx.ravel(), gy.ravel()])
-        key = (tuple(map(tuple, points)), (cx, cy), tuple(self.supports))
-        blocks = [_cached_flexibility(plate, *key) for plate in (self.lower, self.upper)]
+        return np.column_stack([gx.ravel(), gy.ravel()]), (cx, cy)
+
+    @cached_property
+    def flexibilities(self) -> tuple:
+        """``(R_lower, R_upper)``: each plate's flexibility at the pairs (m/N, shape (k, k)).
+
+        Computed once per assembly (seconds for the default grid), once for both plates when
+        they are equal; kept on this object, which is immutable.
+        """
+        points, cells = self._layout
+        lower = plate_flexibility(self.lower, points, cells, self.supports)
+        upper = lower if self.upper == self.lower else plate_flexibility(
+            self.upper, points, cells, self.supports)
+        for block in (lower, upper):
+            block.setflags(write=False)
+        return lower, upper
+
+    def build(self) -> "RivetingModel":
+        """The reduced model of both plates (their flexibilities: :attr:`flexibilities`)."""
+        points, _ = self._layout
+        blocks = self.flexibilities
+        nx, ny = (int(n) for n in self.grid)
         fasteners = []
         for i, j in self.fastener_cells():
             if not (0 <= i < nx and 0 <= j < ny):
@@ -208,10 +201,10 @@ class Assembly:
             raise InvalidInputError("two fasteners share a contact pair")
         model = ReducedModel(flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=1,
                              coordinates=np.vstack([points, points]))
-        return RivetingModel(self, model, points, np.array(fasteners, dtype=int))
+        return RivetingModel(self, model, points.copy(), np.array(fasteners, dtype=int))
 
 
-class RivetingModel:
+class RivetingModel(StackedModel):
     """The reduced model of an :class:`Assembly`: contact pairs, fasteners, problems.
 
     Attributes
@@ -226,51 +219,20 @@ class RivetingModel:
     """
 
     def __init__(self, assembly: Assembly, model: ReducedModel, points, fasteners):
-        self.assembly, self.model = assembly, model
-        self.points, self.fasteners = points, fasteners
-
-    @property
-    def n_pairs(self) -> int:
-        """Number of contact pairs ``k``."""
-        return len(self.points)
+        super().__init__(assembly, model, points, assembly.grid)
+        self.fasteners = fasteners
 
     @cached_property
     def base_problem(self) -> ContactProblem:
         """The contact problem with zero gaps; its dual is assembled once and shared."""
-        k = self.n_pairs
-        pairs = np.column_stack([np.arange(k), k + np.arange(k)])
-        problem = ContactProblem(self.model, np.zeros(2 * k), [NodePairs(pairs, np.zeros(k))])
+        problem = ContactProblem(self.model, np.zeros(2 * self.n_pairs),
+                                 [self.node_pairs(np.zeros(self.n_pairs))])
         problem.dual()
         return problem
 
     def problem(self, gaps) -> ContactProblem:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return self.base_problem.variant(gaps=gaps)
-
-    @property
-    def thickness(self) -> float:
-        """The thinner plate's thickness (m): the scale of a plausible gap or overlap."""
-        return min(self.assembly.lower.thickness, self.assembly.upper.thickness)
-
-    def check_gaps(self, gaps, what: str = "gaps") -> np.ndarray:
-        """``gaps`` (m) as a finite array of shape (k,); an overlap (negative gap) deeper than
-        the thinner plate is physically absurd and refused.
-
-        Raises
-        ------
-        InvalidInputError
-            Wrong shape, NaN or inf, or an overlap beyond the plate thickness; ``what`` names
-            the input in the message.
-        """
-        gaps = finite_array(gaps, what, 1)
-        if gaps.shape != (self.n_pairs,):
-            raise InvalidInputError(f"{what} must have {self.n_pairs} values, got {gaps.size}")
-        deepest = float(gaps.min())
-        if deepest < -self.thickness:
-            raise InvalidInputError(
-                f"{what}: an overlap of {-deepest * 1e3:.4g} mm is deeper than the "
-                f"{self.thickness * 1e3:.4g} mm plates (a negative gap is interference)")
-        return gaps
 
     def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
                tol: float = 1e-10) -> "FasteningSequence":
@@ -338,7 +300,7 @@ class FasteningCase(GapVariation):
     reduced once for all samples) solved by :func:`~contactqp.solve` (``method``, ``tol``) with
     all the fasteners at once (without friction the final state does not depend on the order), warm
     started from the previous sample (except with ``method="nnls"``). Records add ``fastener_force``
-    (tension per fastener, N) to those of :class:`~contactqp.studies.batch.GapVariation`.
+    (tension per fastener, N) to those of :class:`~contactqp.studies.cases.GapVariation`.
     """
 
     def __init__(self, model: RivetingModel, method: str = "lawson-hanson", tol: float = 1e-10):

@@ -63,7 +63,7 @@ class _PolygonalTresca:
                 f"{', '.join(available_backends())}")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
-        self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
+        self.w = data.w
         self.sparse = backend in self.qpsolvers.sparse_solvers
         P = self.W = data.W_sym / self.w
         if self.sparse:
@@ -74,8 +74,7 @@ class _PolygonalTresca:
         self.normals = polygon_normals(facets) if self.d == 3 else None
         self.inradius = np.cos(np.pi / facets)
 
-    def __call__(self, q, s):
-        f = self.data.f
+    def __call__(self, q, s, f):
         d, nc = self.d, self.nc
         keep, sliding, normal, tangent = free_unknowns(s, d)
         bound = s[sliding] / f
