@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from contactqp import ContactProblem, NodePairs, solve
+from contactqp.io.plot import plot_statistics
 from contactqp.studies.batch import (GapSamples, GapVariation, GaussianGapField, load_batch,
-                             load_gap_samples, plot_statistics, run_batch)
+                             load_gap_samples, run_batch)
 from contactqp.errors import FileFormatError, InvalidInputError
 from contactqp.applications.riveting import Assembly, FasteningCase
 

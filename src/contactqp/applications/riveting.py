@@ -553,22 +553,12 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
 
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
-    """Maps of the initial and residual gaps (mm) and of the pair status, as a PNG."""
-    from ..io.plot import save_figure, subplots
+    """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
+    (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
+    from ..io.plot import plot_point_maps
 
-    xy = model.points * 1e3
-    figure, axes = subplots(3, 1, figsize=(7, 9.5), sharex=True)
     panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
               (state.contact.gaps * 1e3, "residual gap (mm)", "viridis"),
               (state.status, "status: " + " / ".join(STATUS_LABELS), "coolwarm")]
-    for ax, (values, title, cmap) in zip(axes, panels):
-        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
-        figure.colorbar(shown, ax=ax)
-        ax.plot(*xy[state.fasteners].T, "k+", ms=10, label="fasteners")
-        ax.set_title(title)
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    axes[0].legend(loc="upper right", fontsize="small")
-    axes[-1].set_xlabel("x (mm)")
-    figure.tight_layout()
-    return save_figure(figure, path)
+    return plot_point_maps(model.points, panels, path, marked=model.points[state.fasteners],
+                           marked_label="fasteners")

@@ -108,8 +108,8 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
         **{f"gap_q{level * 100:g}": q for level, q in zip(stats.levels, stats.quantiles)},
         "contact_probability": stats.contact_probability})
     if plot:
-        from ..studies.batch import plot_statistics
         from ..applications.riveting import plot_status
+        from ..io.plot import plot_statistics
 
         plot_status(model, final, nominal_gaps, out / "nominal.png")
         plot_statistics(stats, xy, out / "statistics.png")

@@ -1,7 +1,9 @@
-"""Figures (matplotlib, imported when a figure is asked for).
+"""Figures (matplotlib, imported when a figure is asked for): the one module that draws.
 
 Figures are made outside pyplot (:func:`subplots`), so drawing one never switches the user's
-matplotlib backend nor leaves a figure registered in a notebook's pyplot state.
+matplotlib backend nor leaves a figure registered in a notebook's pyplot state. Each figure
+takes plain arrays in SI units (an application picks them from its own objects, e.g.
+:func:`contactqp.applications.riveting.plot_status`) and is written by :func:`save_figure`.
 """
 
 from __future__ import annotations
@@ -11,7 +13,8 @@ from pathlib import Path
 from ..errors import InvalidInputError
 from ..optional import require
 
-__all__ = ["plot_spring_chain", "plot_rod", "save_figure", "subplots"]
+__all__ = ["plot_spring_chain", "plot_rod", "plot_point_maps", "plot_statistics",
+           "plot_sliding_curve", "save_figure", "subplots"]
 
 
 def subplots(nrows: int = 1, ncols: int = 1, *, figsize=(7, 4.5), **options):
@@ -43,24 +46,116 @@ def save_figure(figure, path) -> Path:
     return path
 
 
-def plot_spring_chain(results, path) -> Path:
-    """Displacement of each body for each pulling force, as a PNG.
+def plot_spring_chain(forces, displacements, path) -> Path:
+    """Displacement of each body for each pulling force.
 
     Parameters
     ----------
-    results : sequence of SpringChainResult
+    forces : sequence of float
+        The pulling forces (N).
+    displacements : sequence of array_like
+        For each force, the displacement of each body (m).
     path : str or Path
         Output file; its suffix chooses the format.
     """
     figure, axes = subplots(figsize=(7, 4.5))
-    for result in results:
-        bodies = range(1, len(result.x) + 1)
-        axes.plot(bodies, result.x, marker="o" if len(result.x) <= 50 else None,
-                  label=f"F = {result.force:g} N")
+    for force, x in zip(forces, displacements):
+        bodies = range(1, len(x) + 1)
+        axes.plot(bodies, x, marker="o" if len(x) <= 50 else None, label=f"F = {force:g} N")
     axes.xaxis.get_major_locator().set_params(integer=True)
     axes.set_xlabel("body")
     axes.set_ylabel("displacement x (m)")
     axes.set_title("Spring chain with friction")
+    axes.grid(True, alpha=0.3)
+    axes.legend()
+    figure.tight_layout()
+    return save_figure(figure, path)
+
+
+def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = "") -> Path:
+    """Maps of values at points in a plane, one panel above the other, sharing the x axis.
+
+    Parameters
+    ----------
+    points : array_like, shape (m, 2)
+        Positions (m); drawn in mm.
+    panels : sequence of (array_like, str, str)
+        ``(values, title, colormap)`` of each panel; ``values`` has shape (m,).
+    path : str or Path
+        Output file; its suffix chooses the format.
+    marked : array_like, shape (j, 2), optional
+        Positions (m) marked with a cross on every panel, named ``marked_label`` in a legend.
+    """
+    import numpy as np
+
+    xy = np.asarray(points, dtype=float) * 1e3
+    figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True, squeeze=False)
+    axes = axes[:, 0]
+    for ax, (values, title, cmap) in zip(axes, panels):
+        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
+        figure.colorbar(shown, ax=ax)
+        if marked is not None:
+            ax.plot(*(np.asarray(marked, dtype=float).reshape(-1, 2) * 1e3).T, "k+", ms=10,
+                    label=marked_label)
+        ax.set_title(title)
+        ax.set_ylabel("y (mm)")
+        ax.set_aspect("equal")
+    if marked is not None:
+        axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("x (mm)")
+    figure.tight_layout()
+    return save_figure(figure, path)
+
+
+def plot_statistics(statistics, coordinates, path) -> Path:
+    """Maps of the mean final gap, its highest quantile and the probability of contact.
+
+    Parameters
+    ----------
+    statistics : contactqp.studies.batch.GapStatistics
+        Its ``mean`` and ``quantiles`` (m), ``levels``, ``contact_probability`` and ``samples``.
+    coordinates : array_like, shape (m, 2)
+        The position of each contact (m); drawn in mm.
+    path : str or Path
+        Output file; its suffix chooses the format.
+    """
+    import numpy as np
+
+    samples = f", {statistics.samples} samples"
+    panels = [(np.asarray(statistics.mean) * 1e3, f"mean final gap (mm){samples}", "viridis"),
+              (np.asarray(statistics.quantiles[-1]) * 1e3,
+               f"{statistics.levels[-1]:.0%} quantile of the final gap (mm){samples}", "viridis"),
+              (statistics.contact_probability, f"probability of contact{samples}", "viridis")]
+    return plot_point_maps(coordinates, panels, path)
+
+
+def plot_sliding_curve(relative, load, limit: float, path, *, onset: int | None = None,
+                       title: str = "") -> Path:
+    """Lateral load against the relative displacement of two layers, with the analytic limit.
+
+    Parameters
+    ----------
+    relative, load : array_like, shape (s,)
+        Relative displacement (m, drawn in mm) and lateral load (N, drawn in kN) of each step.
+    limit : float
+        The analytic sliding load ``c A + mu N`` (N).
+    path : str or Path
+        Output file; its suffix chooses the format.
+    onset : int, optional
+        The step at which sliding starts, marked with a star.
+    title : str
+    """
+    import numpy as np
+
+    relative, load = np.asarray(relative) * 1e3, np.asarray(load) / 1e3
+    figure, axes = subplots(figsize=(7, 4.5))
+    axes.plot(relative, load, "o-", ms=3, label="reduced model")
+    axes.axhline(limit / 1e3, color="C3", ls="--", label="c A + mu N (sliding block)")
+    if onset is not None:
+        axes.plot(relative[onset], load[onset], "k*", ms=12, label="onset of sliding")
+    axes.set_xlabel("relative displacement of the layers (mm)")
+    axes.set_ylabel("lateral load (kN)")
+    axes.set_title(title)
     axes.grid(True, alpha=0.3)
     axes.legend()
     figure.tight_layout()

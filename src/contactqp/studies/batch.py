@@ -40,7 +40,7 @@ from ..methods import solve
 
 __all__ = ["BatchData", "BatchSummary", "GapSamples", "GapStatistics", "GapVariation",
            "GaussianGapField", "check_scheduler", "load_batch", "load_gap_samples",
-           "plot_statistics", "run_batch"]
+           "run_batch"]
 
 FORMAT = "contactqp-batch/1"
 DEFAULT_CHUNK = 50
@@ -697,27 +697,3 @@ def load_batch(path, n_samples: int | None = None) -> BatchData:
         done = np.flatnonzero(store["done"][:n_samples])
         fields = {name: store[name][:][done] for name in store if name != "done"}
     return BatchData(done, fields)
-
-
-def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
-    """Maps of the mean final gap, its highest quantile and the probability of contact (PNG).
-
-    ``coordinates``: shape (m, 2), the position of each contact (m); drawn in mm.
-    """
-    from ..io.plot import save_figure, subplots
-
-    xy = np.asarray(coordinates, dtype=float) * 1e3
-    panels = [(statistics.mean * 1e3, "mean final gap (mm)"),
-              (statistics.quantiles[-1] * 1e3,
-               f"{statistics.levels[-1]:.0%} quantile of the final gap (mm)"),
-              (statistics.contact_probability, "probability of contact")]
-    figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True)
-    for ax, (values, title) in zip(axes, panels):
-        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, s=18, cmap="viridis")
-        figure.colorbar(shown, ax=ax)
-        ax.set_title(f"{title}, {statistics.samples} samples")
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    axes[-1].set_xlabel("x (mm)")
-    figure.tight_layout()
-    return save_figure(figure, path)
