@@ -8,7 +8,8 @@ import pytest
 
 from contactqp.errors import InvalidInputError
 from contactqp.applications.riveting import (Assembly, FastenerClosure, Plate, plate_flexibility, plot_status,
-                                write_vtu)
+                                result_mesh)
+from contactqp.io.export import write_vtu
 
 ALL_EDGES = ("left", "right", "bottom", "top")
 
@@ -117,7 +118,7 @@ def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
     import meshio
 
     final = small.fasten(rough_gaps).final
-    path = write_vtu(small, final, tmp_path / "r.vtu", rough_gaps)
+    path = write_vtu(tmp_path / "r.vtu", *result_mesh(small, final, rough_gaps))
     mesh = meshio.read(path)
     k = small.n_pairs
     assert mesh.points.shape == (2 * k, 3)

@@ -52,6 +52,7 @@ import scipy.linalg
 from ..studies.batch import GapVariation
 from ..core.contact import NodePairs
 from ..errors import InvalidInputError
+from ..io.export import PointMesh
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
 from ..core.result import ContactResult
@@ -61,7 +62,7 @@ from ..methods.lawson_hanson import solve_nonnegative_qp
 __all__ = ["Plate", "Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
            "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened",
            "STATUS_LABELS",
-           "write_vtu", "plot_status"]
+           "result_mesh", "plot_status"]
 
 #: Pair status codes of :attr:`FastenedResult.status`, by index.
 STATUS_LABELS = ("open", "contact", "fastener")
@@ -516,16 +517,15 @@ class FasteningCase(GapVariation):
         return {**super().describe(), "fasteners": self.fasteners.tolist()}
 
 
-def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -> Path:
-    """Both contact grids as quadrilateral surfaces in a VTU file (ParaView).
+def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> PointMesh:
+    """Both contact grids as quadrilateral surfaces with the fastened state, for
+    :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *result_mesh(...))``).
 
     The lower grid at ``z = 0``, the upper one at ``z = thickness`` of the lower plate (for
     display). Point data: ``displacement`` (``w`` along ``z``, m), ``contact_force`` (N, on the
     node, along ``z``), ``initial_gap`` and ``gap`` (m), ``status`` (codes of
     :data:`STATUS_LABELS`), ``fastener_force`` (N, zero away from fasteners).
     """
-    from ..io.export import write_vtu as write_mesh
-
     nx, ny = model.assembly.grid
     k = model.n_pairs
     ids = np.arange(k).reshape(ny, nx)
@@ -549,7 +549,7 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
         "gap": both(state.contact.gaps), "status": both(state.status),
         "fastener_force": both(tension),
     }
-    return write_mesh(path, points, [("quad", np.vstack([quads, quads + k]))], data)
+    return PointMesh(points, [("quad", np.vstack([quads, quads + k]))], data)
 
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:

@@ -49,8 +49,8 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
     statistics.csv (mean, quantiles of the final gap and probability of contact per pair).
     """
     from ..studies.batch import GaussianGapField, load_batch, load_gap_samples, run_batch
-    from ..io.export import write_csv
-    from ..applications.riveting import Assembly, FasteningCase, STATUS_LABELS, write_vtu
+    from ..io.export import write_csv, write_vtu
+    from ..applications.riveting import Assembly, FasteningCase, STATUS_LABELS, result_mesh
 
     model = Assembly().build()
     if gap_file is not None:
@@ -85,7 +85,7 @@ def riveting(samples, seed, workers, scheduler, out, gap_file, mean_gap, amplitu
              f"{-mean_gap * 1e3:.4g} mm at rest (interference)")
     final = sequence.final
     xy = model.points
-    write_vtu(model, final, out / "nominal.vtu", nominal_gaps)
+    write_vtu(out / "nominal.vtu", *result_mesh(model, final, nominal_gaps))
     write_csv(out / "nominal_contacts.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.contact.gaps,
         "force": final.contact.forces, "status": [STATUS_LABELS[s] for s in final.status]})

@@ -8,13 +8,17 @@ takes plain arrays in SI units (an application picks them from its own objects, 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
 
 from ..errors import InvalidInputError
 from ..optional import require
 
-__all__ = ["plot_spring_chain", "plot_rod", "plot_point_maps", "plot_statistics",
-           "plot_sliding_curve", "save_figure", "subplots"]
+__all__ = ["plot_spring_chain", "plot_deflections", "DeflectionCase", "plot_point_maps",
+           "plot_statistics", "plot_sliding_curve", "save_figure", "subplots"]
 
 
 def subplots(nrows: int = 1, ncols: int = 1, *, figsize=(7, 4.5), **options):
@@ -86,8 +90,6 @@ def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = ""
     marked : array_like, shape (j, 2), optional
         Positions (m) marked with a cross on every panel, named ``marked_label`` in a legend.
     """
-    import numpy as np
-
     xy = np.asarray(points, dtype=float) * 1e3
     figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True, squeeze=False)
     axes = axes[:, 0]
@@ -119,8 +121,6 @@ def plot_statistics(statistics, coordinates, path) -> Path:
     path : str or Path
         Output file; its suffix chooses the format.
     """
-    import numpy as np
-
     samples = f", {statistics.samples} samples"
     panels = [(np.asarray(statistics.mean) * 1e3, f"mean final gap (mm){samples}", "viridis"),
               (np.asarray(statistics.quantiles[-1]) * 1e3,
@@ -145,8 +145,6 @@ def plot_sliding_curve(relative, load, limit: float, path, *, onset: int | None 
         The step at which sliding starts, marked with a star.
     title : str
     """
-    import numpy as np
-
     relative, load = np.asarray(relative) * 1e3, np.asarray(load) / 1e3
     figure, axes = subplots(figsize=(7, 4.5))
     axes.plot(relative, load, "o-", ms=3, label="reduced model")
@@ -162,54 +160,64 @@ def plot_sliding_curve(relative, load, limit: float, path, *, onset: int | None 
     return save_figure(figure, path)
 
 
-def plot_rod(rod, comparisons, path) -> Path:
-    """The rod deformed over its obstacle, one panel per load case, as a PNG (true scale, mm).
+class DeflectionCase(NamedTuple):
+    """One panel of :func:`plot_deflections`: a load case's solutions (m) and forces (N).
+
+    ``loads`` and ``contacts`` are ``(point, force)`` pairs, each of shape (2,): the force on
+    the beam, drawn as an arrow that ends at the point and is labelled with its magnitude.
+    """
+
+    title: str
+    deformed: np.ndarray  #: (p, 2): positions of the mesh nodes, deformed (reference solution)
+    nodes: np.ndarray  #: (k, 2): positions of the computational nodes, deformed (reduced model)
+    loads: Sequence[tuple[np.ndarray, np.ndarray]]
+    contacts: Sequence[tuple[np.ndarray, np.ndarray]]
+
+
+def plot_deflections(x, obstacle, cases: Sequence[DeflectionCase], path, *, clamp: float,
+                     xlabel: str = "x (mm)") -> Path:
+    """A beam deformed over its obstacle, one panel per load case, at true scale in mm.
 
     Parameters
     ----------
-    rod : contactqp.applications.rod.Rod
-    comparisons : sequence of contactqp.applications.rod.CaseComparison
-        Drawn: the reference deflection on the mesh (line), the reduced solution at the
-        computational nodes (markers), the applied forces and the reduced contact forces (arrows,
-        labelled in N).
+    x : array_like, shape (p,)
+        Positions of the mesh nodes along the beam at rest (m), the beam lying on ``y = 0``.
+    obstacle : array_like, shape (p,)
+        Height of the obstacle's surface under each node (m).
+    cases : sequence of DeflectionCase
     path : str or Path
         Output file; its suffix chooses the format.
+    clamp : float
+        Half height of the clamp drawn at the right end (m); also the length of the arrow of
+        each panel's largest load.
+    xlabel : str
     """
-    import numpy as np
-
-    x = rod.frame.coordinates[:, 0] * 1e3
-    nodes = rod.node_indices
-    figure, panels = subplots(len(comparisons), 1, figsize=(8, 3.2 * len(comparisons)),
-                              sharex=True, squeeze=False)
-    arrow = 0.25 * rod.gap_clamped * 1e3
-    for axes, c in zip(panels[:, 0], comparisons):
-        obstacle = -rod.gap(rod.frame.coordinates[:, 0]) * 1e3
+    x, obstacle = np.asarray(x, dtype=float) * 1e3, np.asarray(obstacle, dtype=float) * 1e3
+    figure, panels = subplots(len(cases), 1, figsize=(8, 3.2 * len(cases)), sharex=True,
+                              squeeze=False)
+    arrow = clamp * 1e3
+    for axes, case in zip(panels[:, 0], cases):
+        largest = max((np.hypot(*force) for _, force in case.loads), default=0.0)
+        scale = arrow / max(largest, 1e-300)  # mm per N: the largest load is `arrow` long
         axes.fill_between(x, obstacle, obstacle.min() - 1.0, color="0.85", label="obstacle")
         axes.plot(x, obstacle, color="0.3", lw=1)
         axes.plot(x, 0 * x, color="0.6", ls="--", lw=1, label="rod at rest")
-        deformed = rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2]
-        axes.plot(deformed[:, 0] * 1e3, deformed[:, 1] * 1e3, color="C0", lw=2,
-                  label="full FE contact")
-        U = c.reduced.x.reshape(-1, 2)
-        axes.plot((x[nodes] + U[:, 0] * 1e3), U[:, 1] * 1e3, "o", color="C1",
-                  label="reduced model (nodes)")
+        deformed, nodes = np.asarray(case.deformed) * 1e3, np.asarray(case.nodes) * 1e3
+        axes.plot(deformed[:, 0], deformed[:, 1], color="C0", lw=2, label="full FE contact")
+        axes.plot(nodes[:, 0], nodes[:, 1], "o", color="C1", label="reduced model (nodes)")
         axes.plot([x[-1]] * 2, [-arrow, arrow], color="k", lw=4)
-        scale = arrow / max(max(abs(load.fy) for load in c.case.loads), 1e-300)
-        for load in c.case.loads:
-            uy = c.reference.displacements[int(np.argmin(np.abs(x - load.x * 1e3))), 1] * 1e3
-            axes.annotate(f"{abs(load.fy):.3g} N", (load.x * 1e3, uy),
-                          (load.x * 1e3, uy - load.fy * scale), color="C3", ha="center",
-                          arrowprops={"arrowstyle": "->", "color": "C3"})
-        for i in np.flatnonzero(c.reduced.forces > 0):
-            force = c.reduced.forces[i]
-            tip = (x[nodes[i]] + U[i, 0] * 1e3, U[i, 1] * 1e3)
-            tail = (tip[0] + force * scale * rod.normal[0], tip[1] + force * scale * rod.normal[1])
-            axes.annotate(f"{force:.3g} N", tip, tail, color="C2", ha="center", va="top",
-                          arrowprops={"arrowstyle": "->", "color": "C2"})
-        axes.set_title(f"{c.case.name}: largest deviation {c.max_eps:.2g} %")
+        for arrows, color, options in ((case.loads, "C3", {}), (case.contacts, "C2",
+                                                                  {"va": "top"})):
+            for point, force in arrows:
+                tip = np.asarray(point, dtype=float) * 1e3
+                tail = tip - np.asarray(force, dtype=float) * scale
+                axes.annotate(f"{np.hypot(*force):.3g} N", tuple(tip), tuple(tail), color=color,
+                              ha="center", arrowprops={"arrowstyle": "->", "color": color},
+                              **options)
+        axes.set_title(case.title)
         axes.set_ylabel("y (mm)")
         axes.grid(True, alpha=0.3)
     panels[0, 0].legend(loc="upper left", fontsize="small")
-    panels[-1, 0].set_xlabel("x (mm), clamped at the right end")
+    panels[-1, 0].set_xlabel(xlabel)
     figure.tight_layout()
     return save_figure(figure, path)
