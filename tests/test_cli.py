@@ -155,7 +155,8 @@ from contactqp.io.plot import plot_spring_chain
 from contactqp.applications.springs import SpringChain
 chain = SpringChain(n=3, stiffness=1.0, mu=0.2, mass=2.0, g=10.0)
 results = [chain.solve(f) for f in (3.0, 14.0)]
-plot_spring_chain([r.force for r in results], [r.x for r in results], {str(tmp_path / "chain.png")!r})
+forces, displacements = [r.force for r in results], [r.x for r in results]
+plot_spring_chain(forces, displacements, {str(tmp_path / "chain.png")!r})
 print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)
 """
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
