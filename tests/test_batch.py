@@ -15,9 +15,9 @@ from contactqp.studies import (
     GaussianGapField,
     load_batch,
     load_gap_samples,
-    plot_statistics,
     run_batch,
 )
+from contactqp.io.plot import plot_statistics
 
 N = 24
 

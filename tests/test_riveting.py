@@ -8,7 +8,8 @@ import pytest
 
 import contactqp as cq
 from contactqp.applications.assembly import Part
-from contactqp.applications.riveting import Assembly, plate_flexibility, plot_status, write_vtu
+from contactqp.applications.riveting import Assembly, plate_flexibility, plot_status, result_mesh
+from contactqp.io.export import write_vtu
 from contactqp.errors import InvalidInputError
 
 ALL_EDGES = ("left", "right", "bottom", "top")
@@ -118,7 +119,7 @@ def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
     import meshio
 
     final = small.fasten(rough_gaps).final
-    path = write_vtu(small, final, tmp_path / "r.vtu", rough_gaps)
+    path = write_vtu(tmp_path / "r.vtu", *result_mesh(small, final, rough_gaps))
     mesh = meshio.read(path)
     k = small.n_pairs
     assert mesh.points.shape == (2 * k, 3)

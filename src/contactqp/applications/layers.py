@@ -263,20 +263,11 @@ class LayersResult:
 
 
 def plot_layers(result: LayersResult, path) -> Path:
-    """Lateral load against relative displacement, with the analytic limit, as a PNG."""
-    from ..io.plot import save_figure, subplots
+    """Lateral load against relative displacement, with the analytic limit (drawn by
+    :func:`contactqp.io.plot.plot_sliding_curve`)."""
+    from ..io.plot import plot_sliding_curve
 
-    figure, axes = subplots(figsize=(7, 4.5))
-    axes.plot(result.relative * 1e3, result.load / 1e3, "o-", ms=3, label="reduced model")
-    axes.axhline(result.layers.limit / 1e3, color="C3", ls="--",
-                 label="c A + mu N (sliding block)")
-    if result.onset is not None:
-        axes.plot(result.relative[result.onset] * 1e3, result.load[result.onset] / 1e3, "k*",
-                  ms=12, label="onset of sliding")
-    axes.set_xlabel("relative displacement of the layers (mm)")
-    axes.set_ylabel("lateral load (kN)")
-    axes.set_title(f"Two layers: mu = {result.layers.mu:g}, c = {result.layers.cohesion:g} Pa")
-    axes.grid(True, alpha=0.3)
-    axes.legend()
-    figure.tight_layout()
-    return save_figure(figure, path)
+    layers = result.layers
+    return plot_sliding_curve(result.relative, result.load, layers.limit, path,
+                              onset=result.onset,
+                              title=f"Two layers: mu = {layers.mu:g}, c = {layers.cohesion:g} Pa")

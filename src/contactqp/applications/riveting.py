@@ -53,6 +53,7 @@ import scipy.linalg
 from ..studies.cases import GapVariation
 from ..core.fastened import STATUS_LABELS, FastenedProblem, FastenedResult
 from ..errors import InvalidInputError
+from ..io.export import PointMesh
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
 from ..methods import solve
@@ -60,7 +61,7 @@ from ..methods.registry import get_method
 from .assembly import Part, StackedModel, StackedParts
 
 __all__ = ["Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
-           "FasteningCase", "plate_flexibility", "STATUS_LABELS", "write_vtu", "plot_status"]
+           "FasteningCase", "plate_flexibility", "STATUS_LABELS", "result_mesh", "plot_status"]
 
 _EDGES = ("left", "right", "bottom", "top")
 
@@ -330,16 +331,15 @@ class FasteningCase(GapVariation):
         return {**super().describe(), "fasteners": self.fasteners.tolist()}
 
 
-def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -> Path:
-    """Both contact grids as quadrilateral surfaces in a VTU file (ParaView).
+def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> PointMesh:
+    """Both contact grids as quadrilateral surfaces with the fastened state, for
+    :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *result_mesh(...))``).
 
     The lower grid at ``z = 0``, the upper one at ``z = thickness`` of the lower plate (for
     display). Point data: ``displacement`` (``w`` along ``z``, m), ``contact_force`` (N, on the
     node, along ``z``), ``initial_gap`` and ``gap`` (m), ``status`` (codes of
     :data:`STATUS_LABELS`), ``fastener_force`` (N, zero away from fasteners).
     """
-    from ..io.export import write_vtu as write_mesh
-
     nx, ny = model.assembly.grid
     k = model.n_pairs
     ids = np.arange(k).reshape(ny, nx)
@@ -363,26 +363,16 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
         "gap": both(state.contact.gaps), "status": both(state.status),
         "fastener_force": both(tension),
     }
-    return write_mesh(path, points, [("quad", np.vstack([quads, quads + k]))], data)
+    return PointMesh(points, [("quad", np.vstack([quads, quads + k]))], data)
 
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
-    """Maps of the initial and residual gaps (mm) and of the pair status, as a PNG."""
-    from ..io.plot import save_figure, subplots
+    """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
+    (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
+    from ..io.plot import plot_point_maps
 
-    xy = model.points * 1e3
-    figure, axes = subplots(3, 1, figsize=(7, 9.5), sharex=True)
     panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
               (state.contact.gaps * 1e3, "residual gap (mm)", "viridis"),
               (state.status, "status: " + " / ".join(STATUS_LABELS), "coolwarm")]
-    for ax, (values, title, cmap) in zip(axes, panels):
-        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
-        figure.colorbar(shown, ax=ax)
-        ax.plot(*xy[state.fasteners].T, "k+", ms=10, label="fasteners")
-        ax.set_title(title)
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    axes[0].legend(loc="upper right", fontsize="small")
-    axes[-1].set_xlabel("x (mm)")
-    figure.tight_layout()
-    return save_figure(figure, path)
+    return plot_point_maps(model.points, panels, path, marked=model.points[state.fasteners],
+                           marked_label="fasteners")

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ContactWarning, InvalidInputError
-from ..io.export import write_csv
+from ..io.export import write_csv, write_vtu
 from ..studies import (
     BatchSummary,
     GapSamples,
@@ -38,7 +38,7 @@ from .riveting import (
     FasteningCase,
     FasteningSequence,
     RivetingModel,
-    write_vtu,
+    result_mesh,
 )
 
 __all__ = ["RivetingStudy", "run_riveting_study"]
@@ -183,7 +183,7 @@ def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, worker
                                                           statistics.quantiles)},
         "contact_probability": statistics.contact_probability})
     if plot:
-        from ..studies import plot_statistics
+        from ..io.plot import plot_statistics
         from .riveting import plot_status
 
         files["nominal.png"] = plot_status(model, sequence.final, nominal_gaps,
@@ -211,7 +211,7 @@ def _write_nominal(out: Path, model: RivetingModel, sequence: FasteningSequence,
     """Write the nominal state's files; ``{name: path}``."""
     final = sequence.final
     xy = model.points
-    files = {"nominal.vtu": write_vtu(model, final, out / "nominal.vtu", nominal_gaps)}
+    files = {"nominal.vtu": write_vtu(out / "nominal.vtu", *result_mesh(model, final, nominal_gaps))}
     files["nominal_contacts.csv"] = write_csv(out / "nominal_contacts.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.contact.gaps,
         "force": final.contact.forces, "status": [STATUS_LABELS[s] for s in final.status]})

@@ -6,7 +6,7 @@ Modules: :mod:`.cases` (what one sample solves), :mod:`.sources` (gap fields),
 :mod:`.statistics` (per-contact statistics) and :mod:`.batch` (the driver, :func:`run_batch`).
 """
 
-from .batch import BatchSummary, plot_statistics, run_batch
+from .batch import BatchSummary, run_batch
 from .cases import GapVariation
 from .executors import check_scheduler
 from .sources import GapSamples, GaussianGapField, load_gap_samples
@@ -15,4 +15,4 @@ from .store import BatchData, load_batch
 
 __all__ = ["BatchData", "BatchSummary", "GapSamples", "GapStatistics", "GapVariation",
            "GaussianGapField", "check_scheduler", "gap_statistics", "load_batch",
-           "load_gap_samples", "plot_statistics", "run_batch"]
+           "load_gap_samples", "run_batch"]

@@ -23,7 +23,7 @@ from .executors import check_scheduler, executor
 from .statistics import GapStatistics
 from .store import BatchStore
 
-__all__ = ["BatchSummary", "DEFAULT_CHUNK", "MAX_SAMPLES", "plot_statistics", "run_batch"]
+__all__ = ["BatchSummary", "DEFAULT_CHUNK", "MAX_SAMPLES", "run_batch"]
 
 DEFAULT_CHUNK = 50
 
@@ -166,25 +166,3 @@ def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler
     return BatchSummary(n_samples, computed, reused, failed, time.perf_counter() - start, path)
 
 
-def plot_statistics(statistics: GapStatistics, coordinates, path) -> Path:
-    """Maps of the mean final gap, its highest quantile and the probability of contact (PNG).
-
-    ``coordinates``: shape (m, 2), the position of each contact (m); drawn in mm.
-    """
-    from ..io.plot import save_figure, subplots
-
-    xy = np.asarray(coordinates, dtype=float) * 1e3
-    panels = [(statistics.mean * 1e3, "mean final gap (mm)"),
-              (statistics.quantiles[-1] * 1e3,
-               f"{statistics.levels[-1]:.0%} quantile of the final gap (mm)"),
-              (statistics.contact_probability, "probability of contact")]
-    figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True)
-    for ax, (values, title) in zip(axes, panels):
-        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, s=18, cmap="viridis")
-        figure.colorbar(shown, ax=ax)
-        ax.set_title(f"{title}, {statistics.samples} samples")
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    axes[-1].set_xlabel("x (mm)")
-    figure.tight_layout()
-    return save_figure(figure, path)
