@@ -2,7 +2,7 @@
 
 The assembly is :class:`contactqp.applications.riveting.Assembly` with its defaults: two 200 x 100 x 2 mm
 aluminium plates, 25 x 21 = 525 contact pairs, 6 fasteners closing their pairs. Gap fields are
-:class:`contactqp.studies.batch.GaussianGapField` samples (mean 0.2 mm, sigma 0.1 mm, correlation length
+:class:`contactqp.studies.sources.GaussianGapField` samples (mean 0.2 mm, sigma 0.1 mm, correlation length
 40 mm). Each row of the table runs :func:`contactqp.studies.batch.run_batch` into a fresh HDF5 store
 (writing and flushing included) and reports samples per second of wall time; building the
 model (assembly and condensation) is timed once, apart.
@@ -12,7 +12,8 @@ Rows:
 * ``<method>, cold``: every sample from the solver's own cold start;
 * ``<method>, warm``: each sample warm started from the previous one of its chunk;
 
-for the methods of :meth:`contactqp.applications.riveting.FastenerClosure.solve` on the Schur-reduced dual:
+for the methods of fastened problems (:func:`contactqp.solve` on a
+:class:`~contactqp.core.fastened.FastenedProblem`, the Schur-reduced dual):
 ``lawson-hanson`` (the default, bordered Cholesky factors), ``active-set`` (the project's
 primal-dual box-QP solver) and ``nnls`` (scipy's, cold only),
 
@@ -33,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from contactqp.studies.batch import GaussianGapField, run_batch
+from contactqp.studies import GaussianGapField, run_batch
 from contactqp.applications.riveting import Assembly, FasteningCase
 
 

@@ -30,7 +30,8 @@ import sys
 import numpy as np
 
 import contactqp as cq
-from contactqp.core.history import linear_path, solve_history
+from contactqp.core.history import linear_path
+from contactqp.methods import solve_history
 from contactqp.applications.springs import chain_flexibility
 
 
@@ -84,7 +85,7 @@ def run(n: int = 3, stiffness: float = 1.0, mu: float = 0.2, mass: float = 2.0, 
     limit = mu * weight
     problem = chain_problem(n, stiffness, mu)
     loads = cycle_path(n, weight, force_max, cycles, steps)
-    history = solve_history(problem, loads, solver=solver)
+    history = solve_history(problem, loads, solver)
     forces = loads[:, -2]
     exact = masing(n, stiffness, limit, force_max, forces, steps)
     per_cycle = history.dissipated[1 + steps:].reshape(cycles, 2 * steps).sum(axis=1)

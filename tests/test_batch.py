@@ -8,10 +8,17 @@ import pytest
 
 from contactqp.core.status import ContactStatus
 from contactqp import ContactProblem, NodePairs, solve
-from contactqp.studies.batch import (GapSamples, GapVariation, GaussianGapField, load_batch,
-                             load_gap_samples, plot_statistics, run_batch)
-from contactqp.errors import FileFormatError, InvalidInputError
 from contactqp.applications.riveting import Assembly, FasteningCase
+from contactqp.errors import FileFormatError, InvalidInputError
+from contactqp.studies import (
+    GapSamples,
+    GapVariation,
+    GaussianGapField,
+    load_batch,
+    load_gap_samples,
+    run_batch,
+)
+from contactqp.io.plot import plot_statistics
 
 N = 24
 
@@ -119,6 +126,9 @@ def test_process_pool_gives_the_serial_results(riveted, source, serial, tmp_path
                         tmp_path / "p.h5", workers=2, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(tmp_path / "p.h5"), serial)
+    from contactqp.studies import executors
+
+    assert executors._worker_state is None  # the workers' state stays in the workers
 
 
 def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path):
@@ -255,7 +265,7 @@ def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source
                                                                   tmp_path):
     import h5py
 
-    from contactqp.studies.batch import FORMAT
+    from contactqp.studies.store import FORMAT
 
     path = tmp_path / "half.h5"
     with h5py.File(path, "w") as store:  # killed while creating the datasets (marked first)
@@ -361,7 +371,7 @@ def test_corrupt_or_truncated_numpy_gap_files_are_one_line_format_errors(tmp_pat
 CHILD = """
 import sys, time
 import numpy as np
-from contactqp.studies.batch import GaussianGapField, run_batch
+from contactqp.studies import GaussianGapField, run_batch
 from contactqp.applications.riveting import Assembly, FasteningCase
 
 class SlowField(GaussianGapField):  # the same study, 50 ms per sample: time to stop it
@@ -405,7 +415,7 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
 
 POOL_CHILD = """
 import multiprocessing, sys, time
-from contactqp.studies.batch import GaussianGapField, run_batch
+from contactqp.studies import GaussianGapField, run_batch
 from contactqp.applications.riveting import Assembly, FasteningCase
 
 class LoggedField(GaussianGapField):  # 50 ms per sample; logs each chunk a worker starts

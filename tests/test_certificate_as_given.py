@@ -23,7 +23,7 @@ from contactqp.io.fclib import read_global_problem, read_problem
 from contactqp.io.siconos import parse_dat
 from contactqp.core.local_problem import LocalProblem, natural_map_error
 from contactqp.methods.coulomb import solve_coulomb
-from contactqp.methods.local_global import solve_local
+from contactqp import solve
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "fclib"
@@ -63,7 +63,7 @@ def test_lmgc_global_file_is_solved_as_written():
     condensed = read_problem(LMGC)
     np.testing.assert_allclose(dense(condensed.W), written.W, rtol=0,
                                atol=1e-9 * np.abs(written.W).max())
-    solution = solve_local(condensed, tol=TOL)
+    solution = solve(condensed, tol=TOL)
     assert solution.success, solution.message
     # was 3.9e-3 when W was symmetrised (the solver then reported 2e-14)
     assert natural_map_error(written, solution.forces) <= TOL
@@ -72,11 +72,9 @@ def test_lmgc_global_file_is_solved_as_written():
 
 
 def test_global_solution_is_certified_on_the_written_equations():
-    from contactqp.methods.local_global import solve_global
-
     g = read_global_problem(LMGC)
     written, M, H = written_local(g)
-    solution = solve_global(g, tol=TOL)
+    solution = solve(g, tol=TOL)
     assert solution.success, solution.message
     # v and u are those of the written equations, recomputed here
     v = np.linalg.solve(M, H @ solution.forces + g.f)
@@ -94,13 +92,11 @@ def test_global_solution_is_certified_on_the_written_equations():
 
 def test_ill_conditioned_m_says_what_accuracy_it_allows():
     from contactqp.core.local_problem import GlobalProblem
-    from contactqp.methods.local_global import solve_global
-
     # cond(M) = 2e13 after Jacobi scaling: u = H^T M^-1 (H r + f) + w loses 13 digits
     delta = 1e-13
     M = np.array([[1.0, 1.0 - delta], [1.0 - delta, 1.0]])
     g = GlobalProblem(M, np.eye(2), [1.0, -1.0], [-1e13, 0.0], [0.3], 2)
-    solution = solve_global(g, tol=TOL)
+    solution = solve(g, tol=TOL)
     limits = solution.certificate.limits
     assert limits.condition == pytest.approx(np.linalg.cond(M, 1), rel=1e-3)
     assert limits.rounding > TOL
@@ -135,7 +131,7 @@ def test_few_digits_define_the_problem_and_limit_its_meaning():
     exact = parse_dat(text)
     # W's longest value has 5 significant digits; q's short values are taken as exact
     assert exact.digits == {"W": 5}
-    solution = solve_local(exact, tol=TOL)
+    solution = solve(exact, tol=TOL)
     # the error is on the written values, recomputed from them here
     W = np.array([[1.5, 0.1, 0.2], [0.1, 2.2501, 0.3], [0.2, 0.3, 1.75]]).T
     assert natural_map_error(LocalProblem(W, [-1, 0.5, 0], [0.3], 3), solution.forces) <= TOL
@@ -143,7 +139,7 @@ def test_few_digits_define_the_problem_and_limit_its_meaning():
     assert "significant digits (W 5)" in solution.message
     # full-precision values: nothing to say
     full = parse_dat(text.replace("2.2501", "2.2501000000000002"))
-    assert full.digits == {} and solve_local(full, tol=TOL).certificate.limits.data == 0.0
+    assert full.digits == {} and solve(full, tol=TOL).certificate.limits.data == 0.0
 
 
 # --- other changes of the problem: the reported error is the given problem's -----------------
@@ -189,7 +185,7 @@ def test_frictionless_route_is_judged_on_every_row_of_the_unsymmetric_w():
     # the certificate still judges every row, and the unsymmetric W as given
     base = _scaled_problem(1)
     problem = LocalProblem(base.W, base.q, np.zeros(6), 3)
-    solution = solve_local(problem, tol=TOL)
+    solution = solve(problem, tol=TOL)
     assert solution.success, solution.message
     assert np.all(solution.forces.reshape(6, 3)[:, 1:] == 0)
     assert natural_map_error(LocalProblem(dense(problem.W), problem.q, problem.mu, 3),

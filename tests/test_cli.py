@@ -154,7 +154,9 @@ matplotlib.use("svg")
 from contactqp.io.plot import plot_spring_chain
 from contactqp.applications.springs import SpringChain
 chain = SpringChain(n=3, stiffness=1.0, mu=0.2, mass=2.0, g=10.0)
-plot_spring_chain([chain.solve(f) for f in (3.0, 14.0)], {str(tmp_path / "chain.png")!r})
+results = [chain.solve(f) for f in (3.0, 14.0)]
+forces, displacements = [r.force for r in results], [r.x for r in results]
+plot_spring_chain(forces, displacements, {str(tmp_path / "chain.png")!r})
 print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)
 """
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)

@@ -34,7 +34,7 @@ from contactqp.core.local_problem import (
 import contactqp.core.local_problem
 from contactqp.methods import coulomb
 from contactqp.methods.coulomb import alart_curnier, solve_coulomb
-from contactqp.methods.local_global import solve_local
+from contactqp import solve
 from contactqp.methods.pgs import GaussSeidel
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
@@ -280,7 +280,7 @@ def test_alart_curnier_jacobian_matches_finite_differences(dim):
 @pytest.mark.parametrize("name", FILES)
 def test_every_fclib_file_is_solved(name):
     problem = read_problem(DATA / name)
-    solution = solve_local(problem, tol=1e-8)
+    solution = solve(problem, tol=1e-8)
     assert solution.success, solution.message
     # the README's measure, recomputed from r alone (u = W r + q) outside the solver
     assert natural_map_error(problem, solution.forces) <= 1e-8
@@ -305,10 +305,10 @@ def test_contact_status_does_not_depend_on_units(cohesion):
 
 def test_frictionless_problems_stay_on_the_box_qp():
     problem = random_problem(8, 3, seed=3, mu=0.0)
-    solution = solve_local(problem)
+    solution = solve(problem)
     assert solution.success and "newton" not in solution.message
     assert np.all(solution.forces.reshape(8, 3)[:, 1:] == 0)
-    frictional = solve_local(random_problem(8, 3, seed=3, mu=0.3))
+    frictional = solve(random_problem(8, 3, seed=3, mu=0.3))
     assert frictional.success and "newton" in frictional.message
 
 
@@ -341,7 +341,7 @@ def test_indefinite_w_is_refused(W, match):
     with pytest.raises(NotPositiveDefiniteError, match=match):
         solve_coulomb(problem)
     with pytest.raises(NotPositiveDefiniteError, match=match):
-        solve_local(LocalProblem(W, [-1.0, 0.0, 0.0], [0.0], 3))
+        solve(LocalProblem(W, [-1.0, 0.0, 0.0], [0.0], 3))
 
 
 def test_psd_check_accepts_singular_and_rounded_matrices():

@@ -144,7 +144,7 @@ def test_single_contact_matches_enumeration(seed, mu):
     # normal and tangential responses are strongly coupled, e.g. W_NT / W_NN = 5)
     contracts = mu * abs(step.W[0, 1]) / step.W[0, 0] < 0.5
     for solver in ("coulomb", "tresca") if contracts else ("coulomb",):
-        result = problem.solve(solver=solver)
+        result = cq.solve(problem, solver)
         assert result.success, result.message
         distance = min(np.linalg.norm(result.forces[0] - r) for r in exact)
         assert distance <= 1e-8 * max(1.0, np.max(np.abs(P)))
@@ -155,7 +155,7 @@ def test_single_contact_matches_enumeration(seed, mu):
 def test_one_spring_sticks_until_mu_n_then_slips(Q, slip, status):
     k, mu, N = 2.0, 0.3, 10.0
     problem = cq.FrictionalProblem(one_node(np.diag([k, 5.0])), [Q, -N], [floor(2)], mu=mu)
-    result = problem.solve()
+    result = cq.solve(problem)
     assert result.success and result.status_labels == [status]
     np.testing.assert_allclose(result.slip[0, 0], slip, atol=1e-12)
     np.testing.assert_allclose(result.forces[0], [N, -np.clip(Q, -mu * N, mu * N)], atol=1e-10)
@@ -169,7 +169,7 @@ def test_two_bodies_in_frictional_contact_slip_relative_to_each_other(Q):
     k, mu, N, gap = 2.0, 0.3, 10.0, 0.5
     model = cq.ReducedModel(stiffness=np.diag([k, 4.0, k, 4.0]), dofs_per_node=2)
     pair = cq.NodePairs([[0, 1]], [gap], [0.0, -1.0])
-    result = cq.FrictionalProblem(model, [Q, -N, -Q, N], [pair], mu=mu).solve()
+    result = cq.solve(cq.FrictionalProblem(model, [Q, -N, -Q, N], [pair], mu=mu))
     assert result.success
     normal = N - 4.0 * gap / 2  # the springs close the gap, the rest is contact force
     friction = np.clip(Q, -mu * normal, mu * normal)
@@ -184,16 +184,16 @@ def test_two_bodies_in_frictional_contact_slip_relative_to_each_other(Q):
 def test_mohr_coulomb_cohesion_raises_the_slip_threshold_and_carries_tension():
     k, kn, mu, c, N = 2.0, 5.0, 0.3, 0.5, 10.0
     model = one_node(np.diag([k, kn]))
-    shear = cq.FrictionalProblem(model, [4.0, -N], [floor(2)], mu=mu, cohesion=c).solve()
+    shear = cq.solve(cq.FrictionalProblem(model, [4.0, -N], [floor(2)], mu=mu, cohesion=c))
     assert shear.success and shear.status_labels == ["slip"]
     np.testing.assert_allclose(shear.slip[0, 0], (4.0 - mu * N - c) / k, rtol=1e-10)
     np.testing.assert_allclose(shear.forces[0, 1], -(mu * N + c), rtol=1e-10)
     # pulled off the floor: closed while the tension is below c / mu, then open at that tension
-    held = cq.FrictionalProblem(model, [0.0, 1.0], [floor(2)], mu=mu, cohesion=c).solve()
+    held = cq.solve(cq.FrictionalProblem(model, [0.0, 1.0], [floor(2)], mu=mu, cohesion=c))
     np.testing.assert_allclose([held.forces[0, 0], held.gaps[0]], [-1.0, 0.0], atol=1e-10)
     assert held.status_labels == ["stick"]
     with pytest.warns(cq.ContactWarning, match="no tension cut-off"):
-        pulled = cq.FrictionalProblem(model, [0.0, 2.0], [floor(2)], mu=mu, cohesion=c).solve()
+        pulled = cq.solve(cq.FrictionalProblem(model, [0.0, 2.0], [floor(2)], mu=mu, cohesion=c))
     np.testing.assert_allclose(pulled.forces[0], [-c / mu, 0.0], atol=1e-10)
     np.testing.assert_allclose(pulled.gaps[0], (2.0 - c / mu) / kn, rtol=1e-10)
     assert pulled.success and pulled.status_labels == ["open"]
@@ -210,8 +210,8 @@ def test_polygonal_cone_reduces_the_limit_across_a_side_not_at_a_vertex(facets):
     vertex = np.array([np.cos(np.pi / facets), -np.sin(np.pi / facets)])
     for direction, limit in (([1.0, 0.0], mu * N * np.cos(np.pi / facets)), (vertex, mu * N)):
         P = np.array([Q * direction[0], Q * direction[1], -N])
-        polygonal = cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets).solve()
-        exact = cq.FrictionalProblem(model, P, [floor(3)], mu=mu).solve()
+        polygonal = cq.solve(cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets))
+        exact = cq.solve(cq.FrictionalProblem(model, P, [floor(3)], mu=mu))
         assert polygonal.success and exact.success, (polygonal.message, exact.message)
         assert polygonal.method == "polygonal" and exact.method == "coulomb"
         local_direction = np.array([direction[0], -direction[1]])
@@ -236,11 +236,11 @@ def test_polygonal_answer_approaches_the_exact_cone_as_facets_grow():
     P[2::3] = -3.0
     P[0::3], P[1::3] = rng.normal(size=(2, 5))
     mu = 0.3
-    exact = cq.FrictionalProblem(model, P, [floor(3)], mu=mu).solve()
+    exact = cq.solve(cq.FrictionalProblem(model, P, [floor(3)], mu=mu))
     assert exact.success and exact.status_labels.count("slip") >= 2
     errors = {}
     for facets in (8, 16, 32, 64):
-        linear = cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets).solve()
+        linear = cq.solve(cq.FrictionalProblem(model, P, [floor(3)], mu=mu, facets=facets))
         assert linear.success, linear.message
         errors[facets] = np.abs(linear.forces - exact.forces).max() / np.abs(exact.forces).max()
         assert errors[facets] <= mu * np.pi / facets
@@ -248,8 +248,8 @@ def test_polygonal_answer_approaches_the_exact_cone_as_facets_grow():
 
 
 def test_polygonal_law_in_2d_is_the_exact_cone():
-    exact = coupled_problem(3, mu=0.2).solve()
-    linear = coupled_problem(3, mu=0.2, facets=6).solve()
+    exact = cq.solve(coupled_problem(3, mu=0.2))
+    linear = cq.solve(coupled_problem(3, mu=0.2, facets=6))
     assert exact.success and linear.success
     # so the certificate checks the 2-D polygonal answer against the natural map as well
     assert linear.certificate.exact_cone and linear.certificate.natural_map <= 1e-7
@@ -263,7 +263,7 @@ def test_polygonal_law_in_2d_is_the_exact_cone():
 def test_coupled_contacts_agree_across_routes_and_report_every_status(seed):
     # node 0 pressed hard, node 1 sheared hard, node 2 pulled off the floor
     problem = coupled_problem(seed, mu=0.3).with_loads([0.1, -5.0, 3.0, -2.0, 0.0, 4.0])
-    results = [problem.solve(solver=name) for name in ("coulomb", "tresca")]
+    results = [cq.solve(problem, name) for name in ("coulomb", "tresca")]
     for result in results:
         assert result.success, result.message
         assert result.status_labels == ["stick", "slip", "open"]
@@ -273,7 +273,7 @@ def test_coupled_contacts_agree_across_routes_and_report_every_status(seed):
 
 def test_certificate_rejects_wrong_answers():
     problem = coupled_problem(5)
-    good = problem.solve()
+    good = cq.solve(problem)
     assert good.success
     r = good.forces.copy()
     r[:, 1] *= 1.5  # friction beyond the cone somewhere, or sticking forces changed
@@ -309,7 +309,7 @@ def test_a_soft_node_away_from_the_contacts_does_not_blunt_status_or_certificate
     # softest compliance times the largest force (1 m/N * 1000 N = 1000 m, which made a 1e-5 m
     # slip "stick" and accepted a 1e-5 m interpenetration)
     problem = stiff_contact_beside_a_soft_node(dim, facets)
-    good = problem.solve()
+    good = cq.solve(problem)
     assert good.success, good.message
     assert good.status_labels == ["slip"] and good.slip[0, 0] > 9e-6
     wrong = good.forces * 0.99  # 1 % short of the normal force: 1e-5 m interpenetration
@@ -330,7 +330,7 @@ def test_a_large_load_away_from_the_contacts_does_not_blunt_the_cone_check():
     problem = cq.FrictionalProblem(model, [5.0, 0.0, -10.0, 1e6, 0.0, 0.0],
                                    [cq.PlaneObstacle([0.0] * 3, [0.0, 0.0, -1.0], nodes=[0])],
                                    mu=0.3, facets=8)
-    good = problem.solve()
+    good = cq.solve(problem)
     assert good.success and good.status_labels == ["slip"], good.message
     wrong = good.forces.copy()
     wrong[0, 1:] *= 1.01
@@ -347,7 +347,7 @@ def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
                             coordinates=[[0.0, 0.0], [5.0, 0.0]])
     problem = cq.FrictionalProblem(model, [5.0, -10.0, 0.0, 0.0],
                                    [cq.GapObstacle([0, 1], [0.0, 1.0], [0.0, -1.0])], mu=0.3)
-    good = problem.solve()
+    good = cq.solve(problem)
     assert good.success and good.status_labels == ["slip", "open"], good.message
     wrong = good.forces.copy()
     wrong[0, 1] *= 1.01
@@ -390,17 +390,17 @@ def test_a_wide_gap_elsewhere_does_not_loosen_the_solution(solver, facets, rtol)
     # nothing physically. Measured on the whole problem (FCLIB's error), each route stopped when
     # the others were still 1e-5 off; each contact is now also held to its own scale (the 2-D
     # polygon is the exact cone, so all three routes solve the same problem)
-    near = micrometre_contacts().solve()
+    near = cq.solve(micrometre_contacts())
     assert near.success, near.message
     far = micrometre_contacts(far_gap=1.0, facets=facets)
-    solved = far.solve(solver=solver)
+    solved = cq.solve(far, solver)
     assert solved.success and solved.status_labels[-1] == "open", solved.message
     np.testing.assert_allclose(solved.forces[:6], near.forces, rtol=0,
                                atol=rtol * np.abs(near.forces).max())
     np.testing.assert_allclose(solved.displacements[:12], near.displacements, rtol=0,
                                atol=rtol * np.abs(near.displacements).max())
     # the same solve stopped on the FCLIB measure alone: the certificate now sees the difference
-    loose = far.solve(solver=solver, per_contact=False)
+    loose = cq.solve(far, solver, per_contact=False)
     assert np.abs(loose.forces[:6] - near.forces).max() > 1e-7 * np.abs(near.forces).max()
     assert loose.status == 2 and loose.certificate.natural_map > 1e-6, loose.message
 
@@ -410,8 +410,8 @@ def test_polygonal_cone_in_3d_beside_a_wide_gap(far_gap):
     # the QPs are scaled by the largest q, here the far gap: the micrometre contacts' forces
     # were a 1e-4 to 1e-6 fraction of that scale, and came back 1e-5 to 1e-2 off (at 1 m
     # "not converged"). The first iterate's largest force now rescales the QPs.
-    near = micrometre_contacts(facets=8, dim=3).solve()
-    far = micrometre_contacts(far_gap=far_gap, facets=8, dim=3).solve()
+    near = cq.solve(micrometre_contacts(facets=8, dim=3))
+    far = cq.solve(micrometre_contacts(far_gap=far_gap, facets=8, dim=3))
     assert near.success and far.success, (near.message, far.message)
     assert far.status_labels[-1] == "open"
     np.testing.assert_allclose(far.forces[:6], near.forces, rtol=0,
@@ -423,7 +423,7 @@ def test_each_contact_is_certified_on_its_own_scales():
     # they push. Against the 1 m gap of the far contact that complementarity residual was 1e-8
     # and passed; against each contact's own length it is about 1e-2.
     problem = micrometre_contacts(far_gap=1.0)
-    good = problem.solve()
+    good = cq.solve(problem)
     assert good.success, good.message
     wrong = good.forces.copy()
     wrong[:6] *= 1.01
@@ -500,12 +500,14 @@ def test_bad_models_and_solvers_are_clear_errors():
                               cq.GapObstacle([1], [0.0], [0.0, 0.0, -1.0])], mu=0.2)
     with pytest.raises(cq.InvalidInputError, match="loads contains NaN"):
         coupled_problem(0).with_loads(np.full(6, np.nan))
-    with pytest.raises(cq.InvalidInputError, match="solver='polygonal'"):
-        coupled_problem(0, facets=8).solve(solver="coulomb")
-    with pytest.raises(cq.InvalidInputError, match="unknown friction solver"):
-        coupled_problem(0).solve(solver="magic")
+    with pytest.raises(cq.InvalidInputError,
+                       match="'coulomb' does not solve frictional-polygonal problems.*polygonal"):
+        cq.solve(coupled_problem(0, facets=8), "coulomb")
+    with pytest.raises(cq.InvalidInputError,
+                       match="unknown method 'magic' for frictional problems.*coulomb"):
+        cq.solve(coupled_problem(0), "magic")
     with pytest.raises(cq.InvalidInputError, match="previous"):
-        coupled_problem(0).solve(previous="rest")
+        coupled_problem(0).with_loads(np.zeros(6), previous="rest")
     # these raised ValueError from numpy (string loads, forces of the wrong length)
     with pytest.raises(cq.InvalidInputError, match="loads"):
         coupled_problem(0).with_loads(["a"] * 6)

@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 
 from contactqp import InvalidInputError
+from contactqp.core.friction import polygon_normals
 from contactqp.core.local_problem import LocalProblem, natural_map_error
 from contactqp.methods.coulomb import solve_coulomb
-from contactqp.methods.polygonal import polygon_normals, solve_polygonal
+from contactqp.methods.polygonal import solve_polygonal
 from contactqp.methods.tresca import solve_tresca_fixed_point
 
 TOL = 1e-8
@@ -251,11 +252,38 @@ def test_polygonal_cone_converges_on_the_hex_block_where_the_exact_cone_does():
     model = fe.reduced_model(fe.select_nodes(where="bottom"))
     floor = cq.PlaneObstacle([0.0, 0.0, 1e-5], [0.0, 0.0, -1.0])
     loads = np.tile([4000.0, 1500.0, 0.0], model.n_nodes)
-    exact = cq.FrictionalProblem(model, loads, floor, mu=0.3).solve()
-    polygon = cq.FrictionalProblem(model, loads, floor, mu=0.3, facets=8).solve()
+    exact = cq.solve(cq.FrictionalProblem(model, loads, floor, mu=0.3))
+    polygon = cq.solve(cq.FrictionalProblem(model, loads, floor, mu=0.3, facets=8))
     assert exact.success and polygon.success, polygon.message
     assert polygon.iterations < 50 and "fixed point reached" in polygon.message
     assert not polygon.certificate.exact_cone
     # the linearisation's distance from Coulomb: O(pi / facets) on the sliding contacts
     assert 1e-3 < polygon.certificate.natural_map < np.pi / 8
     np.testing.assert_array_equal(polygon.contact_status, exact.contact_status)
+
+
+@pytest.mark.parametrize("route", ["tresca", "polygonal"])
+def test_the_fixed_point_does_not_change_the_data_it_is_given(route):
+    # was: run_fixed_point set data.f to its first iterate's force scale, so a second run on
+    # the same FixedPointData skipped the rescaled first solve and gave another answer
+    from contactqp.methods.polygonal import _PolygonalTresca
+    from contactqp.methods.tresca import FixedPointData, _ClarabelTresca, run_fixed_point
+
+    rng = np.random.default_rng(4)
+    nc, d = 4, 3
+    A = rng.standard_normal((nc * d, nc * d))
+    q = -1e-6 * np.abs(rng.standard_normal(nc * d))
+    q[0] = 1e3  # one contact far from its obstacle: the first iterate is rescaled
+    problem = LocalProblem(A @ A.T / (nc * d) + np.eye(nc * d), q, np.full(nc, 0.3), d)
+    data = FixedPointData(problem)
+    scale = data.f
+    make = {"tresca": lambda: _ClarabelTresca(data),
+            "polygonal": lambda: _PolygonalTresca(data, 8, "clarabel", {})}[route]
+    runs = [run_fixed_point(problem, data, make(), tol=TOL, max_iter=30, r0=None,
+                            exact=route == "tresca", method=route) for _ in range(2)]
+    assert data.f == scale
+    assert runs[0].iterations == runs[1].iterations
+    np.testing.assert_array_equal(runs[0].forces, runs[1].forces)
+    fresh = (solve_tresca_fixed_point(problem, tol=TOL, max_iter=30) if route == "tresca"
+             else solve_polygonal(problem, facets=8, tol=TOL, max_iter=30))
+    np.testing.assert_array_equal(fresh.forces, runs[0].forces)

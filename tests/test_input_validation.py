@@ -127,7 +127,7 @@ def test_frictional_solve_refuses_bad_options(solver, facets, kwargs, name):
     model, loads = frictional_block(2)
     problem = cq.FrictionalProblem(model, loads, [FLOOR], mu=0.3, facets=facets)
     with pytest.raises(InvalidInputError, match=f"^{name} must be"):
-        problem.solve(solver=solver, **kwargs)
+        cq.solve(problem, solver, **kwargs)
 
 
 # 3. duplicate contacts -----------------------------------------------------------------------
@@ -192,7 +192,7 @@ def test_a_single_obstacle_needs_no_list():
     alone = cq.solve(cq.ContactProblem(model, LOADS, obstacle))
     listed = cq.solve(cq.ContactProblem(model, LOADS, [obstacle]))
     assert alone.success and np.array_equal(alone.displacements, listed.displacements)
-    frictional = cq.FrictionalProblem(*frictional_block(2), FLOOR, mu=0.3).solve()
+    frictional = cq.solve(cq.FrictionalProblem(*frictional_block(2), FLOOR, mu=0.3))
     assert frictional.success and frictional.forces.shape == (2, 3)
 
 
@@ -216,9 +216,9 @@ def test_the_friction_routes_stop_at_max_iter(solver, facets, max_iter):
     # rescaled first sub-problem was solved twice
     model, loads = frictional_block()
     problem = cq.FrictionalProblem(model, loads, FLOOR, mu=0.3, facets=facets)
-    free = problem.solve(solver=solver)
+    free = cq.solve(problem, solver)
     assert free.success and free.iterations > max_iter  # the problem needs more than max_iter
-    capped = problem.solve(solver=solver, max_iter=max_iter)
+    capped = cq.solve(problem, solver, max_iter=max_iter)
     assert capped.iterations <= max_iter
     assert not capped.success and capped.status == 1
     assert f"max_iter = {max_iter} reached" in capped.message

@@ -91,7 +91,7 @@ def test_state_is_carried_over(example):
     history = cq.solve_history(problem, loads)
     assert history.success
     np.testing.assert_allclose(history.displacements[-1, 0], 7.0 - 4.0, atol=1e-10)
-    np.testing.assert_allclose(problem.with_loads(loads[-1]).solve().displacements[0], 0.0,
+    np.testing.assert_allclose(cq.solve(problem.with_loads(loads[-1])).displacements[0], 0.0,
                                atol=1e-12)
     np.testing.assert_allclose(history.slip[:, 0, 0], [0.0, 0.0, 3.0, 0.0, 0.0], atol=1e-9)
     assert history.contact_status[:, 0].tolist() == [1, 1, 2, 1, 1]
@@ -108,7 +108,7 @@ def coupled_history(solver, cycles=1, steps=12):
     points = np.zeros((2 + 2 * cycles, 8))
     points[:, 1::2] = -3.0
     points[1:, 0::2] = np.array([1.0] + [-1.0, 1.0] * cycles)[:, None] * [2.0, 1.0, -0.5, 1.5]
-    return cq.solve_history(problem, cq.linear_path(points, steps), solver=solver)
+    return cq.solve_history(problem, cq.linear_path(points, steps), solver)
 
 
 def test_coupled_cyclic_history_dissipates_and_agrees_across_routes():

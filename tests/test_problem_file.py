@@ -437,7 +437,8 @@ CASES = {
         ["[loads].entries #2: freedom 1 is already loaded by entry #1"]),
     "unknown solver": (
         GOOD + "\n[solver]\nname = 'simplex'\n", {"R.csv": SPD}, InvalidInputError,
-        ["[solver].name: unknown solver 'simplex'"]),
+        ["[solver].name: unknown method 'simplex' for frictionless problems; choose one of "
+         "active-set (default), qp"]),
     "solver option of the wrong kind": (
         GOOD + "\n[solver]\ntol = 'small'\n", {"R.csv": SPD}, InvalidInputError,
         ["[solver].tol: must be a number (default 1e-10), got the string 'small'"]),
@@ -909,7 +910,7 @@ def test_write_history_results(tmp_path):
 def test_write_results_rejects_a_result_of_the_wrong_kind(tmp_path):
     spec = load_problem_file(CYCLIC)
     with pytest.raises(InvalidInputError, match="result must be a HistoryResult"):
-        write_results(spec, spec.problem.solve(), tmp_path)
+        write_results(spec, solve(spec.problem), tmp_path)
 
 
 # ------------------------------------------------------------------------------------------
@@ -963,11 +964,14 @@ FRICTION_CASES = {
                               ["[friction].facets: facets must be an integer from 3"]),
     "facets with the coulomb route": (
         FRICTION + "facets = 8\nsolver = 'coulomb'\n",
-        ["[friction].solver: facets=8 asks for the polygonal cone", "got 'coulomb'"]),
+        ["[friction].solver: method 'coulomb' does not solve frictional-polygonal problems",
+         "methods for frictional-polygonal problems: polygonal (default)"]),
     "polygonal without facets": (FRICTION + "solver = 'polygonal'\n",
-                                 ["[friction].solver: solver='polygonal' needs facets"]),
+                                 ["[friction].solver: method 'polygonal' does not solve "
+                                  "frictional problems", "coulomb (default)"]),
     "unknown friction route": (FRICTION + "solver = 'newton'\n",
-                               ["[friction].solver: unknown friction solver 'newton'"]),
+                               ["[friction].solver: unknown method 'newton' for frictional "
+                                "problems; choose one of coulomb (default), tresca"]),
     "friction tolerance not positive": (FRICTION + "tol = 0.0\n",
                                         ["[friction].tol: must be positive"]),
     "frictionless solver name with friction": (

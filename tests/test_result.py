@@ -10,11 +10,9 @@ import numpy as np
 import pytest
 
 import contactqp as cq
-from contactqp.applications.riveting import FastenerClosure
 from contactqp.core.local_problem import GlobalProblem, LocalProblem
 from contactqp.core.result import ContactResult
 from contactqp.core.status import STATUS_LABELS, ContactStatus, status_counts
-from contactqp.methods.local_global import solve_global, solve_local
 
 SOURCE = Path(cq.__file__).parent
 EXAMPLE = Path(__file__).parent.parent / "examples" / "problems" / "two_springs.toml"
@@ -29,17 +27,17 @@ def frictional():
     block = cq.ReducedModel(stiffness=np.diag([2.0e6, 5.0e6]), dofs_per_node=2,
                             coordinates=[[0.0, 0.0]])
     floor = cq.PlaneObstacle(point=[0.0, 0.0], normal=[0.0, -1.0])
-    return cq.FrictionalProblem(block, [400.0, -1000.0], [floor], mu=0.3).solve()
+    return cq.solve(cq.FrictionalProblem(block, [400.0, -1000.0], [floor], mu=0.3))
 
 
 def local():
     W = np.array([[2.0, 0.1, 0.0], [0.1, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    return solve_local(LocalProblem(W, [-1.0, 0.5, 0.0], [0.3], 3))
+    return cq.solve(LocalProblem(W, [-1.0, 0.5, 0.0], [0.3], 3))
 
 
 def global_():
     M = np.array([[4.0, 1.0], [1.0, 3.0]])
-    return solve_global(GlobalProblem(M, np.eye(2), [1.0, -1.0], [-1.0, 0.0], [0.3], 2))
+    return cq.solve(GlobalProblem(M, np.eye(2), [1.0, -1.0], [-1.0, 0.0], [0.3], 2))
 
 
 def fastened():
@@ -50,7 +48,7 @@ def fastened():
     pairs = np.column_stack([np.arange(k), k + np.arange(k)])
     problem = cq.ContactProblem(model, np.zeros(2 * k),
                                 [cq.NodePairs(pairs, [1e-4, 2e-4, 1e-4, 3e-4])])
-    return FastenerClosure(problem, [1]).solve()
+    return cq.solve(cq.FastenedProblem(problem, [1]))
 
 
 KINDS = {"frictionless": frictionless, "frictional": frictional, "local": local,

@@ -6,15 +6,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import contactqp as cq
 from contactqp.core.status import ContactStatus
+from contactqp.applications.assembly import Part
+from contactqp.applications.riveting import Assembly, plate_flexibility, plot_status, result_mesh
+from contactqp.io.export import write_vtu
 from contactqp.errors import InvalidInputError
-from contactqp.applications.riveting import (Assembly, FastenerClosure, Plate, plate_flexibility, plot_status,
-                                write_vtu)
 
 ALL_EDGES = ("left", "right", "bottom", "top")
 
 
-def navier(points, plate: Plate, terms: int = 200) -> np.ndarray:
+def navier(points, plate: Part, terms: int = 200) -> np.ndarray:
     """Deflection at ``points`` under unit forces at ``points``, simply supported rectangle.
 
     Navier's double sine series (Timoshenko & Woinowsky-Krieger, Theory of plates and shells,
@@ -32,7 +34,7 @@ def navier(points, plate: Plate, terms: int = 200) -> np.ndarray:
 def test_plate_flexibility_converges_to_navier_at_second_order():
     # 7 x 3 interior points, 25 mm apart, of a plate simply supported on its four edges; the
     # Morley element converges as h^2 (a halving of h divides the error by about 4)
-    plate = Plate()
+    plate = Part()
     xs, ys = np.meshgrid(np.arange(1, 8) * 0.025, np.arange(1, 4) * 0.025)
     points = np.column_stack([xs.ravel(), ys.ravel()])
     exact = navier(points, plate)
@@ -45,7 +47,7 @@ def test_plate_flexibility_converges_to_navier_at_second_order():
 @pytest.fixture(scope="module")
 def small():
     """11 x 7 pairs, plates of different thickness, fasteners in a row."""
-    assembly = Assembly(lower=Plate(thickness=0.002), upper=Plate(thickness=0.0016),
+    assembly = Assembly(lower=Part(thickness=0.002), upper=Part(thickness=0.0016),
                         grid=(11, 7), fasteners=((1, 3), (5, 3), (9, 3)), refine=2)
     return assembly.build()
 
@@ -68,9 +70,9 @@ def test_one_fastener_closing_a_uniform_gap_matches_the_direct_solve(small):
     W = sum(plate_flexibility(p, small.points, cells, held)
             for p in (small.assembly.lower, small.assembly.upper))
     assert np.all(np.delete(W[:, f], f) < W[f, f])  # the premise: no other pair closes
-    closure = FastenerClosure(small.problem(np.full(k, g)), [f])
+    fastened = cq.FastenedProblem(small.problem(np.full(k, g)), [f])
     for method in ("lawson-hanson", "nnls", "active-set"):
-        state = closure.solve(method=method)
+        state = cq.solve(fastened, method)
         assert state.success
         np.testing.assert_allclose(state.fastener_forces, [g / W[f, f]], rtol=1e-9)
         np.testing.assert_allclose(state.gaps, g * (1 - W[:, f] / W[f, f]), rtol=1e-9,
@@ -101,14 +103,14 @@ def test_sequence_order_changes_the_path_not_the_end_without_friction(small, rou
 
 
 def test_three_routes_agree_on_a_rough_gap_field(small, rough_gaps):
-    closure = FastenerClosure(small.problem(rough_gaps), small.fasteners)
-    reference = closure.solve(method="nnls")  # scipy's NNLS on the factor: independent
+    fastened = cq.FastenedProblem(small.problem(rough_gaps), small.fasteners)
+    reference = cq.solve(fastened, "nnls")  # scipy's NNLS on the factor: independent
     assert reference.success
     assert np.count_nonzero(reference.contact_status == ContactStatus.CLOSED) > 0
     warm = reference.multipliers * (1 + 0.3 * np.cos(np.arange(small.n_pairs)))  # a nearby start
     for method, start in [("lawson-hanson", None), ("lawson-hanson", warm),
                           ("active-set", None), ("active-set", warm)]:
-        state = closure.solve(method=method, forces0=start)
+        state = cq.solve(fastened, method, r0=start)
         assert state.success, (method, state.message)
         np.testing.assert_allclose(state.multipliers, reference.multipliers, rtol=1e-6,
                                    atol=1e-8 * np.max(np.abs(reference.multipliers)))
@@ -119,7 +121,7 @@ def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
     import meshio
 
     final = small.fasten(rough_gaps).final
-    path = write_vtu(small, final, tmp_path / "r.vtu", rough_gaps)
+    path = write_vtu(tmp_path / "r.vtu", *result_mesh(small, final, rough_gaps))
     mesh = meshio.read(path)
     k = small.n_pairs
     assert mesh.points.shape == (2 * k, 3)
@@ -135,7 +137,7 @@ def test_outputs_vtu_and_figure(small, rough_gaps, tmp_path):
     ({"fasteners": ((11, 3),)}, "outside"),
     ({"fasteners": ((1, 3), (1, 3))}, "share"),
     ({"supports": ("left", "middle")}, "supports"),
-    ({"upper": Plate(length=0.3)}, "same length"),
+    ({"upper": Part(length=0.3)}, "same length"),
 ])
 def test_bad_assemblies(kwargs, match):
     with pytest.raises(InvalidInputError, match=match):
@@ -145,8 +147,9 @@ def test_bad_assemblies(kwargs, match):
 def test_bad_fastening(small, rough_gaps):
     with pytest.raises(InvalidInputError, match="permutation"):
         small.fasten(rough_gaps, order=[0, 0, 1])
-    with pytest.raises(InvalidInputError, match="method"):
-        FastenerClosure(small.problem(rough_gaps), [3]).solve(method="simplex")
+    with pytest.raises(InvalidInputError, match="unknown method 'simplex' for fastened problems; "
+                                                "choose one of lawson-hanson \\(default\\)"):
+        cq.solve(cq.FastenedProblem(small.problem(rough_gaps), [3]), "simplex")
     with pytest.raises(InvalidInputError, match="gaps"):
         small.problem(rough_gaps[:-1])
 
@@ -253,8 +256,8 @@ def test_cli_corrupt_gap_file_is_one_line_exit_2(tmp_path, capsys):
 
 
 def test_cli_every_sample_failing_exits_1(tmp_path, capsys, monkeypatch):
-    from contactqp.cli import main
     from contactqp.applications.riveting import FasteningCase
+    from contactqp.cli import main
 
     solve_sample = FasteningCase.solve_sample
 

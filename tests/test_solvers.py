@@ -82,7 +82,7 @@ def test_stiffness_model_gives_the_same_answer():
 def test_warm_start_reaches_the_same_answer_in_fewer_iterations():
     problem = random_problem(300, 5)
     cold = cq.solve(problem)
-    warm = cq.solve(problem, forces0=cold.forces)
+    warm = cq.solve(problem, r0=cold.forces)
     assert warm.success and warm.iterations <= 1 < cold.iterations
     np.testing.assert_allclose(warm.forces, cold.forces, atol=1e-10 * np.max(cold.forces))
 
@@ -114,7 +114,9 @@ def test_node_pairs_and_plane_obstacle():
 
 
 def test_unknown_solver_is_a_clear_error():
-    with pytest.raises(cq.InvalidInputError, match="unknown solver 'nope'"):
+    with pytest.raises(cq.InvalidInputError,
+                       match="unknown method 'nope' for frictionless problems; choose one of "
+                             "active-set \\(default\\), qp"):
         cq.solve(random_problem(3, 0), "nope")
 
 

@@ -12,19 +12,20 @@ from .errors import (
 )
 from .core.model import ReducedModel, unit_load_compliance
 from .core.friction import FrictionLaw
-from .core.history import HistoryResult, linear_path, solve_history
+from .core.fastened import FastenedProblem
+from .core.history import HistoryResult, linear_path
+from .core.local_problem import GlobalProblem, LocalProblem
 from .core.problem import ContactProblem, FrictionalProblem
 from .core.certificate import Certificate, FrictionCertificate, LocalCertificate
 from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
 from .core.status import STATUS_LABELS, ContactStatus
-from .methods import SOLVERS, solve
+from .methods import METHODS, default_method, is_installed, methods_for, solve, solve_history
 
 __all__ = [
     "ReducedModel",
     "unit_load_compliance",
     "ContactProblem",
     "ContactResult",
-    "FastenedResult",
     "LocalResult",
     "ContactStatus",
     "STATUS_LABELS",
@@ -34,6 +35,10 @@ __all__ = [
     "FrictionalResult",
     "FrictionCertificate",
     "FrictionLaw",
+    "LocalProblem",
+    "GlobalProblem",
+    "FastenedProblem",
+    "FastenedResult",
     "solve_history",
     "linear_path",
     "HistoryResult",
@@ -43,7 +48,10 @@ __all__ = [
     "NodePairs",
     "solve",
     "solve_gaps",
-    "SOLVERS",
+    "METHODS",
+    "methods_for",
+    "default_method",
+    "is_installed",
     "ContactError",
     "ContactWarning",
     "InvalidInputError",
@@ -57,7 +65,7 @@ __version__ = "0.1.0"
 
 
 def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_per_node=1,
-               solver="active-set", **options) -> ContactResult:
+               method: str | None = None, **options) -> ContactResult:
     """Solve the common case in one call: a flexibility matrix, loads and per-node gaps.
 
     Parameters
@@ -73,8 +81,8 @@ def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_
     nodes : sequence of int, optional
         Contact nodes (default: every node, then ``k`` must equal the node count).
     dofs_per_node : int
-    solver : str
-        See :func:`solve`.
+    method : str, optional
+        A frictionless method (default ``"active-set"``), see :func:`solve`.
 
     Returns
     -------
@@ -84,4 +92,4 @@ def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_
     if nodes is None:
         nodes = range(model.n_nodes)
     problem = ContactProblem(model, loads, [GapObstacle(list(nodes), gaps, directions)])
-    return solve(problem, solver=solver, **options)
+    return solve(problem, method, **options)

@@ -18,7 +18,8 @@ reported, to be compared with the weight).
 Both layers are condensed (:func:`~contactqp.compliance.condensation.condense`) to the interface
 nodes and the nodes of the upper layer's left side; gravity enters through the loads that give,
 on these nodes, the displacements of the full model under gravity alone. The history
-``d = 0 .. d_max`` (gravity first) is solved by :func:`~contactqp.core.history.solve_history`, the
+``d = 0 .. d_max`` (gravity first) is solved by
+:func:`~contactqp.methods.history.solve_history`, the
 friction state carried over.
 
 The analytic limit of the sliding block: when no contact sticks, the interface carries
@@ -38,10 +39,11 @@ import scipy.sparse
 
 from ..core.contact import NodePairs
 from ..errors import ContactError, InvalidInputError
-from ..core.history import MAX_STEPS, solve_history
+from ..core.history import MAX_STEPS
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..core.status import ContactStatus
+from ..methods import solve_history
 
 __all__ = ["Layers", "LayersResult", "LayersError", "plot_layers"]
 
@@ -177,8 +179,8 @@ class Layers:
         ``d_max`` (m) defaults to twice the travel that brings the load to the analytic limit
         when the spring and the upper layer stretched over its length act in series,
         ``2 H_lim (1 / k_a + length / (E h_upper depth))``: beyond the onset of sliding.
-        ``options`` go to :func:`~contactqp.core.history.solve_history` (``progress``) and
-        :meth:`~contactqp.FrictionalProblem.solve`.
+        ``options`` go to :func:`~contactqp.methods.history.solve_history` (``method``,
+        ``progress``, the method's options).
 
         Raises
         ------
@@ -263,20 +265,11 @@ class LayersResult:
 
 
 def plot_layers(result: LayersResult, path) -> Path:
-    """Lateral load against relative displacement, with the analytic limit, as a PNG."""
-    from ..io.plot import save_figure, subplots
+    """Lateral load against relative displacement, with the analytic limit (drawn by
+    :func:`contactqp.io.plot.plot_sliding_curve`)."""
+    from ..io.plot import plot_sliding_curve
 
-    figure, axes = subplots(figsize=(7, 4.5))
-    axes.plot(result.relative * 1e3, result.load / 1e3, "o-", ms=3, label="reduced model")
-    axes.axhline(result.layers.limit / 1e3, color="C3", ls="--",
-                 label="c A + mu N (sliding block)")
-    if result.onset is not None:
-        axes.plot(result.relative[result.onset] * 1e3, result.load[result.onset] / 1e3, "k*",
-                  ms=12, label="onset of sliding")
-    axes.set_xlabel("relative displacement of the layers (mm)")
-    axes.set_ylabel("lateral load (kN)")
-    axes.set_title(f"Two layers: mu = {result.layers.mu:g}, c = {result.layers.cohesion:g} Pa")
-    axes.grid(True, alpha=0.3)
-    axes.legend()
-    figure.tight_layout()
-    return save_figure(figure, path)
+    layers = result.layers
+    return plot_sliding_curve(result.relative, result.load, layers.limit, path,
+                              onset=result.onset,
+                              title=f"Two layers: mu = {layers.mu:g}, c = {layers.cohesion:g} Pa")

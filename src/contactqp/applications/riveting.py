@@ -29,68 +29,51 @@ A fastener imposes closure: at its pair the gap is brought to zero and held ther
 constraint). Its multiplier ``lambda_f`` is free in sign: ``lambda_f >= 0`` is a contact
 compression at the fastener, ``lambda_f < 0`` a tension ``-lambda_f`` carried by the fastener.
 The dual QP is the frictionless one (:class:`~contactqp.core.problem.DualForm`) with the lower bound
-of the fastener rows lifted to ``-inf``; :class:`FastenerClosure` eliminates the fastener
-multipliers (a Schur complement) and solves the remaining non-negative QP by Lawson and
-Hanson's active-set method (or the project's box-QP solver, or scipy's NNLS). The answer is
-returned as a certified :class:`~contactqp.core.result.FastenedResult`: the result of the contact
-problem in which the fastener tensions are external loads, the closure of each fastener checked
-separately. Fasteners are installed one after another (:meth:`RivetingModel.fasten`), each an
-increment warm-started from the previous one; without friction the final state does not depend
+of the fastener rows lifted to ``-inf``: a :class:`~contactqp.core.fastened.FastenedProblem`,
+which eliminates the fastener multipliers (a Schur complement); :func:`~contactqp.solve` solves
+the remaining non-negative QP by Lawson and Hanson's active-set method (or the project's box-QP
+solver, or scipy's NNLS, see :mod:`contactqp.methods.fastened`). The answer is a
+:class:`~contactqp.core.fastened.FastenedResult` holding a certified
+:class:`~contactqp.core.result.ContactResult` of the contact problem in which the fastener
+tensions are external loads, the closure of each fastener checked separately. Fasteners are
+installed one after another (:meth:`RivetingModel.fasten`), each an increment warm-started
+from the previous one; without friction the final state does not depend
 on the order (a test checks it), the intermediate states do.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 
-from ..studies.batch import GapVariation
-from ..core.contact import NodePairs
+from ..studies.cases import GapVariation
+from ..core.fastened import FastenedProblem
 from ..errors import InvalidInputError
+from ..io.export import PointMesh
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
 from ..core.result import FastenedResult
 from ..core.status import STATUS_LABELS
-from ..methods import solve_box_qp
-from ..methods.lawson_hanson import solve_nonnegative_qp
+from ..methods import solve
+from ..methods.registry import get_method
+from .assembly import Part, StackedModel, StackedParts
 
-__all__ = ["Plate", "Assembly", "RivetingModel", "FasteningSequence",
-           "FasteningCase", "FastenerClosure", "plate_flexibility", "solve_fastened",
-           "write_vtu", "plot_status"]
+__all__ = ["Assembly", "RivetingModel", "FasteningSequence", "FasteningCase",
+           "plate_flexibility", "result_mesh", "plot_status"]
 
 _EDGES = ("left", "right", "bottom", "top")
 
 
-@dataclass(frozen=True)
-class Plate:
-    """A thin isotropic plate ``[0, length] x [0, width]`` (m) of uniform ``thickness`` (m).
-
-    Defaults: 200 x 100 x 2 mm aluminium (``E = 70 GPa``, ``nu = 0.33``).
-    """
-
-    length: float = 0.200
-    width: float = 0.100
-    thickness: float = 0.002
-    young: float = 70e9
-    poisson: float = 0.33
-
-    @property
-    def rigidity(self) -> float:
-        """Flexural rigidity ``D = E t^3 / (12 (1 - nu^2))`` (N m)."""
-        return self.young * self.thickness ** 3 / (12.0 * (1.0 - self.poisson ** 2))
-
-
-def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -> np.ndarray:
+def plate_flexibility(plate: Part, points, cells, supports=("left", "right")) -> np.ndarray:
     """Out-of-plane flexibility of points of a Kirchhoff plate (Morley elements, condensed).
 
     Parameters
     ----------
-    plate : Plate
+    plate : Part
     points : array_like, shape (k, 2)
         Positions (m) of the computational nodes; each must be a vertex of the mesh.
     cells : (int, int)
@@ -139,11 +122,6 @@ def plate_flexibility(plate: Plate, points, cells, supports=("left", "right")) -
     return condense(K[free][:, free], np.searchsorted(free, freedoms))
 
 
-@lru_cache(maxsize=4)
-def _cached_flexibility(plate: Plate, points: tuple, cells: tuple, supports: tuple) -> np.ndarray:
-    return plate_flexibility(plate, np.array(points), cells, supports)
-
-
 def _axis(count: int, length: float, low_held: bool, high_held: bool, refine: int):
     """Contact positions along one side (held edges excluded) and the mesh cells along it."""
     intervals = count - 1 + low_held + high_held
@@ -152,13 +130,13 @@ def _axis(count: int, length: float, low_held: bool, high_held: bool, refine: in
 
 
 @dataclass(frozen=True)
-class Assembly:
+class Assembly(StackedParts):
     """Definition of a riveted assembly of two plates; :meth:`build` makes the reduced model.
 
     Parameters
     ----------
-    lower, upper : Plate
-        The two parts (same outline).
+    lower, upper : Part
+        The two plates (same outline).
     grid : (int, int)
         Contact node pairs along ``x`` and ``y``: a regular grid over the plate, supported edges
         excluded (25 x 21 = 525 pairs by default).
@@ -171,8 +149,6 @@ class Assembly:
         Mesh cells between neighbouring contact nodes.
     """
 
-    lower: Plate = Plate()
-    upper: Plate = Plate()
     grid: tuple = (25, 21)
     supports: tuple = ("left", "right")
     fasteners: tuple | None = None
@@ -185,10 +161,10 @@ class Assembly:
         nx, ny = self.grid
         return tuple((i, ny // 2) for i in range(2, nx - 2, 4))
 
-    def build(self) -> "RivetingModel":
-        """Assemble and condense both plates (seconds for the default grid; cached)."""
-        if (self.lower.length, self.lower.width) != (self.upper.length, self.upper.width):
-            raise InvalidInputError("lower and upper plates must have the same length and width")
+    @cached_property
+    def _layout(self) -> tuple:
+        """``(points, cells)``: pair positions (m, shape (k, 2)) and mesh cells along x, y."""
+        self.check_outline()
         nx, ny = (int(n) for n in self.grid)
         if nx < 1 or ny < 1 or int(self.refine) < 1:
             raise InvalidInputError(f"grid and refine must be positive, got {self.grid}, "
@@ -197,9 +173,28 @@ class Assembly:
         xs, cx = _axis(nx, self.lower.length, "left" in held, "right" in held, self.refine)
         ys, cy = _axis(ny, self.lower.width, "bottom" in held, "top" in held, self.refine)
         gx, gy = np.meshgrid(xs, ys)  # pair i + nx j at (xs[i], ys[j])
-        points = np.column_stack([gx.ravel(), gy.ravel()])
-        key = (tuple(map(tuple, points)), (cx, cy), tuple(self.supports))
-        blocks = [_cached_flexibility(plate, *key) for plate in (self.lower, self.upper)]
+        return np.column_stack([gx.ravel(), gy.ravel()]), (cx, cy)
+
+    @cached_property
+    def flexibilities(self) -> tuple:
+        """``(R_lower, R_upper)``: each plate's flexibility at the pairs (m/N, shape (k, k)).
+
+        Computed once per assembly (seconds for the default grid), once for both plates when
+        they are equal; kept on this object, which is immutable.
+        """
+        points, cells = self._layout
+        lower = plate_flexibility(self.lower, points, cells, self.supports)
+        upper = lower if self.upper == self.lower else plate_flexibility(
+            self.upper, points, cells, self.supports)
+        for block in (lower, upper):
+            block.setflags(write=False)
+        return lower, upper
+
+    def build(self) -> "RivetingModel":
+        """The reduced model of both plates (their flexibilities: :attr:`flexibilities`)."""
+        points, _ = self._layout
+        blocks = self.flexibilities
+        nx, ny = (int(n) for n in self.grid)
         fasteners = []
         for i, j in self.fastener_cells():
             if not (0 <= i < nx and 0 <= j < ny):
@@ -209,10 +204,10 @@ class Assembly:
             raise InvalidInputError("two fasteners share a contact pair")
         model = ReducedModel(flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=1,
                              coordinates=np.vstack([points, points]))
-        return RivetingModel(self, model, points, np.array(fasteners, dtype=int))
+        return RivetingModel(self, model, points.copy(), np.array(fasteners, dtype=int))
 
 
-class RivetingModel:
+class RivetingModel(StackedModel):
     """The reduced model of an :class:`Assembly`: contact pairs, fasteners, problems.
 
     Attributes
@@ -227,51 +222,20 @@ class RivetingModel:
     """
 
     def __init__(self, assembly: Assembly, model: ReducedModel, points, fasteners):
-        self.assembly, self.model = assembly, model
-        self.points, self.fasteners = points, fasteners
-
-    @property
-    def n_pairs(self) -> int:
-        """Number of contact pairs ``k``."""
-        return len(self.points)
+        super().__init__(assembly, model, points, assembly.grid)
+        self.fasteners = fasteners
 
     @cached_property
     def base_problem(self) -> ContactProblem:
         """The contact problem with zero gaps; its dual is assembled once and shared."""
-        k = self.n_pairs
-        pairs = np.column_stack([np.arange(k), k + np.arange(k)])
-        problem = ContactProblem(self.model, np.zeros(2 * k), [NodePairs(pairs, np.zeros(k))])
+        problem = ContactProblem(self.model, np.zeros(2 * self.n_pairs),
+                                 [self.node_pairs(np.zeros(self.n_pairs))])
         problem.dual()
         return problem
 
     def problem(self, gaps) -> ContactProblem:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return self.base_problem.variant(gaps=gaps)
-
-    @property
-    def thickness(self) -> float:
-        """The thinner plate's thickness (m): the scale of a plausible gap or overlap."""
-        return min(self.assembly.lower.thickness, self.assembly.upper.thickness)
-
-    def check_gaps(self, gaps, what: str = "gaps") -> np.ndarray:
-        """``gaps`` (m) as a finite array of shape (k,); an overlap (negative gap) deeper than
-        the thinner plate is physically absurd and refused.
-
-        Raises
-        ------
-        InvalidInputError
-            Wrong shape, NaN or inf, or an overlap beyond the plate thickness; ``what`` names
-            the input in the message.
-        """
-        gaps = finite_array(gaps, what, 1)
-        if gaps.shape != (self.n_pairs,):
-            raise InvalidInputError(f"{what} must have {self.n_pairs} values, got {gaps.size}")
-        deepest = float(gaps.min())
-        if deepest < -self.thickness:
-            raise InvalidInputError(
-                f"{what}: an overlap of {-deepest * 1e3:.4g} mm is deeper than the "
-                f"{self.thickness * 1e3:.4g} mm plates (a negative gap is interference)")
-        return gaps
 
     def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
                tol: float = 1e-10) -> "FasteningSequence":
@@ -283,9 +247,12 @@ class RivetingModel:
             Initial gaps (m), negative for interference.
         order : sequence of int, optional
             Positions in :attr:`fasteners` in installation order (default: as listed).
-        method, tol
-            See :meth:`FastenerClosure.solve`; each step is warm started from the previous one
-            (except with ``method="nnls"``).
+        method : str
+            A method for fastened problems (``"lawson-hanson"``, ``"active-set"``, ``"nnls"``,
+            see :func:`~contactqp.solve`); each step is warm started from the previous one
+            (except with ``"nnls"``).
+        tol : float
+            The method's tolerance (``"nnls"`` has none).
 
         Returns
         -------
@@ -298,11 +265,17 @@ class RivetingModel:
         problem = self.problem(self.check_gaps(gaps))
         steps, forces = [], None
         for count in range(1, len(order) + 1):
-            step = solve_fastened(problem, self.fasteners[order[:count]], method=method,
-                                  forces0=forces, tol=tol)
+            fastened = FastenedProblem(problem, self.fasteners[order[:count]])
+            step = solve(fastened, method, **_fastening_options(method, tol, forces))
             forces = step.multipliers
             steps.append(step)
         return FasteningSequence(steps, order)
+
+
+def _fastening_options(method: str, tol: float, r0) -> dict:
+    """``tol`` and the warm start ``r0`` for the fastened ``method``, where it takes them."""
+    taken = get_method(method, FastenedProblem.kind).option_names
+    return {name: value for name, value in (("tol", tol), ("r0", r0)) if name in taken}
 
 
 @dataclass
@@ -323,143 +296,29 @@ class FasteningSequence:
         return all(step.success for step in self.steps)
 
 
-class FastenerClosure:
-    r"""The dual of a contact problem with some rows closed by fasteners, reduced once.
-
-    The fastener multipliers ``lambda_f`` are free in sign, so they are eliminated: with
-    ``W`` split into fastener (``f``) and contact (``c``) blocks and ``q = A R P - Delta``,
-
-    .. math::
-
-        \lambda_f = W_{ff}^{-1} (q_f - W_{fc} \lambda_c), \qquad
-        \min_{\lambda_c \ge 0} \tfrac12 \lambda_c^T S \lambda_c
-            - \lambda_c^T (q_c - W_{cf} W_{ff}^{-1} q_f),
-        \quad S = W_{cc} - W_{cf} W_{ff}^{-1} W_{fc},
-
-    a frictionless contact dual whose Delassus operator ``S`` (a Schur complement, positive
-    definite) is that of the assembly with the fasteners closed. ``S`` depends on the fasteners
-    only, so a variation study reduces once and solves every sample on it.
-
-    Parameters
-    ----------
-    problem : ContactProblem
-        Node pairs; ``fasteners`` index its constraint rows.
-    fasteners : array_like of int, shape (f,)
-        Rows whose gap the fasteners close to zero.
-    """
-
-    def __init__(self, problem: ContactProblem, fasteners):
-        rows = np.asarray(fasteners, dtype=int).reshape(-1)
-        m = problem.n_constraints
-        if rows.size == 0 or rows.min() < 0 or rows.max() >= m or np.unique(rows).size != rows.size:
-            raise InvalidInputError(f"fasteners must be distinct rows in 0..{m - 1}, at least one")
-        self.problem, self.fasteners = problem, rows
-        self.contacts = np.setdiff1d(np.arange(m), rows)
-        W = problem.dual().W
-        self._factor = scipy.linalg.cho_factor(W[np.ix_(rows, rows)])
-        self._coupling = W[np.ix_(rows, self.contacts)]
-        self._eliminated = scipy.linalg.cho_solve(self._factor, self._coupling)
-        self.schur = W[np.ix_(self.contacts, self.contacts)] - self._coupling.T @ self._eliminated
-        self._schur_factor = None
-
-    def _nnls(self, q):
-        """``(forces, converged, message, iterations, factorizations)`` by NNLS."""
-        from scipy.optimize import nnls
-
-        if self._schur_factor is None:
-            self._schur_factor = np.linalg.cholesky(self.schur)
-        lower = self._schur_factor
-        target = scipy.linalg.solve_triangular(lower, q, lower=True, check_finite=False)
-        try:
-            forces, _ = nnls(lower.T, target)
-        except RuntimeError as exc:  # iteration limit
-            return np.zeros(len(q)), False, f"nnls: {exc}", 0, 1
-        return forces, True, "nnls converged (iterations not reported)", 0, 1
-
-    def solve(self, gaps=None, *, method: str = "lawson-hanson", forces0=None,
-              tol: float = 1e-10) -> "FastenedResult":
-        """Solve for the initial ``gaps`` (m, shape (m,); default: the problem's).
-
-        Parameters
-        ----------
-        gaps : array_like, shape (m,), optional
-        method : {"lawson-hanson", "active-set", "nnls"}
-            ``"lawson-hanson"`` (default): Lawson and Hanson's active-set method on ``S``
-            directly, adding one contact at a time, warm started from the support of
-            ``forces0``. ``"active-set"``: the project's primal-dual box-QP solver
-            (:func:`~contactqp.methods.solve_box_qp`) on ``S``, warm started from ``forces0``.
-            ``"nnls"``: :func:`scipy.optimize.nnls` (Lawson and Hanson too, cold) on
-            ``min ||L^T lambda_c - L^-1 q||`` with ``S = L L^T``: an independent route.
-        forces0 : array_like, shape (m,), optional
-            Warm start, e.g. :attr:`FastenedResult.multipliers`.
-        tol : float
-            Relative tolerance of ``"lawson-hanson"`` (on ``q - S lambda``, relative to
-            ``max|q|``) and of ``"active-set"`` (its natural residual).
-        """
-        start = time.perf_counter()
-        problem = self.problem if gaps is None else self.problem.variant(gaps=gaps)
-        dual = problem.dual()
-        rows, contacts = self.fasteners, self.contacts
-        q_rows = dual.b[rows]
-        q = dual.b[contacts] - self._eliminated.T @ q_rows
-        x0 = None if forces0 is None else np.maximum(np.asarray(forces0, float)[contacts], 0)
-        if method == "lawson-hanson":
-            solution = solve_nonnegative_qp(self.schur, q, x0, tol, max_iter=3 * len(q))
-            forces, converged = solution.x, solution.converged
-            nit, factorizations = solution.iterations, solution.factorizations
-            message = f"Lawson-Hanson {'converged' if converged else 'did not converge'}"
-        elif method == "nnls":
-            forces, converged, message, nit, factorizations = self._nnls(q)
-        elif method == "active-set":
-            solution = solve_box_qp(self.schur, -q, lower=0.0, x0=x0, tol=tol, check_finite=False)
-            forces, converged, message = solution.x, solution.converged, solution.message
-            nit, factorizations = solution.iterations, solution.factorizations
-        else:
-            raise InvalidInputError(f"method must be 'lawson-hanson', 'active-set' or 'nnls', "
-                                    f"got {method!r}")
-        multipliers = np.empty(problem.n_constraints)
-        multipliers[contacts] = forces
-        multipliers[rows] = scipy.linalg.cho_solve(self._factor, q_rows - self._coupling @ forces)
-        tension = np.maximum(-multipliers[rows], 0.0)
-        compression = np.maximum(multipliers, 0.0)
-        A = problem.constraints.matrix
-        pulled = problem.variant(loads=problem.loads + A[rows].T @ tension)
-        contact = pulled.make_result(
-            dual.displacements(multipliers), compression, method=f"{method} (fastened)",
-            converged=converged, message=message, iterations=nit,
-            seconds=time.perf_counter() - start, info={"factorizations": factorizations})
-        return FastenedResult.from_contact(contact, rows, tension, multipliers,
-                                           problem.constraints.gaps)
-
-
-def solve_fastened(problem: ContactProblem, fasteners, *, method: str = "lawson-hanson",
-                   forces0=None, tol: float = 1e-10) -> FastenedResult:
-    """Solve a frictionless contact problem whose ``fasteners`` rows are closed (bilateral).
-
-    One call of :class:`FastenerClosure`; see there for the parameters.
-    """
-    return FastenerClosure(problem, fasteners).solve(method=method, forces0=forces0, tol=tol)
-
-
 class FasteningCase(GapVariation):
     """A riveted assembly, every fastener installed: a case of :func:`~contactqp.studies.batch.run_batch`.
 
-    Each sample is solved by :meth:`FastenerClosure.solve` (``method``, ``tol``) with all the
-    fasteners at once (without friction the final state does not depend on the order), warm
+    Each sample is a :class:`~contactqp.core.fastened.FastenedProblem` (its Schur complement
+    reduced once for all samples) solved by :func:`~contactqp.solve` (``method``, ``tol``) with
+    all the fasteners at once (without friction the final state does not depend on the order), warm
     started from the previous sample (except with ``method="nnls"``). Records add ``fastener_force``
-    (tension per fastener, N) to those of :class:`~contactqp.studies.batch.GapVariation`.
+    (tension per fastener, N) to those of :class:`~contactqp.studies.cases.GapVariation`.
     """
 
     def __init__(self, model: RivetingModel, method: str = "lawson-hanson", tol: float = 1e-10):
         super().__init__(model.base_problem, method=method, tol=tol)
         self.fasteners = model.fasteners
-        self.closure = FastenerClosure(model.base_problem, model.fasteners)
+        self.fastened = FastenedProblem(model.base_problem, model.fasteners)
 
     def fields(self) -> dict:
         return {**super().fields(), "fastener_force": ((len(self.fasteners),), "f8")}
 
     def solve_sample(self, gaps, warm):
-        state = self.closure.solve(gaps, forces0=warm, **self.options)
+        options = dict(self.options)
+        method = options.pop("method")
+        state = solve(self.fastened.variant(gaps=gaps), method,
+                      **_fastening_options(method, options.pop("tol"), warm), **options)
         record = self._record(state)
         record["fastener_force"] = state.fastener_forces
         record["success"] = state.success
@@ -474,8 +333,9 @@ class FasteningCase(GapVariation):
         return {**super().describe(), "fasteners": self.fasteners.tolist()}
 
 
-def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -> Path:
-    """Both contact grids as quadrilateral surfaces in a VTU file (ParaView).
+def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> PointMesh:
+    """Both contact grids as quadrilateral surfaces with the fastened state, for
+    :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *result_mesh(...))``).
 
     The lower grid at ``z = 0``, the upper one at ``z = thickness`` of the lower plate (for
     display). Point data: ``displacement`` (``w`` along ``z``, m), ``contact_force`` (N, on the
@@ -483,8 +343,6 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
     :data:`~contactqp.core.status.STATUS_LABELS`: open, closed, fastened), ``fastener_force``
     (N, zero away from fasteners).
     """
-    from ..io.export import write_vtu as write_mesh
-
     nx, ny = model.assembly.grid
     k = model.n_pairs
     ids = np.arange(k).reshape(ny, nx)
@@ -508,28 +366,18 @@ def write_vtu(model: RivetingModel, state: FastenedResult, path, initial_gaps) -
         "gap": both(state.gaps), "status": both(state.contact_status),
         "fastener_force": both(tension),
     }
-    return write_mesh(path, points, [("quad", np.vstack([quads, quads + k]))], data)
+    return PointMesh(points, [("quad", np.vstack([quads, quads + k]))], data)
 
 
 def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
-    """Maps of the initial and residual gaps (mm) and of the pair status, as a PNG."""
-    from ..io.plot import save_figure, subplots
+    """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
+    (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
+    from ..io.plot import plot_point_maps
 
-    xy = model.points * 1e3
-    figure, axes = subplots(3, 1, figsize=(7, 9.5), sharex=True)
     panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
               (state.gaps * 1e3, "residual gap (mm)", "viridis"),
               (state.contact_status, "status: " + " / ".join(
                   f"{code} {STATUS_LABELS[code]}" for code in FastenedResult.STATUSES),
                "coolwarm")]
-    for ax, (values, title, cmap) in zip(axes, panels):
-        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
-        figure.colorbar(shown, ax=ax)
-        ax.plot(*xy[state.fasteners].T, "k+", ms=10, label="fasteners")
-        ax.set_title(title)
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    axes[0].legend(loc="upper right", fontsize="small")
-    axes[-1].set_xlabel("x (mm)")
-    figure.tight_layout()
-    return save_figure(figure, path)
+    return plot_point_maps(model.points, panels, path, marked=model.points[state.fasteners],
+                           marked_label="fasteners")

@@ -41,8 +41,8 @@ A fastener at pair ``i`` is a clamping force ``F`` (N): ``+F e_z`` on the lower 
 ``-F e_z`` on the upper one. Fasteners are installed one after another, each a load increment;
 then, optionally, an in-plane shear ``T`` (N, along ``x``, shared equally by the upper part's
 interface nodes) is applied and removed in increments. The whole is one load history solved by
-:func:`~contactqp.core.history.solve_history` (each step
-:meth:`~contactqp.core.problem.FrictionalProblem.solve` from the previous result), so the friction
+:func:`~contactqp.methods.history.solve_history` (each step solved by
+:func:`~contactqp.solve` from the previous result), so the friction
 law acts on each step's slip increment.
 """
 
@@ -55,39 +55,28 @@ import scipy.linalg
 
 from ..core.contact import NodePairs
 from ..errors import InvalidInputError
-from ..core.history import linear_path, solve_history
-from ..core.model import ReducedModel, finite_array
+from ..core.history import linear_path
+from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..core.result import FrictionalResult
+from ..methods import solve_history
+from .assembly import Part, StackedModel, StackedParts
 
-__all__ = ["Part", "FrictionAssembly", "FrictionRivetingModel", "FasteningStep"]
+__all__ = ["FrictionAssembly", "FrictionRivetingModel", "FasteningStep"]
 
 #: Freedoms per contact node: ``u_x, u_y, u_z``.
 _DOFS = 3
 
 
 @dataclass(frozen=True)
-class Part:
-    """A thin isotropic part ``[0, length] x [0, width] x [0, thickness]`` (m).
-
-    Defaults: 100 x 40 x 2 mm aluminium (``E = 70 GPa`` in Pa, ``nu = 0.33``).
-    """
-
-    length: float = 0.100
-    width: float = 0.040
-    thickness: float = 0.002
-    young: float = 70e9
-    poisson: float = 0.33
-
-
-@dataclass(frozen=True)
-class FrictionAssembly:
+class FrictionAssembly(StackedParts):
     """Two parts, one on the other; :meth:`build` meshes, clamps and condenses them.
 
     Parameters
     ----------
     lower, upper : Part
-        The parts (same length and width); by default 2 mm and 1.2 mm thick.
+        The parts (same length and width); by default 100 x 40 mm aluminium, 2 mm and 1.2 mm
+        thick.
     cells : (int, int)
         Cells along ``x`` and ``y`` (one through the thickness), each of quadratic tetrahedra
         (see the module notes). The contact
@@ -95,16 +84,15 @@ class FrictionAssembly:
         + 1)`` pairs (9 x 5 = 45 by default).
     """
 
-    lower: Part = Part()
-    upper: Part = Part(thickness=0.0012)
+    lower: Part = Part(length=0.100, width=0.040)
+    upper: Part = Part(length=0.100, width=0.040, thickness=0.0012)
     cells: tuple = (10, 4)
 
     def build(self) -> "FrictionRivetingModel":
         """Mesh, clamp and condense both parts (about a second for the default cells)."""
         from ..compliance.fem import ElasticModel, block  # needs scikit-fem
 
-        if (self.lower.length, self.lower.width) != (self.upper.length, self.upper.width):
-            raise InvalidInputError("lower and upper parts must have the same length and width")
+        self.check_outline()
         nx, ny = (int(n) for n in self.cells)
         if nx < 2 or ny < 1:
             raise InvalidInputError(f"cells must be at least (2, 1), got {self.cells}")
@@ -149,7 +137,7 @@ class FasteningStep:
     result: FrictionalResult
 
 
-class FrictionRivetingModel:
+class FrictionRivetingModel(StackedModel):
     """The reduced model of a :class:`FrictionAssembly`: pairs, loads, fastening sequences.
 
     Attributes
@@ -165,34 +153,13 @@ class FrictionRivetingModel:
     """
 
     def __init__(self, assembly: FrictionAssembly, model: ReducedModel, points, parts):
-        self.assembly, self.model, self.points, self.parts = assembly, model, points, parts
-
-    @property
-    def n_pairs(self) -> int:
-        """Number of contact pairs ``k``."""
-        return len(self.points)
-
-    @property
-    def grid(self) -> tuple[int, int]:
-        """Pairs along ``x`` and ``y``."""
-        nx, ny = self.assembly.cells
-        return int(nx) - 1, int(ny) + 1
-
-    def pair(self, i: int, j: int) -> int:
-        """Index of the pair at grid position ``(i, j)`` (along ``x``, along ``y``)."""
-        nx, ny = self.grid
-        if not (0 <= i < nx and 0 <= j < ny):
-            raise InvalidInputError(f"pair ({i}, {j}) is outside the {nx} x {ny} grid")
-        return int(i) + nx * int(j)
+        nx, ny = assembly.cells
+        super().__init__(assembly, model, points, (int(nx) - 1, int(ny) + 1))
+        self.parts = parts
 
     def obstacles(self, gaps) -> list[NodePairs]:
         """The interface as :class:`NodePairs` for initial gaps ``gaps`` (m, shape (k,))."""
-        values = finite_array(gaps, "gaps", 1)
-        if values.shape != (self.n_pairs,):
-            raise InvalidInputError(f"gaps must have shape ({self.n_pairs},), got {values.shape}")
-        k = self.n_pairs
-        return [NodePairs(np.column_stack([np.arange(k), k + np.arange(k)]), values,
-                          (0.0, 0.0, 1.0))]
+        return [self.node_pairs(gaps)]
 
     def clamp_loads(self, pairs, force: float) -> np.ndarray:
         """Loads (N, shape (n_freedoms,)) of fasteners clamping ``pairs`` with ``force`` (N).
@@ -233,7 +200,8 @@ class FrictionRivetingModel:
         facets : int, optional
             Polygonal friction cone (see :class:`FrictionalProblem`).
         **options
-            Passed to :meth:`FrictionalProblem.solve` (``solver``, ``tol``, ...).
+            Passed to :func:`~contactqp.methods.history.solve_history` (``method``,
+            ``tol``, ...).
 
         Returns
         -------

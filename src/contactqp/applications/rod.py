@@ -59,7 +59,7 @@ from ..methods import solve
 
 __all__ = ["Rod", "RodLoad", "RodLoadCase", "FullSolution", "CaseComparison", "DEFAULT_CASES",
            "ReferenceSolveError", "solve_reduced", "solve_full", "compare", "deviations",
-           "as_record", "write_vtu", "ABSOLUTE_BELOW", "MAX_ELEMENTS"]
+           "as_record", "result_mesh", "plot_rod", "ABSOLUTE_BELOW", "MAX_ELEMENTS"]
 
 #: Reference values below this fraction of a case's largest displacement get absolute deviations.
 ABSOLUTE_BELOW = 1e-6
@@ -237,7 +237,7 @@ def solve_reduced(rod: Rod, case: RodLoadCase, solver: str = "active-set") -> Co
     x = rod.frame.coordinates[rod.node_indices, 0]
     problem = ContactProblem(model, P, [GapObstacle(range(model.n_nodes), rod.normal_gap(x),
                                                     rod.normal)])
-    result = solve(problem, solver=solver)
+    result = solve(problem, solver)
     return dataclasses.replace(result, seconds=time.perf_counter() - start)
 
 
@@ -530,8 +530,9 @@ def as_record(rod: Rod, comparisons) -> dict:
             "cases": cases}
 
 
-def write_vtu(rod: Rod, comparisons, path) -> Path:
-    """The mesh and every case's solutions as a VTU file for ParaView (meshio).
+def result_mesh(rod: Rod, comparisons) -> export.PointMesh:
+    """The mesh and every case's solutions, for :func:`~contactqp.io.export.write_vtu`
+    (``write_vtu(path, *result_mesh(rod, comparisons))``).
 
     Line cells, points at the mesh nodes (``z = 0``). Point data: ``gap`` (initial, along ``y``,
     m) and, per case (name with spaces as underscores), ``<case>_displacement`` (reference, m),
@@ -554,4 +555,33 @@ def write_vtu(rod: Rod, comparisons, path) -> Path:
         data[f"{slug}_displacement_reduced"] = np.column_stack([c.recovered[:, :2], np.zeros(n)])
         data[f"{slug}_contact_force"] = vectors(c.reference.contact_nodes, c.reference.forces)
         data[f"{slug}_contact_force_reduced"] = vectors(rod.node_indices, c.reduced.forces)
-    return export.write_vtu(path, frame.coordinates, [("line", frame.elements)], data)
+    return export.PointMesh(frame.coordinates, [("line", frame.elements)], data)
+
+
+def plot_rod(rod: Rod, comparisons, path) -> Path:
+    """The rod deformed over its obstacle, one panel per load case (drawn by
+    :func:`contactqp.io.plot.plot_deflections`, true scale, mm).
+
+    Drawn: the reference deflection on the mesh (line), the reduced solution at the
+    computational nodes (markers), the applied forces and the reduced contact forces (arrows,
+    labelled in N).
+    """
+    from ..io.plot import DeflectionCase, plot_deflections
+
+    x = rod.frame.coordinates[:, 0]
+    nodes = rod.node_indices
+    cases = []
+    for c in comparisons:
+        U = c.reduced.displacements.reshape(-1, 2)
+        at_nodes = np.column_stack([x[nodes] + U[:, 0], U[:, 1]])
+        loads = [(np.array([load.x, c.reference.displacements[int(np.argmin(np.abs(x - load.x))),
+                                                              1]]),
+                  np.array([0.0, load.fy])) for load in c.case.loads]
+        contacts = [(at_nodes[i], -c.reduced.forces[i] * rod.normal)
+                    for i in np.flatnonzero(c.reduced.forces > 0)]
+        cases.append(DeflectionCase(
+            title=f"{c.case.name}: largest deviation {c.max_eps:.2g} %",
+            deformed=rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2],
+            nodes=at_nodes, loads=loads, contacts=contacts))
+    return plot_deflections(x, -rod.gap(x), cases, path, clamp=0.25 * rod.gap_clamped,
+                            xlabel="x (mm), clamped at the right end")

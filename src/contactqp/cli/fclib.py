@@ -45,8 +45,7 @@ def fclib(files, tol, as_json, solution_dir):
     overwrite an input, another input's solution or a file this command did not write.
     """
     from ..io.fclib import read_any, write_solution
-    from ..core.local_problem import GlobalProblem
-    from ..methods.local_global import solve_global, solve_local
+    from ..methods import solve
 
     targets = _solution_targets(files, solution_dir) if solution_dir else {}
     exit_code = EXIT_OK
@@ -54,8 +53,7 @@ def fclib(files, tol, as_json, solution_dir):
     for path in files:
         try:
             problem = read_any(path)
-            solve = solve_global if isinstance(problem, GlobalProblem) else solve_local
-            solution = solve(problem, tol=tol)
+            solution = solve(problem, tol=tol)  # mu = 0 everywhere: the frictionless route
         except ContactError as exc:
             message = str(exc)  # the reader's messages may already name the file
             fail(message if message.startswith(str(path)) else f"{path}: {message}")

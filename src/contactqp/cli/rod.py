@@ -30,7 +30,15 @@ def rod(elements, as_json, plot, vtu):
     The rod (40 mm, E = 1e12 Pa, A = 0.2 mm^2) is clamped at its right end; the gap to the
     obstacle grows from 1 mm under the free left end to 5 mm under the clamp.
     """
-    from ..applications.rod import ReferenceSolveError, Rod, as_record, compare, write_vtu
+    from ..applications.rod import (
+        ReferenceSolveError,
+        Rod,
+        as_record,
+        compare,
+        plot_rod,
+        result_mesh,
+    )
+    from ..io.export import write_vtu
 
     model = Rod(n_elements=elements)
     try:
@@ -44,11 +52,9 @@ def rod(elements, as_json, plot, vtu):
         _rod_tables(model, comparisons)
     written = []
     if plot:
-        from ..io.plot import plot_rod
-
         written.append(plot_rod(model, comparisons, plot))
     if vtu:
-        written.append(write_vtu(model, comparisons, vtu))
+        written.append(write_vtu(vtu, *result_mesh(model, comparisons)))
     if not as_json:
         for path in written:
             click.echo(f"wrote {path}")

@@ -2,7 +2,7 @@
 
 Frictionless, with friction (``[friction]``) or along a load history (``[loading]``); the file
 format and the files ``--out`` writes (columns and units) are described in
-:mod:`contactqp.io.problem_file`. ``--json`` prints :meth:`ProblemSpec.summary` on one line,
+``docs/problem-files.md``. ``--json`` prints :meth:`ProblemSpec.summary` on one line,
 with the problem's ``name`` and path. Exit 1 when the solve (or a step of the history) did not
 converge or its certificate failed, with one line on stderr naming the first such step.
 """

@@ -47,7 +47,7 @@ def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
     if plot:
         from ..io.plot import plot_spring_chain
 
-        plot_spring_chain(results, plot)
+        plot_spring_chain([r.force for r in results], [r.x for r in results], plot)
         if not as_json:
             click.echo(f"figure written to {plot}")
     failed = [r for r in results if not r.converged]

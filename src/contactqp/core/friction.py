@@ -18,7 +18,7 @@ gap :math:`\ge 0`, and :math:`\tilde r = 0` where the gap is open.
 
 The *polygonal* law of the method replaces the disc :math:`\|r_T\| \le s` by the inscribed
 regular polygon of ``facets`` sides :math:`n_k \cdot r_T \le s \cos(\pi / F)`, with the outward
-normals :math:`n_k` of :func:`~contactqp.methods.polygonal.polygon_normals` (vertices on the circle
+normals :math:`n_k` of :func:`polygon_normals` (vertices on the circle
 at the angles :math:`(2k + 1)\pi / F`). In 2-D the tangential "disc" is the segment
 :math:`|r_T| \le s`, which every polygon reproduces: the polygonal law is then exact.
 
@@ -30,16 +30,35 @@ on the exact cone whenever :math:`s_T \ne 0`.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..methods.polygonal import polygon_normals
 from .model import finite_array
 from .status import ContactStatus
 
-__all__ = ["FrictionLaw", "apex_distance"]
+__all__ = ["FrictionLaw", "MAX_FACETS", "apex_distance", "polygon_normals"]
+
+
+#: Most sides of a polygonal cone: 1024 sides are within 5e-6 of the circle, and more would only
+#: add rows to every cone program; the exact cone (``facets=None``) is the route beyond that.
+MAX_FACETS = 1024
+
+
+def polygon_normals(facets: int) -> np.ndarray:
+    """Outward unit normals of the regular polygon of ``facets`` sides, shape (facets, 2).
+
+    Side ``k`` is orthogonal to the angle ``2 pi k / facets`` (side 0 across the first tangent
+    axis) at the distance ``cos(pi / facets)`` from the centre of the unit circle.
+    """
+    if (isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3
+            or facets > MAX_FACETS):
+        raise InvalidInputError(f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
+                                f"the exact cone), got {facets!r}")
+    angles = 2.0 * np.pi * np.arange(int(facets)) / int(facets)
+    return np.column_stack([np.cos(angles), np.sin(angles)])
 
 
 def _per_contact(value, name: str, count: int) -> np.ndarray:
@@ -86,7 +105,7 @@ class FrictionLaw:
     InvalidInputError
         ``mu`` or ``cohesion`` negative, NaN, inf or of the wrong length; cohesion where
         ``mu = 0`` (the cone has no apex); ``facets`` not an integer from 3 to
-        :data:`~contactqp.methods.polygonal.MAX_FACETS`.
+        :data:`MAX_FACETS`.
     """
 
     mu: np.ndarray

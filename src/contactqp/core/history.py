@@ -17,25 +17,24 @@ totals of the forces and the increments of the slip: :math:`r_k` in the friction
 (:class:`~contactqp.core.friction.FrictionLaw`), :math:`u_N \ge 0` complementary to the normal force,
 and :math:`-r_{T,k} \cdot u_T` the largest friction work (maximum dissipation). In the total
 unknown :math:`r_k` this is the FCLIB problem :math:`u = W r_k + q_k` with
-:math:`q_k = \bar q_k - W r_{k-1}`, solved by :meth:`~contactqp.FrictionalProblem.solve` warm
-started from :math:`r_{k-1}`. The energy dissipated in step ``k`` is :math:`-r_{T,k} \cdot u_T`
+:math:`q_k = \bar q_k - W r_{k-1}`, solved by :func:`~contactqp.solve` warm started from
+:math:`r_{k-1}` (:func:`~contactqp.methods.history.solve_history` chains the steps). The energy
+dissipated in step ``k`` is :math:`-r_{T,k} \cdot u_T`
 (backward Euler: exact while the friction bound stays constant during the step's slip).
 """
 
 from __future__ import annotations
 
 import numbers
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InvalidInputError
 from .model import finite_array
-from .problem import FrictionalProblem
 from .result import FrictionalResult
 
-__all__ = ["MAX_STEPS", "HistoryResult", "linear_path", "solve_history"]
+__all__ = ["MAX_STEPS", "HistoryResult", "linear_path"]
 
 #: Default cap on the steps of :func:`linear_path`: each step is a full solve whose result is
 #: kept, a few milliseconds and a few kilobytes each for small models, so 100000 steps are
@@ -141,43 +140,3 @@ class HistoryResult:
     def dissipated(self) -> np.ndarray:
         """Energy dissipated by friction in each step (J), shape (K,)."""
         return np.array([step.dissipated for step in self.steps])
-
-
-def solve_history(problem: FrictionalProblem, loads, previous: FrictionalResult | None = None,
-                  *, progress: Callable[[int, int], None] | None = None,
-                  **options) -> HistoryResult:
-    """Solve a frictional problem along a history of loads, step by step.
-
-    Parameters
-    ----------
-    problem : FrictionalProblem
-        The contacts and the friction law (its own loads are not used).
-    loads : array_like, shape (K, n_freedoms)
-        Total loads of each step (N); see :func:`linear_path`.
-    previous : FrictionalResult, optional
-        State before the first step; rest by default.
-    progress : callable, optional
-        Called as ``progress(done, total)`` after each step (e.g. to show a progress bar).
-    **options
-        Passed to :meth:`~contactqp.FrictionalProblem.solve` (``solver``, ``tol``, ...).
-
-    Returns
-    -------
-    HistoryResult
-        Every step, including failed ones (check :attr:`HistoryResult.success`).
-    """
-    if not isinstance(problem, FrictionalProblem):
-        raise InvalidInputError(
-            f"problem must be a FrictionalProblem, got {type(problem).__name__}")
-    history = finite_array(loads, "loads", 2)
-    if history.shape[1] != problem.model.n_freedoms or history.shape[0] == 0:
-        raise InvalidInputError(
-            f"loads must have shape (K, {problem.model.n_freedoms}) with K >= 1, got "
-            f"{history.shape}")
-    steps = []
-    for P in history:
-        previous = problem.with_loads(P).solve(previous, **options)
-        steps.append(previous)
-        if progress is not None:
-            progress(len(steps), len(history))
-    return HistoryResult(steps)

@@ -131,6 +131,8 @@ class LocalProblem:
         cohesion on a frictionless contact, or ``dim`` is not 2 or 3.
     """
 
+    kind = "local"  # the problem kind (contactqp.methods.registry); not a field
+
     W: sp.csr_matrix | np.ndarray
     q: np.ndarray
     mu: np.ndarray
@@ -427,6 +429,8 @@ class GlobalProblem:
         than 16, as :attr:`LocalProblem.digits`.
     """
 
+    kind = "global"  # the problem kind (contactqp.methods.registry); not a field
+
     M: sp.csr_matrix | np.ndarray
     H: sp.csr_matrix | np.ndarray
     f: np.ndarray
@@ -660,7 +664,7 @@ def natural_map_error(problem: LocalProblem, r, u=None, *, per_contact: bool = F
     them alike only when ``W`` is O(1), as in FCLIB files. On a problem in newtons and metres
     with a stiff ``W`` (say 1e-6 m/N) the reactions dominate and a displacement error hardly
     shows: a reaction 1 % short, 1e-5 m of interpenetration, measures 2e-8. Solve such a
-    problem made dimensionless, as :meth:`~contactqp.FrictionalProblem.solve` does
+    problem made dimensionless, as :func:`~contactqp.solve` does for a ``FrictionalProblem``
     (:attr:`~contactqp.core.problem.FrictionStep.fclib`), whose certificate also checks the gaps
     in metres.
 

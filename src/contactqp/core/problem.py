@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import time
 import warnings
 
 import numpy as np
@@ -47,8 +46,7 @@ from .certificate import CERTIFICATE_TOL, certify, certify_friction, contact_sca
 from .result import CERTIFICATE_FAILED, NOT_CONVERGED, SUCCESS, ContactResult, FrictionalResult
 from .status import ContactStatus
 
-__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "LocalForm",
-           "friction_route"]
+__all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "LocalForm"]
 
 #: A contact is reported closed when its force exceeds this fraction of the problem's force scale.
 CLOSED_RTOL = 1e-10
@@ -120,7 +118,14 @@ class ContactProblem:
         :class:`~contactqp.core.contact.ProfileObstacle` or :class:`~contactqp.core.contact.NodePairs`.
     certificate_tol : float
         Largest relative residual the certificate accepts.
+
+    Attributes
+    ----------
+    kind : str
+        ``"frictionless"`` (see :mod:`contactqp.methods.registry`).
     """
+
+    kind = "frictionless"
 
     def __init__(self, model: ReducedModel, loads, obstacles, certificate_tol: float = CERTIFICATE_TOL):
         self.loads = _checked_loads(model, loads, certificate_tol)
@@ -291,9 +296,10 @@ class FrictionStep:
 class FrictionalProblem:
     r"""A contact problem with friction on a reduced model, solved from a given state.
 
-    From the state of a previous result (or from rest), the loads ``P`` are applied in one
-    increment. The normal law acts on the total gap and the friction law on the slip increment
-    ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see :meth:`local_problem`) is
+    From the state of a previous result (``previous``, or from rest), the loads ``P`` are
+    applied in one increment. The normal law acts on the total gap and the friction law on the
+    slip increment ``s_T = (H U)_T - (H U_prev)_T``, so the step's local problem (see
+    :meth:`local_problem`) is
 
     .. math::
 
@@ -326,16 +332,27 @@ class FrictionalProblem:
         method's linearised cone (3-D; in 2-D the cone is already linear).
     certificate_tol : float
         Largest relative residual the certificate accepts.
+    previous : FrictionalResult, optional
+        The state the increment starts from (None: rest): its tangential displacements are the
+        origin of the slip increments and its forces the default warm start. The state is part
+        of the problem because the step's local problem and its certificate depend on it; a
+        load history chains ``with_loads(P, previous=result)``.
+
+    Attributes
+    ----------
+    kind : str
+        ``"frictional"`` for the exact cone, ``"frictional-polygonal"`` with ``facets`` (see
+        :mod:`contactqp.methods.registry`).
 
     Raises
     ------
     InvalidInputError
-        Bad loads, obstacles, ``mu``, ``cohesion`` or ``facets``; contact nodes with one freedom
-        (no tangent) or with different numbers of freedoms.
+        Bad loads, obstacles, ``mu``, ``cohesion``, ``facets`` or ``previous``; contact nodes
+        with one freedom (no tangent) or with different numbers of freedoms.
     """
 
     def __init__(self, model: ReducedModel, loads, obstacles, mu, cohesion=0.0, facets=None,
-                 certificate_tol: float = CERTIFICATE_TOL):
+                 certificate_tol: float = CERTIFICATE_TOL, *, previous=None):
         self.loads = _checked_loads(model, loads, certificate_tol)
         self.model = model
         self.constraints = assemble_constraints(model, obstacles)
@@ -353,6 +370,18 @@ class FrictionalProblem:
                 f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)")
         self.certificate_tol = float(certificate_tol)
         self._local = None
+        self.previous = previous
+        self._previous_tangential()  # checked now, not at the solve
+
+    @property
+    def kind(self) -> str:
+        """``"frictional"`` (exact cone) or ``"frictional-polygonal"`` (``facets`` given)."""
+        return "frictional" if self.law.facets is None else "frictional-polygonal"
+
+    @property
+    def frictionless(self) -> bool:
+        """True when ``mu = 0`` on every contact (no cohesion then either)."""
+        return not np.any(self.law.mu > 0)
 
     @property
     def n_contacts(self) -> int:
@@ -370,15 +399,19 @@ class FrictionalProblem:
             self._local = LocalForm(self.model, self.constraints, self.frames)
         return self._local
 
-    def with_loads(self, loads) -> "FrictionalProblem":
-        """The same contacts and law under other loads (nothing is assembled again)."""
+    def with_loads(self, loads, *, previous=None) -> "FrictionalProblem":
+        """The same contacts and law under other loads, from the state ``previous`` (None:
+        rest); nothing is assembled again."""
         twin = copy.copy(self)
         twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
         twin._local = self.local()
+        twin.previous = previous
+        twin._previous_tangential()
         return twin
 
-    def _previous_tangential(self, previous) -> np.ndarray:
+    def _previous_tangential(self) -> np.ndarray:
         """``(H U_prev)_T`` of shape (k, d - 1): zero from rest."""
+        previous = self.previous
         if previous is None:
             return np.zeros((self.n_contacts, self.dim - 1))
         if not isinstance(previous, FrictionalResult):
@@ -390,41 +423,42 @@ class FrictionalProblem:
                 f"{self.n_contacts}")
         return previous.tangential_displacements
 
-    def local_problem(self, previous=None) -> LocalProblem:
-        """The step's :class:`~contactqp.core.local_problem.LocalProblem` from ``previous`` (None: rest).
+    def local_problem(self) -> LocalProblem:
+        """The step's :class:`~contactqp.core.local_problem.LocalProblem` from :attr:`previous`.
 
         In the model's units (m, N), with the cohesion of the law; FCLIB's problem when there
-        is none. To solve it, prefer :meth:`solve` (or :attr:`FrictionStep.fclib`): in these
+        is none. To solve it, prefer :func:`~contactqp.solve` (which solves
+        :attr:`FrictionStep.fclib`): in these
         units the natural-map error that the local solvers stop on weighs newtons against
         metres and, for a stiff ``W``, barely sees displacement errors
         (:func:`~contactqp.core.local_problem.natural_map_error`).
         """
-        return self.step(previous).local
+        return self.step().local
 
-    def step(self, previous=None) -> "FrictionStep":
-        """The increment from ``previous`` (None: rest), assembled once for solver and certificate."""
-        tangential = self._previous_tangential(previous)
+    def step(self) -> "FrictionStep":
+        """The increment from :attr:`previous`, assembled once for method and certificate."""
+        tangential = self._previous_tangential()
         q = self.local().q(self.loads).reshape(self.n_contacts, self.dim)
         q[:, 1:] -= tangential
         local = LocalProblem(self.local().W, q.reshape(-1), self.law.mu, self.dim,
                              cohesion=self.law.cohesion)
         return FrictionStep(tangential, local)
 
-    def make_result(self, forces, previous=None, *, method: str, converged: bool, message: str,
+    def make_result(self, forces, *, method: str, converged: bool, message: str,
                     iterations: int, seconds: float, info: dict | None = None,
                     step: "FrictionStep | None" = None) -> FrictionalResult:
         """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`.
 
-        ``step`` is :meth:`step` of ``previous`` when the caller has it already. Forces holding
+        ``step`` is :meth:`step` when the caller has it already. Forces holding
         NaN or inf (an overflow, or a failed solve) fail the certificate (status 2) and the
         message says so; numpy's warnings are kept inside.
         """
         with np.errstate(all="ignore"):
-            return self._result(forces, previous, method=method, converged=converged,
+            return self._result(forces, method=method, converged=converged,
                                 message=message, iterations=iterations, seconds=seconds,
                                 info=info, step=step)
 
-    def _result(self, forces, previous, *, method, converged, message, iterations, seconds, info,
+    def _result(self, forces, *, method, converged, message, iterations, seconds, info,
                 step) -> FrictionalResult:
         r = real_array(forces, "forces").reshape(-1)
         if r.shape != (self.n_contacts * self.dim,):
@@ -434,7 +468,7 @@ class FrictionalProblem:
         local = self.local()
         U = local.displacements(self.loads, r)
         if step is None:
-            step = self.step(previous)
+            step = self.step()
         tangential = step.tangential
         certificate = certify_friction(self, U, r, step, self.certificate_tol)
         status, success, message = _verdict(converged, certificate, message, self.model)
@@ -464,43 +498,6 @@ class FrictionalProblem:
             elastic_energy=elastic, loads=self.loads.copy(),
         )
 
-    def solve(self, previous=None, *, solver: str | None = None, tol: float = 1e-10,
-              **options) -> FrictionalResult:
-        """Solve the step from ``previous`` (a :class:`FrictionalResult`, None: rest).
-
-        The solver receives the dimensionless FCLIB problem :attr:`FrictionStep.fclib`.
-
-        Parameters
-        ----------
-        previous : FrictionalResult, optional
-            The state carried over: its forces start the solver, its tangential displacements
-            are the origin of the slip increments.
-        solver : {"coulomb", "tresca", "polygonal"}, optional
-            ``"coulomb"`` (default for the exact cone): the project's Coulomb solver.
-            ``"tresca"``: the Tresca fixed point (second route). ``"polygonal"`` (default and
-            only choice when ``facets`` is set): the method's linearised cone.
-        tol : float
-            Solver tolerance (natural-map error, or fixed-point change for polygons).
-        **options
-            Passed to the solver.
-        """
-        name, method = friction_route(self.law, solver)
-        start = time.perf_counter()
-        step = self.step(previous)
-        problem, shift, unit = step.fclib, step.apex_shift, step.force_unit
-        r0 = None if previous is None else (previous.forces.reshape(-1) + shift) / unit
-        options = {"per_contact": True, **options}  # a wide gap must not loosen the others
-        if name == "polygonal":
-            options = {"facets": self.law.facets, **options}
-        elif name == "coulomb":  # W = H R H^T is semidefinite: R was validated
-            options = {"check_psd": False, **options}
-        with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite r
-            solution = method(problem, tol=tol, r0=r0, **options)
-        return self.make_result(unit * solution.forces - shift, previous, method=name,
-                                converged=solution.success, message=solution.message,
-                                iterations=solution.iterations,
-                                seconds=time.perf_counter() - start, step=step)
-
     def __repr__(self) -> str:
         return (f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
                 f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})")
@@ -527,24 +524,3 @@ def _verdict(converged: bool, certificate, message: str, model) -> tuple[int, bo
                                            f"residual {certificate.worst:.2e} > "
                                            f"{certificate.tol:.0e}){note}")
     return SUCCESS, True, message
-
-
-def friction_route(law: FrictionLaw, solver: str | None):
-    """``(name, function)`` of the local solver for ``law``; imported where used."""
-    name = solver or ("coulomb" if law.facets is None else "polygonal")
-    if law.facets is not None and name != "polygonal":
-        raise InvalidInputError(
-            f"facets={law.facets} asks for the polygonal cone: use solver='polygonal', got "
-            f"{name!r}")
-    if name == "coulomb":
-        from ..methods.coulomb import solve_coulomb as method
-    elif name == "tresca":
-        from ..methods.tresca import solve_tresca_fixed_point as method
-    elif name == "polygonal":
-        if law.facets is None:
-            raise InvalidInputError("solver='polygonal' needs facets (an integer >= 3)")
-        from ..methods.polygonal import solve_polygonal as method
-    else:
-        raise InvalidInputError(
-            f"unknown friction solver {solver!r}; choose coulomb, tresca or polygonal")
-    return name, method

@@ -1,5 +1,8 @@
-"""Arrays from files (CSV tables, numpy's ``.npy`` and ``.npz``), read safely: every failure is
-one line that names the file.
+"""Arrays from files (CSV tables, numpy's ``.npy`` and ``.npz``, MatrixMarket, NASTRAN OP4), read
+safely: every failure is one line that names the file.
+
+:func:`read_array` picks the reader from the file's extension (:data:`ARRAY_FORMATS`); the
+MatrixMarket and OP4 matrices come from :mod:`contactqp.compliance.importers`.
 
 ``np.load`` of a truncated or corrupt file raises whatever its layers meet (``BadZipFile``,
 ``zlib.error``, ``EOFError``, ``OSError``, ``ValueError``, ``KeyError``), some only when an
@@ -18,12 +21,101 @@ import numpy as np
 
 from ..errors import FileFormatError, InvalidInputError
 
-__all__ = ["read_csv_array", "read_numpy_array"]
+__all__ = ["read_array", "read_csv_array", "read_numpy_array", "ARRAY_FORMATS"]
+
+#: Array file formats and the file name endings that select them.
+ARRAY_FORMATS = {
+    "csv": (".csv", ".txt", ".dat"),
+    "npz": (".npz",),
+    "npy": (".npy",),
+    "mtx": (".mtx", ".mtx.gz"),
+    "op4": (".op4",),
+}
 
 #: The arrays of an archive written by :func:`scipy.sparse.save_npz`.
 SCIPY_SPARSE_NPZ = frozenset({"format", "shape", "data"})
 
 _UNREADABLE = (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError)
+
+
+def read_array(path, key: str | None = None, format: str | None = None) -> np.ndarray:
+    """Read a numeric array from a CSV, NPY, NPZ, MatrixMarket or OP4 file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file. Its format comes from its extension (see :data:`ARRAY_FORMATS`) unless given.
+    key : str, optional
+        The array to take from an ``.npz`` archive (default: its only array; an archive written
+        by :func:`scipy.sparse.save_npz` is read as one sparse matrix), or the matrix to take
+        from an ``.op4`` file (default: its only matrix).
+    format : {"csv", "npz", "npy", "mtx", "op4"}, optional
+        Overrides the extension.
+
+    Returns
+    -------
+    ndarray of float
+        Dense; a CSV file always gives a 2-D array, sparse matrices are densified. The values are
+        not checked for NaN or inf here.
+
+    Raises
+    ------
+    FileFormatError
+        The file is missing or unreadable, or its content is not numeric.
+    InvalidInputError
+        ``key`` is missing from the archive, or given for a format without keys.
+    """
+    path = Path(path)
+    fmt = array_format(path, format)
+    if key is not None and fmt not in ("npz", "op4"):
+        raise InvalidInputError(f"key {key!r} applies only to .npz and .op4 files, not to {fmt} "
+                                "files")
+    if not path.exists():
+        raise FileFormatError(f"file '{path}' not found")
+    if not path.is_file():
+        raise FileFormatError(f"'{path}' is not a file")
+    if fmt == "csv":
+        array = read_csv_array(path)
+    elif fmt in ("npz", "npy"):
+        array = read_numpy_array(path, key)
+    else:
+        from ..compliance.importers import mtx_matrix, op4_matrix
+
+        array = op4_matrix(path, key) if fmt == "op4" else mtx_matrix(path)
+        array = array.toarray() if hasattr(array, "toarray") else array
+    array = np.asarray(array)
+    if np.iscomplexobj(array):
+        raise FileFormatError("the file holds complex numbers; a real array is needed")
+    if not (np.issubdtype(array.dtype, np.number) or array.dtype == bool):
+        raise FileFormatError(f"the file holds {array.dtype} values, not numbers")
+    return array.astype(float)
+
+
+def array_format(path: Path, fmt: str | None = None) -> str:
+    """The format of :data:`ARRAY_FORMATS` that ``fmt`` names or ``path``'s extension selects.
+
+    Raises
+    ------
+    InvalidInputError
+        ``fmt`` is not a known format.
+    FileFormatError
+        No ``fmt`` and an extension no format has.
+    """
+    if fmt is not None:
+        if fmt not in ARRAY_FORMATS:
+            raise InvalidInputError(
+                f"unknown format {fmt!r} (expected {', '.join(ARRAY_FORMATS)})"
+            )
+        return fmt
+    name = Path(path).name.lower()
+    for candidate, endings in ARRAY_FORMATS.items():
+        if name.endswith(endings):
+            return candidate
+    known = ", ".join(e for endings in ARRAY_FORMATS.values() for e in endings)
+    raise FileFormatError(
+        f"cannot tell the format of '{Path(path).name}' from its extension (known: {known}); "
+        "give it with { file = ..., format = \"csv\" }"
+    )
 
 
 def read_numpy_array(path, key: str | None = None) -> np.ndarray:

@@ -4,17 +4,30 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import InvalidInputError
 from ..optional import require
 
-__all__ = ["write_vtu", "write_csv", "write_rows"]
+__all__ = ["PointMesh", "write_vtu", "write_csv", "write_rows"]
+
+
+class PointMesh(NamedTuple):
+    """A mesh and its point fields, as :func:`write_vtu` takes them: ``write_vtu(path, *mesh)``.
+
+    An application builds one from its results (e.g.
+    :func:`contactqp.applications.riveting.result_mesh`); this module writes it.
+    """
+
+    points: np.ndarray
+    cells: list
+    point_data: dict
 
 
 def write_vtu(path, points, cells, point_data) -> Path:
-    """Write a mesh and its point fields to a VTU file (ParaView).
+    """Write a mesh and its point fields to a VTU file (ParaView): the one VTU writer.
 
     Parameters
     ----------

@@ -219,8 +219,8 @@ def read_problem(path) -> LocalProblem:
     The format is found from the content: a file with the HDF5 signature is read as FCLIB
     (``/fclib_local``, or ``/fclib_global`` condensed, as given, with
     :func:`~contactqp.core.local_problem.condense_global`; :func:`read_any` keeps it global, for
-    :func:`~contactqp.methods.local_global.solve_global`), anything else as a Siconos ``.dat`` text file
-    (see :mod:`contactqp.io.siconos`).
+    :func:`~contactqp.solve` to certify on the global equations), anything else as a Siconos
+    ``.dat`` text file (see :mod:`contactqp.io.siconos`).
 
     Parameters
     ----------

@@ -1,17 +1,24 @@
-"""Figures (matplotlib, imported when a figure is asked for).
+"""Figures (matplotlib, imported when a figure is asked for): the one module that draws.
 
 Figures are made outside pyplot (:func:`subplots`), so drawing one never switches the user's
-matplotlib backend nor leaves a figure registered in a notebook's pyplot state.
+matplotlib backend nor leaves a figure registered in a notebook's pyplot state. Each figure
+takes plain arrays in SI units (an application picks them from its own objects, e.g.
+:func:`contactqp.applications.riveting.plot_status`) and is written by :func:`save_figure`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
 
 from ..errors import InvalidInputError
 from ..optional import require
 
-__all__ = ["plot_spring_chain", "plot_rod", "save_figure", "subplots"]
+__all__ = ["plot_spring_chain", "plot_deflections", "DeflectionCase", "plot_point_maps",
+           "plot_statistics", "plot_sliding_curve", "save_figure", "subplots"]
 
 
 def subplots(nrows: int = 1, ncols: int = 1, *, figsize=(7, 4.5), **options):
@@ -43,20 +50,22 @@ def save_figure(figure, path) -> Path:
     return path
 
 
-def plot_spring_chain(results, path) -> Path:
-    """Displacement of each body for each pulling force, as a PNG.
+def plot_spring_chain(forces, displacements, path) -> Path:
+    """Displacement of each body for each pulling force.
 
     Parameters
     ----------
-    results : sequence of SpringChainResult
+    forces : sequence of float
+        The pulling forces (N).
+    displacements : sequence of array_like
+        For each force, the displacement of each body (m).
     path : str or Path
         Output file; its suffix chooses the format.
     """
     figure, axes = subplots(figsize=(7, 4.5))
-    for result in results:
-        bodies = range(1, len(result.x) + 1)
-        axes.plot(bodies, result.x, marker="o" if len(result.x) <= 50 else None,
-                  label=f"F = {result.force:g} N")
+    for force, x in zip(forces, displacements):
+        bodies = range(1, len(x) + 1)
+        axes.plot(bodies, x, marker="o" if len(x) <= 50 else None, label=f"F = {force:g} N")
     axes.xaxis.get_major_locator().set_params(integer=True)
     axes.set_xlabel("body")
     axes.set_ylabel("displacement x (m)")
@@ -67,54 +76,148 @@ def plot_spring_chain(results, path) -> Path:
     return save_figure(figure, path)
 
 
-def plot_rod(rod, comparisons, path) -> Path:
-    """The rod deformed over its obstacle, one panel per load case, as a PNG (true scale, mm).
+def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = "") -> Path:
+    """Maps of values at points in a plane, one panel above the other, sharing the x axis.
 
     Parameters
     ----------
-    rod : contactqp.applications.rod.Rod
-    comparisons : sequence of contactqp.applications.rod.CaseComparison
-        Drawn: the reference deflection on the mesh (line), the reduced solution at the
-        computational nodes (markers), the applied forces and the reduced contact forces (arrows,
-        labelled in N).
+    points : array_like, shape (m, 2)
+        Positions (m); drawn in mm.
+    panels : sequence of (array_like, str, str)
+        ``(values, title, colormap)`` of each panel; ``values`` has shape (m,).
+    path : str or Path
+        Output file; its suffix chooses the format.
+    marked : array_like, shape (j, 2), optional
+        Positions (m) marked with a cross on every panel, named ``marked_label`` in a legend.
+    """
+    xy = np.asarray(points, dtype=float) * 1e3
+    figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True, squeeze=False)
+    axes = axes[:, 0]
+    for ax, (values, title, cmap) in zip(axes, panels):
+        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
+        figure.colorbar(shown, ax=ax)
+        if marked is not None:
+            ax.plot(*(np.asarray(marked, dtype=float).reshape(-1, 2) * 1e3).T, "k+", ms=10,
+                    label=marked_label)
+        ax.set_title(title)
+        ax.set_ylabel("y (mm)")
+        ax.set_aspect("equal")
+    if marked is not None:
+        axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("x (mm)")
+    figure.tight_layout()
+    return save_figure(figure, path)
+
+
+def plot_statistics(statistics, coordinates, path) -> Path:
+    """Maps of the mean final gap, its highest quantile and the probability of contact.
+
+    Parameters
+    ----------
+    statistics : contactqp.studies.batch.GapStatistics
+        Its ``mean`` and ``quantiles`` (m), ``levels``, ``contact_probability`` and ``samples``.
+    coordinates : array_like, shape (m, 2)
+        The position of each contact (m); drawn in mm.
     path : str or Path
         Output file; its suffix chooses the format.
     """
-    import numpy as np
+    samples = f", {statistics.samples} samples"
+    panels = [(np.asarray(statistics.mean) * 1e3, f"mean final gap (mm){samples}", "viridis"),
+              (np.asarray(statistics.quantiles[-1]) * 1e3,
+               f"{statistics.levels[-1]:.0%} quantile of the final gap (mm){samples}", "viridis"),
+              (statistics.contact_probability, f"probability of contact{samples}", "viridis")]
+    return plot_point_maps(coordinates, panels, path)
 
-    x = rod.frame.coordinates[:, 0] * 1e3
-    nodes = rod.node_indices
-    figure, panels = subplots(len(comparisons), 1, figsize=(8, 3.2 * len(comparisons)),
-                              sharex=True, squeeze=False)
-    arrow = 0.25 * rod.gap_clamped * 1e3
-    for axes, c in zip(panels[:, 0], comparisons):
-        obstacle = -rod.gap(rod.frame.coordinates[:, 0]) * 1e3
+
+def plot_sliding_curve(relative, load, limit: float, path, *, onset: int | None = None,
+                       title: str = "") -> Path:
+    """Lateral load against the relative displacement of two layers, with the analytic limit.
+
+    Parameters
+    ----------
+    relative, load : array_like, shape (s,)
+        Relative displacement (m, drawn in mm) and lateral load (N, drawn in kN) of each step.
+    limit : float
+        The analytic sliding load ``c A + mu N`` (N).
+    path : str or Path
+        Output file; its suffix chooses the format.
+    onset : int, optional
+        The step at which sliding starts, marked with a star.
+    title : str
+    """
+    relative, load = np.asarray(relative) * 1e3, np.asarray(load) / 1e3
+    figure, axes = subplots(figsize=(7, 4.5))
+    axes.plot(relative, load, "o-", ms=3, label="reduced model")
+    axes.axhline(limit / 1e3, color="C3", ls="--", label="c A + mu N (sliding block)")
+    if onset is not None:
+        axes.plot(relative[onset], load[onset], "k*", ms=12, label="onset of sliding")
+    axes.set_xlabel("relative displacement of the layers (mm)")
+    axes.set_ylabel("lateral load (kN)")
+    axes.set_title(title)
+    axes.grid(True, alpha=0.3)
+    axes.legend()
+    figure.tight_layout()
+    return save_figure(figure, path)
+
+
+class DeflectionCase(NamedTuple):
+    """One panel of :func:`plot_deflections`: a load case's solutions (m) and forces (N).
+
+    ``loads`` and ``contacts`` are ``(point, force)`` pairs, each of shape (2,): the force on
+    the beam, drawn as an arrow that ends at the point and is labelled with its magnitude.
+    """
+
+    title: str
+    deformed: np.ndarray  #: (p, 2): positions of the mesh nodes, deformed (reference solution)
+    nodes: np.ndarray  #: (k, 2): positions of the computational nodes, deformed (reduced model)
+    loads: Sequence[tuple[np.ndarray, np.ndarray]]
+    contacts: Sequence[tuple[np.ndarray, np.ndarray]]
+
+
+def plot_deflections(x, obstacle, cases: Sequence[DeflectionCase], path, *, clamp: float,
+                     xlabel: str = "x (mm)") -> Path:
+    """A beam deformed over its obstacle, one panel per load case, at true scale in mm.
+
+    Parameters
+    ----------
+    x : array_like, shape (p,)
+        Positions of the mesh nodes along the beam at rest (m), the beam lying on ``y = 0``.
+    obstacle : array_like, shape (p,)
+        Height of the obstacle's surface under each node (m).
+    cases : sequence of DeflectionCase
+    path : str or Path
+        Output file; its suffix chooses the format.
+    clamp : float
+        Half height of the clamp drawn at the right end (m); also the length of the arrow of
+        each panel's largest load.
+    xlabel : str
+    """
+    x, obstacle = np.asarray(x, dtype=float) * 1e3, np.asarray(obstacle, dtype=float) * 1e3
+    figure, panels = subplots(len(cases), 1, figsize=(8, 3.2 * len(cases)), sharex=True,
+                              squeeze=False)
+    arrow = clamp * 1e3
+    for axes, case in zip(panels[:, 0], cases):
+        largest = max((np.hypot(*force) for _, force in case.loads), default=0.0)
+        scale = arrow / max(largest, 1e-300)  # mm per N: the largest load is `arrow` long
         axes.fill_between(x, obstacle, obstacle.min() - 1.0, color="0.85", label="obstacle")
         axes.plot(x, obstacle, color="0.3", lw=1)
         axes.plot(x, 0 * x, color="0.6", ls="--", lw=1, label="rod at rest")
-        deformed = rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2]
-        axes.plot(deformed[:, 0] * 1e3, deformed[:, 1] * 1e3, color="C0", lw=2,
-                  label="full FE contact")
-        U = c.reduced.displacements.reshape(-1, 2)
-        axes.plot((x[nodes] + U[:, 0] * 1e3), U[:, 1] * 1e3, "o", color="C1",
-                  label="reduced model (nodes)")
+        deformed, nodes = np.asarray(case.deformed) * 1e3, np.asarray(case.nodes) * 1e3
+        axes.plot(deformed[:, 0], deformed[:, 1], color="C0", lw=2, label="full FE contact")
+        axes.plot(nodes[:, 0], nodes[:, 1], "o", color="C1", label="reduced model (nodes)")
         axes.plot([x[-1]] * 2, [-arrow, arrow], color="k", lw=4)
-        scale = arrow / max(max(abs(load.fy) for load in c.case.loads), 1e-300)
-        for load in c.case.loads:
-            uy = c.reference.displacements[int(np.argmin(np.abs(x - load.x * 1e3))), 1] * 1e3
-            axes.annotate(f"{abs(load.fy):.3g} N", (load.x * 1e3, uy),
-                          (load.x * 1e3, uy - load.fy * scale), color="C3", ha="center",
-                          arrowprops={"arrowstyle": "->", "color": "C3"})
-        for i in np.flatnonzero(c.reduced.forces > 0):
-            force = c.reduced.forces[i]
-            tip = (x[nodes[i]] + U[i, 0] * 1e3, U[i, 1] * 1e3)
-            tail = (tip[0] + force * scale * rod.normal[0], tip[1] + force * scale * rod.normal[1])
-            axes.annotate(f"{force:.3g} N", tip, tail, color="C2", ha="center", va="top",
-                          arrowprops={"arrowstyle": "->", "color": "C2"})
-        axes.set_title(f"{c.case.name}: largest deviation {c.max_eps:.2g} %")
+        for arrows, color, options in ((case.loads, "C3", {}), (case.contacts, "C2",
+                                                                  {"va": "top"})):
+            for point, force in arrows:
+                tip = np.asarray(point, dtype=float) * 1e3
+                tail = tip - np.asarray(force, dtype=float) * scale
+                axes.annotate(f"{np.hypot(*force):.3g} N", tuple(tip), tuple(tail), color=color,
+                              ha="center", arrowprops={"arrowstyle": "->", "color": color},
+                              **options)
+        axes.set_title(case.title)
         axes.set_ylabel("y (mm)")
         axes.grid(True, alpha=0.3)
     panels[0, 0].legend(loc="upper left", fontsize="small")
-    panels[-1, 0].set_xlabel("x (mm), clamped at the right end")
+    panels[-1, 0].set_xlabel(xlabel)
     figure.tight_layout()
     return save_figure(figure, path)

@@ -1,38 +1,23 @@
-"""Solvers for frictionless contact and the registry that names them."""
+"""Every algorithm, the registry that names them and :func:`solve`, the one entry point."""
 
 from __future__ import annotations
 
-from ..errors import InvalidInputError
 from .active_set import solve_active_set
 from .box_qp import BoxQPSolution, solve_box_qp
+from .dispatch import solve
+from .history import solve_history
 from .qp import solve_qp
+from .registry import (
+                       KINDS,
+                       METHODS,
+                       Kind,
+                       Method,
+                       Option,
+                       default_method,
+                       is_installed,
+                       methods_for,
+)
 
-__all__ = ["SOLVERS", "solve", "solve_active_set", "solve_qp", "solve_box_qp", "BoxQPSolution"]
-
-#: Solver names accepted by :func:`solve` and the CLI.
-SOLVERS = {"active-set": solve_active_set, "qp": solve_qp}
-
-
-def solve(problem, solver: str = "active-set", **options):
-    """Solve a :class:`~contactqp.ContactProblem` with the named solver.
-
-    Parameters
-    ----------
-    problem : ContactProblem
-    solver : {"active-set", "qp"}
-        ``"active-set"`` (default): the project's dual solver. ``"qp"``: the primal QP through
-        qpsolvers; choose its backend with ``backend=``.
-    **options
-        Passed to the solver.
-
-    Returns
-    -------
-    ContactResult
-    """
-    try:
-        method = SOLVERS[solver]
-    except KeyError:
-        raise InvalidInputError(
-            f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}"
-        ) from None
-    return method(problem, **options)
+__all__ = ["solve", "solve_history", "METHODS", "KINDS", "Method", "Option", "Kind",
+           "methods_for", "default_method", "is_installed", "solve_active_set", "solve_qp",
+           "solve_box_qp", "BoxQPSolution"]

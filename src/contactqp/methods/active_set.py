@@ -7,8 +7,10 @@ import time
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..core.fastened import FastenedProblem
 from ..core.model import iteration_cap, positive_tolerance
 from .box_qp import solve_box_qp
+from .fastened import solve_fastened_box_qp
 
 __all__ = ["solve_active_set", "cold_start"]
 
@@ -27,13 +29,16 @@ def cold_start(W, b):
     return np.maximum(b, 0.0) / row_sums
 
 
-def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int = 500):
+def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 500):
     """Solve a frictionless :class:`~contactqp.ContactProblem` on its dual.
+
+    On a :class:`~contactqp.core.fastened.FastenedProblem`, the same solver runs on the reduced
+    QP (:func:`~contactqp.methods.fastened.solve_fastened_box_qp`).
 
     Parameters
     ----------
-    problem : ContactProblem
-    forces0 : array_like, shape (n_constraints,), optional
+    problem : ContactProblem or FastenedProblem
+    r0 : array_like, shape (n_constraints,), optional
         Warm start: contact forces of a nearby problem (their support is the first active set).
     tol : float
         Relative natural-residual tolerance of :func:`~contactqp.methods.box_qp.solve_box_qp`.
@@ -47,21 +52,23 @@ def solve_active_set(problem, *, forces0=None, tol: float = 1e-10, max_iter: int
     Raises
     ------
     InvalidInputError
-        ``tol`` not a finite number > 0, ``max_iter`` not an integer >= 1, or ``forces0`` of the
+        ``tol`` not a finite number > 0, ``max_iter`` not an integer >= 1, or ``r0`` of the
         wrong shape.
     """
     positive_tolerance(tol)
     iteration_cap(max_iter)
-    if forces0 is not None and np.shape(forces0) != (problem.n_constraints,):
+    if isinstance(problem, FastenedProblem):
+        return solve_fastened_box_qp(problem, r0=r0, tol=tol, max_iter=max_iter)
+    if r0 is not None and np.shape(r0) != (problem.n_constraints,):
         raise InvalidInputError(
-            f"forces0 must have shape ({problem.n_constraints},), got {np.shape(forces0)}"
+            f"r0 must have shape ({problem.n_constraints},), got {np.shape(r0)}"
         )
     start = time.perf_counter()
     dual = problem.dual()
-    if forces0 is None:
-        forces0 = cold_start(dual.W, dual.b)
+    if r0 is None:
+        r0 = cold_start(dual.W, dual.b)
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite x
-        solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=forces0, tol=tol,
+        solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=r0, tol=tol,
                                 max_iter=max_iter, check_finite=False)  # W: validated model
     forces = solution.x
     displacements = dual.displacements(forces)

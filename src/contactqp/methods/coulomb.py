@@ -313,8 +313,8 @@ def _check_options(problem, r0, tol, max_iter):
     return r
 
 
-def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: int = MAX_ITER, *,
-                  check_psd: bool = True, per_contact: bool = False):
+def solve_coulomb(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
+                  max_iter: int = MAX_ITER, check_psd: bool = True, per_contact: bool = False):
     """Solve a local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
 
     Semismooth Newton on the Alart-Curnier formulation with a non-monotone line search, and
@@ -348,9 +348,9 @@ def solve_coulomb(problem: LocalProblem, r0=None, tol: float = 1e-8, max_iter: i
     -------
     LocalResult
         ``success`` is True exactly when the independently computed natural-map error is at
-        most ``tol``; otherwise the forces are the best point found and ``message`` says where each
-        stage stopped. ``iterations`` counts Newton iterations plus Gauss-Seidel sweeps.
-        ``status`` gives open / stick / slip per contact.
+        most ``tol``; otherwise the forces are the best point found and ``message`` says where
+        each stage stopped. ``iterations`` counts Newton iterations plus Gauss-Seidel sweeps.
+        ``contact_status`` gives open / stick / slip per contact.
 
     Raises
     ------

@@ -1,12 +1,15 @@
 """Local FCLIB problems ``u = W r + q`` solved by the project's own methods.
 
-With friction (some ``mu > 0``) :func:`solve_local` calls
-:func:`~contactqp.methods.coulomb.solve_coulomb`. Without (every ``mu`` zero) the cones reduce to
-rays, the tangential reactions vanish and the normal part is the bound-constrained QP
-``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``, solved by the own box-QP solver.
+The answer to a local problem (:class:`~contactqp.core.result.LocalResult`, built by
+:func:`local_result` and :func:`finish`, shared by the local methods). Without friction
+(every ``mu`` zero) the cones reduce to rays, the tangential reactions vanish and the normal
+part is the bound-constrained QP
+``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``, solved by the own box-QP solver
+(:func:`solve_frictionless`).
 
-:func:`solve_global` solves a global problem through its condensed form and certifies the answer
-on the global equations as written (:meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
+A global problem is solved through its condensed form and the answer certified on the global
+equations as written (:func:`certify_global`,
+:meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
 Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far rounding (the
 conditioning of ``M``) and the data's written digits limit its error.
 """
@@ -27,10 +30,12 @@ from ..core.local_problem import (
     contact_status,
     natural_map_error,
 )
+from ..core.model import finite_array
 from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
+from ..errors import InvalidInputError
 from .box_qp import solve_box_qp
 
-__all__ = ["local_result", "solve_global", "solve_local"]
+__all__ = ["certify_global", "finish", "local_result", "solve_frictionless"]
 
 
 def local_result(problem: LocalProblem, r, u, *, converged: bool, error: float, tol: float,
@@ -87,45 +92,65 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     return best
 
 
-def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
-                 max_iter: int | None = None) -> LocalResult:
-    """Solve a local problem to natural-map error ``tol``.
+def solve_frictionless(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
+                       max_iter: int | None = None, check_psd: bool = True,
+                       per_contact: bool = False) -> LocalResult:
+    """Solve a local problem with ``mu = 0`` on every contact to natural-map error ``tol``.
+
+    The cones are rays, the tangential reactions vanish and the normal part is the
+    bound-constrained QP ``min 1/2 r_N^T W_NN r_N + q_N^T r_N, r_N >= 0``, solved by the own
+    box-QP solver; :func:`~contactqp.solve` takes this route for every kind with ``mu = 0``
+    everywhere when the default method is asked for.
 
     Parameters
     ----------
     problem : LocalProblem
+        Every ``mu`` zero.
+    r0 : array_like, shape (m,), optional
+        Warm start (reactions); only the normal components are used.
     tol : float
         Target of :func:`~contactqp.core.local_problem.natural_map_error`; ``success`` is True
         only when the error, computed independently of the solver, is at most ``tol``.
     max_iter : int, optional
-        Cap on all the iterations of the route: the box-QP solver (default 500) or, with
-        friction, every Newton run and Gauss-Seidel sweep of
-        :func:`~contactqp.methods.coulomb.solve_coulomb` together (default its ``MAX_ITER``).
+        Cap on the box-QP iterations (default 500).
+    check_psd : bool
+        Check that ``W`` is positive semidefinite.
+    per_contact : bool
+        Measure the natural map on every contact's own scale too.
 
     Raises
     ------
+    InvalidInputError
+        Some ``mu`` positive, or ``r0`` of the wrong shape.
     NotPositiveDefiniteError
         If ``W`` is not positive semidefinite
         (:func:`~contactqp.core.local_problem.check_positive_semidefinite`).
     """
     if np.any(problem.mu > 0):
-        from .coulomb import MAX_ITER, solve_coulomb
-
-        return solve_coulomb(problem, tol=tol, max_iter=MAX_ITER if max_iter is None else max_iter)
+        raise InvalidInputError("the frictionless route needs mu = 0 on every contact")
     start = time.perf_counter()
-    check_positive_semidefinite(problem.W)
+    if check_psd:
+        check_positive_semidefinite(problem.W)
     normal = np.arange(problem.n_contacts) * problem.dim
     W = problem.W
     W_nn = W[normal][:, normal]
     W_nn = np.asarray(W_nn.toarray() if hasattr(W_nn, "toarray") else W_nn, dtype=float)
     q_n = problem.q[normal]
-    solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0, tol=min(tol, 1e-10) * 1e-2,
+    x0 = None
+    if r0 is not None:
+        x0 = finite_array(r0, "r0", 1)
+        if x0.shape != (problem.W.shape[0],):
+            raise InvalidInputError(f"r0 must have shape ({problem.W.shape[0]},), got "
+                                    f"{x0.shape}")
+        x0 = np.maximum(x0[normal], 0.0)
+    solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0, x0=x0,
+                            tol=min(tol, 1e-10) * 1e-2,
                             max_iter=500 if max_iter is None else max_iter)
     reactions = _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
     return finish(problem, r, tol, solution.iterations, start, solution.message,
-                  method="active-set")
+                  method="normal-qp", per_contact=per_contact)
 
 
 def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
@@ -156,38 +181,17 @@ def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
     return f"{message}; {notes}" if notes else message
 
 
-def solve_global(problem: GlobalProblem, *, tol: float = 1e-8,
-                 max_iter: int | None = None) -> LocalResult:
-    """Solve a global problem ``M v = H r + f, u = H^T v + w`` as given, certified on it.
+def certify_global(problem: GlobalProblem, local: LocalResult, tol: float,
+                   start: float) -> LocalResult:
+    """The solution ``local`` of ``problem.condense()`` judged on the global equations as written.
 
-    The problem is condensed (:meth:`~contactqp.core.local_problem.GlobalProblem.condense`, ``W`` not
-    symmetrised) and solved by :func:`solve_local`; the reactions are then judged on the written
-    equations by :meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``v`` solves ``M v = H r + f``,
-    ``u = H^T v + w``, and the certificate's natural-map error is that of ``(r, u)``.
-
-    Parameters
-    ----------
-    problem : GlobalProblem
-    tol : float
-        ``success`` is True when the certified natural-map error and the relative
-        equilibrium residual are both at most ``tol``.
-    max_iter : int
-        As :func:`solve_local`.
-
-    Returns
-    -------
-    LocalResult
-        With ``v``, and the certificate's ``equilibrium``; its ``limits`` give the attainable
-        error set by the conditioning of ``M`` and the limit set by the data's digits, and the
-        message names any above ``tol``.
-
-    Raises
-    ------
-    NotPositiveDefiniteError
-        If ``M`` is singular or the condensed ``W`` is not positive semidefinite.
+    ``v`` solves ``M v = H r + f`` (``M`` as given), ``u = H^T v + w``, and the certificate's
+    natural-map error is that of ``(r, u)``
+    (:meth:`~contactqp.core.local_problem.GlobalProblem.certify`); ``success`` when it and
+    the relative equilibrium residual are both at most ``tol``. Its ``limits`` give the attainable
+    error set by the conditioning of ``M`` and the limit set by the data's digits, and the
+    message names any above ``tol``. ``start`` is the ``time.perf_counter()`` of the solve.
     """
-    start = time.perf_counter()
-    local = solve_local(problem.condense(), tol=tol, max_iter=max_iter)
     r = local.forces
     certificate = problem.certify(r)
     error, equilibrium = certificate.error, certificate.equilibrium

@@ -31,13 +31,13 @@ law), which is not Coulomb friction.
 
 from __future__ import annotations
 
-import numbers
 import warnings
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from ..core.friction import polygon_normals
 from ..core.local_problem import LocalProblem
 from ..core.result import LocalResult
 from ..errors import InvalidInputError
@@ -50,26 +50,7 @@ from .tresca import (
     run_fixed_point,
 )
 
-__all__ = ["solve_polygonal", "polygon_normals", "MAX_FACETS"]
-
-#: Most sides of a polygonal cone: 1024 sides are within 5e-6 of the circle, and more would only
-#: add rows to every cone program; the exact cone (``facets=None``) is the route beyond that.
-MAX_FACETS = 1024
-
-
-def polygon_normals(facets: int) -> np.ndarray:
-    """Outward unit normals of the regular polygon of ``facets`` sides, shape (facets, 2).
-
-    Side ``k`` is orthogonal to the angle ``2 pi k / facets`` (side 0 across the first tangent
-    axis) at the distance ``cos(pi / facets)`` from the centre of the unit circle.
-    """
-    if (isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3
-            or facets > MAX_FACETS):
-        raise InvalidInputError(f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
-                                f"the exact cone), got {facets!r}")
-    angles = 2.0 * np.pi * np.arange(int(facets)) / int(facets)
-    return np.column_stack([np.cos(angles), np.sin(angles)])
-
+__all__ = ["solve_polygonal"]
 
 class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
@@ -82,7 +63,7 @@ class _PolygonalTresca:
                 f"{', '.join(available_backends())}")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
-        self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
+        self.w = data.w
         self.sparse = backend in self.qpsolvers.sparse_solvers
         P = self.W = data.W_sym / self.w
         if self.sparse:
@@ -93,8 +74,7 @@ class _PolygonalTresca:
         self.normals = polygon_normals(facets) if self.d == 3 else None
         self.inradius = np.cos(np.pi / facets)
 
-    def __call__(self, q, s):
-        f = self.data.f
+    def __call__(self, q, s, f):
         d, nc = self.d, self.nc
         keep, sliding, normal, tangent = free_unknowns(s, d)
         bound = s[sliding] / f
@@ -175,9 +155,9 @@ def _polish_active_set(P, c, G, h, normal, x):
     return refined if feasible else x
 
 
-def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clarabel",
-                    tol: float = 1e-8, max_iter: int = 50, r0=None, *,
-                    per_contact: bool = False, **options) -> LocalResult:
+def solve_polygonal(problem: LocalProblem, *, r0=None, facets: int = 8, backend: str = "clarabel",
+                    tol: float = 1e-8, max_iter: int = 50, per_contact: bool = False,
+                    **options) -> LocalResult:
     """Solve a local problem with polygonal friction cones by a fixed point of QPs (qpsolvers).
 
     Parameters

@@ -90,14 +90,16 @@ class FixedPointData:
     shift : ndarray, shape (m,)
         :attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`.
     w, f : float
-        Compliance scale (largest diagonal of ``W``) and force scale: the sub-problems solve
-        for ``r' / f`` with ``W / w`` and ``q / (f w)``, data on which the backends' absolute
-        tolerances mean the same thing on every problem. ``f`` starts as ``max|q'| / w`` and
-        :func:`run_fixed_point` replaces it by the largest reaction of its first iterate when
-        that is below 1 % of it: a contact far from its obstacle (large ``q_i``, no force)
-        would otherwise leave the others' forces a small fraction of ``f``, resolved only to
-        the backend's tolerance times ``f``. (Scaling up as well, when the reactions exceed
-        ``f``, made the fixed point stall earlier on rigid multibody FCLIB files.)
+        Compliance scale (largest diagonal of ``W``) and initial force scale: the sub-problems
+        solve for ``r' / f`` with ``W / w`` and ``q / (f w)``, data on which the backends'
+        absolute tolerances mean the same thing on every problem. ``f`` is ``max|q'| / w``;
+        :func:`run_fixed_point` starts from it and, for its own run only, replaces it by the
+        largest reaction of its first iterate when that is below 1 % of it: a contact far
+        from its obstacle (large ``q_i``, no force) would otherwise leave the others' forces a
+        small fraction of ``f``, resolved only to the backend's tolerance times ``f``.
+        (Scaling up as well, when the reactions exceed ``f``, made the fixed point stall
+        earlier on rigid multibody FCLIB files.) Nothing here changes after construction, so
+        one instance may serve several runs.
     dim, n_contacts : int
     """
 
@@ -125,8 +127,9 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, method: 
     problem : LocalProblem
     data : FixedPointData
     tresca : callable
-        ``tresca(q, s) -> r'``: reactions from the apex (shape (m,)) of the Tresca problem with
-        ``data.W_sym``, right-hand side ``q`` (shape (m,)) and friction bounds ``s`` (shape (nc,)).
+        ``tresca(q, s, f) -> r'``: reactions from the apex (shape (m,)) of the Tresca problem
+        with ``data.W_sym``, right-hand side ``q`` (shape (m,)) and friction bounds ``s``
+        (shape (nc,)), solved on the force scale ``f`` (see :class:`FixedPointData`).
     tol : float
     max_iter : int
         Largest number of sub-problems solved (the first one solved again on the reactions' own
@@ -159,14 +162,18 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, method: 
     message, converged, stalled = "", False, 0
     reference = np.inf  # the error at the last halving
     solved = 0  # sub-problems solved: at most max_iter
+    scale = data.f  # this run's force scale (data is not changed)
     while solved < max_iter:
         s = problem.mu * np.maximum(r[::d], 0.0)
         q = data.q if data.skew is None else data.q + np.asarray(data.skew @ r).ravel()
-        previous, r = r, tresca(q, s)
+        previous, r = r, tresca(q, s, scale)
         solved += 1
-        if solved == 1 and solved < max_iter and _rescale(data, r):
-            r = tresca(q, s)  # the first sub-problem again, on the reactions' own scale
-            solved += 1
+        if solved == 1 and solved < max_iter:
+            rescaled = _rescaled(scale, r)
+            if rescaled != scale:
+                scale = rescaled
+                r = tresca(q, s, scale)  # the first sub-problem again, on the reactions' scale
+                solved += 1
         error = natural_map_error(problem, r - data.shift, per_contact=per_contact)
         if exact:
             # stalled: no halving of the error since `reference` for _PATIENCE iterations (a
@@ -201,13 +208,11 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, method: 
                         message=message, method=method)
 
 
-def _rescale(data, r) -> bool:
-    """Set ``data.f`` to the largest reaction of ``r`` if that is below 1 % of it; True if so."""
+def _rescaled(scale: float, r) -> float:
+    """The largest reaction of ``r`` if that is below 1 % of the force scale ``scale``, else
+    ``scale``."""
     force = float(np.max(np.abs(r), initial=0.0))
-    if 0.0 < force < 0.01 * data.f:
-        data.f = force
-        return True
-    return False
+    return force if 0.0 < force < 0.01 * scale else scale
 
 
 def free_unknowns(s, d):
@@ -313,7 +318,7 @@ class _ClarabelTresca:
 
     def __init__(self, data: FixedPointData):
         self._clarabel = require("clarabel", "the Tresca fixed point", "qp")
-        self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
+        self.w = data.w
         self.W = data.W_sym / self.w  # scaled, full (for the polish)
         self.P = sp.triu(sp.csc_matrix(self.W), format="csc")
         self.d, self.nc = data.dim, data.n_contacts
@@ -324,8 +329,7 @@ class _ClarabelTresca:
         settings.max_iter = 200
         self.settings = settings
 
-    def __call__(self, q, s):
-        f = self.data.f
+    def __call__(self, q, s, f):
         clarabel = self._clarabel
         d, nc = self.d, self.nc
         m = d * nc
@@ -349,8 +353,8 @@ class _ClarabelTresca:
         return f * polish(self.W, q / (f * self.w), s / f, x, d)
 
 
-def solve_tresca_fixed_point(problem: LocalProblem, tol: float = 1e-8, max_iter: int = 50,
-                             r0=None, *, per_contact: bool = False) -> LocalResult:
+def solve_tresca_fixed_point(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
+                             max_iter: int = 50, per_contact: bool = False) -> LocalResult:
     """Solve a local Coulomb problem by a fixed point on Tresca cone programs (Clarabel).
 
     Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the

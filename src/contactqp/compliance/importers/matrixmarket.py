@@ -10,7 +10,7 @@ from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ._common import about, existing_file, one_line, reduced_model
 
-__all__ = ["read_matrix_market"]
+__all__ = ["read_matrix_market", "mtx_matrix"]
 
 
 def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_node=1,
@@ -48,6 +48,33 @@ def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_n
         stiffness with rigid-body modes).
     """
     path = existing_file(path)
+    matrix = mtx_matrix(path)
+    matrix = sp.csc_matrix(matrix) if sp.issparse(matrix) else matrix
+    with about(path):
+        return reduced_model(matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node,
+                             symmetry_rtol=symmetry_rtol)
+
+
+def mtx_matrix(path):
+    """The matrix of a MatrixMarket file (coordinate or array, ``symmetric`` storage included).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    ndarray or scipy.sparse matrix
+        Real, float64, as stored (a coordinate file stays sparse).
+
+    Raises
+    ------
+    FileFormatError
+        Missing or unreadable file, or not MatrixMarket.
+    InvalidInputError
+        A complex matrix.
+    """
+    path = existing_file(path)
     try:
         matrix = scipy.io.mmread(str(path))
     except (OSError, ValueError, EOFError, UnicodeDecodeError, IndexError) as exc:
@@ -55,7 +82,4 @@ def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_n
             f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
     if np.iscomplexobj(matrix.data if sp.issparse(matrix) else matrix):
         raise InvalidInputError(f"{path}: the matrix is complex; a real matrix is needed")
-    matrix = sp.csc_matrix(matrix, dtype=float) if sp.issparse(matrix) else matrix.astype(float)
-    with about(path):
-        return reduced_model(matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node,
-                             symmetry_rtol=symmetry_rtol)
+    return matrix.astype(float)

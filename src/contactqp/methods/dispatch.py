@@ -1,0 +1,114 @@
+"""One entry point: :func:`solve` solves a problem of any kind with a registered method."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .frictional import solve_frictional
+from .local_global import certify_global
+from .registry import (
+    FRICTIONLESS_ROUTE,
+    METHODS,
+    Method,
+    check_options,
+    get_kind,
+    get_method,
+    kind_of,
+)
+
+__all__ = ["solve", "resolve"]
+
+
+def _is_frictionless(problem, kind: str) -> bool:
+    """True when ``mu = 0`` on every contact of a problem of a frictional ``kind``."""
+    if kind in ("frictional", "frictional-polygonal"):
+        return problem.frictionless
+    if kind in ("local", "global"):
+        return not np.any(problem.mu > 0)
+    return False
+
+
+def resolve(problem, method: str | None = None, options: dict | None = None
+            ) -> tuple[str, Method, dict]:
+    """``(kind, method, options)`` that :func:`solve` runs for ``problem``.
+
+    The kind's option defaults (:attr:`~contactqp.methods.registry.Kind.defaults`) are added
+    under ``options``. With ``mu = 0`` on every contact, the kind's default method (asked for
+    by name or by None) is replaced by the frictionless route
+    (:data:`~contactqp.methods.registry.FRICTIONLESS_ROUTE`), which receives the options it
+    takes.
+
+    Raises
+    ------
+    InvalidInputError
+        Not a problem, an unknown or unfitting method, or an unknown option.
+    """
+    kind = kind_of(problem)
+    spec = get_kind(kind)
+    entry = get_method(method, kind)
+    options = dict(options or {})
+    check_options(entry, kind, options)
+    if entry.name == spec.default and _is_frictionless(problem, kind):
+        entry = METHODS[FRICTIONLESS_ROUTE]
+        options = {name: value for name, value in options.items()
+                   if name in entry.option_names}
+    defaults = {name: value for name, value in spec.defaults.items()
+                if name in entry.option_names}
+    return kind, entry, {**defaults, **options}
+
+
+def solve(problem, method: str | None = None, **options):
+    """Solve ``problem``, of any kind, with the named method (None: the kind's default).
+
+    ==========================================  ==================  ===========================
+    problem                                     default method      result
+    ==========================================  ==================  ===========================
+    :class:`~contactqp.ContactProblem`          ``active-set``      ContactResult
+    :class:`~contactqp.FrictionalProblem`       ``coulomb``         FrictionalResult
+    the same with ``facets``                    ``polygonal``       FrictionalResult
+    ``LocalProblem`` (FCLIB)                    ``coulomb``         LocalResult
+    ``GlobalProblem`` (FCLIB)                   ``coulomb``         LocalResult (certified on
+                                                                    the global equations)
+    ``FastenedProblem``                         ``lawson-hanson``   FastenedResult
+    ==========================================  ==================  ===========================
+
+    ``mu = 0`` on every contact of a frictional, local or global problem: the default method
+    (None or its name) is replaced by the frictionless route ``normal-qp`` (the box QP on the
+    normal block); the result keeps its kind's shape and certificate. A cross-check named
+    explicitly runs as asked. The methods, their kinds and options: :mod:`the registry
+    <contactqp.methods.registry>`, or ``contactqp methods``.
+
+    Parameters
+    ----------
+    problem
+        A problem of a registered kind (its ``kind`` attribute).
+    method : str, optional
+        A method registered for the problem's kind.
+    **options
+        The method's keyword options (see the registry); ``r0`` is the warm start of every
+        method that takes one. For a frictional problem, ``r0`` is in newtons (local forces,
+        shape (k, d) or (d k,)) and defaults to the forces of its ``previous`` state.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown or unfitting method (the message lists those for the kind), an unknown
+        option (the message names it and the valid ones), or bad option values.
+    MissingDependencyError
+        The method needs an extra that is not installed.
+    """
+    kind, entry, options = resolve(problem, method, options)
+    if kind in ("frictional", "frictional-polygonal"):
+        return solve_frictional(problem, entry, options)
+    if kind == "global":
+        start = time.perf_counter()
+        local = entry.function(problem.condense(), **options)
+        tol = options.get("tol", _default(entry, "tol"))
+        return certify_global(problem, local, tol, start)
+    return entry.function(problem, **options)
+
+
+def _default(method: Method, name: str):
+    return next(option.default for option in method.options if option.name == name)

@@ -1,0 +1,61 @@
+"""Statistics of a study's stored samples: per-contact mean, quantiles, probability of contact."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InvalidInputError
+
+__all__ = ["GapStatistics", "gap_statistics"]
+
+
+@dataclass(frozen=True)
+class GapStatistics:
+    """Per-contact statistics of the final gaps over the successful samples.
+
+    Attributes
+    ----------
+    samples : int
+        Samples used.
+    mean : ndarray, shape (m,)
+        Mean final gap (m).
+    levels : ndarray, shape (q,)
+        Quantile levels.
+    quantiles : ndarray, shape (q, m)
+        Final-gap quantiles (m).
+    contact_probability : ndarray, shape (m,)
+        Fraction of samples in which the contact is closed.
+    """
+
+    samples: int
+    mean: np.ndarray
+    levels: np.ndarray
+    quantiles: np.ndarray
+    contact_probability: np.ndarray
+
+
+def gap_statistics(fields: dict, levels=(0.05, 0.5, 0.95)) -> GapStatistics:
+    """:class:`GapStatistics` of the records ``fields`` (one row per sample).
+
+    Parameters
+    ----------
+    fields : dict of ndarray
+        At least ``gap`` (m, shape (s, m)), ``closed`` (shape (s, m)) and ``success``
+        (shape (s,)); only the successful rows count.
+    levels : sequence of float
+        Quantile levels in [0, 1].
+
+    Raises
+    ------
+    InvalidInputError
+        No successful sample.
+    """
+    ok = np.asarray(fields["success"], dtype=bool)
+    if not ok.any():
+        raise InvalidInputError("no successful sample to compute statistics from")
+    gaps, closed = fields["gap"][ok], fields["closed"][ok]
+    levels = np.asarray(levels, dtype=float)
+    return GapStatistics(int(ok.sum()), gaps.mean(axis=0), levels,
+                         np.quantile(gaps, levels, axis=0), closed.mean(axis=0))
