@@ -13,6 +13,7 @@ __all__ = [
     "MissingDependencyError",
     "ContactWarning",
     "SymmetrizedWarning",
+    "PureNumpyKernelsWarning",
 ]
 
 
@@ -46,3 +47,7 @@ class ContactWarning(UserWarning):
 
 class SymmetrizedWarning(ContactWarning):
     """A nearly symmetric matrix was replaced by its symmetric part."""
+
+
+class PureNumpyKernelsWarning(ContactWarning):
+    """The compiled kernels are not built: the slower pure-numpy ones are used instead."""
