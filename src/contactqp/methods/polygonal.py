@@ -38,10 +38,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, SolverError
 from ..core.local_problem import LocalProblem
 from .local_global import LocalSolution
-from .qp import _qpsolvers, available_backends, backend_options
+from .qp import backend_options, installed_backend, run_backend
 from .tresca import (FixedPointData, check_fixed_point_arguments, free_unknowns, polish,
                      run_fixed_point)
 
@@ -70,11 +70,7 @@ class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
 
     def __init__(self, data: FixedPointData, facets: int, backend: str, options: dict):
-        self.qpsolvers = _qpsolvers("the polygonal cone")
-        if backend not in self.qpsolvers.available_solvers:
-            raise InvalidInputError(
-                f"backend {backend!r} is not installed; available: "
-                f"{', '.join(available_backends())}")
+        self.qpsolvers = installed_backend(backend, "the polygonal cone")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
         self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
@@ -116,9 +112,10 @@ class _PolygonalTresca:
             # An inexact status (e.g. Clarabel's "AlmostSolved" at the tight tolerances) is
             # judged by the outer loop, which measures every iterate itself.
             warnings.simplefilter("ignore", UserWarning)
-            x = self.qpsolvers.solve_problem(problem, solver=self.backend, **self.options).x
+            x = run_backend(self.qpsolvers, problem, self.backend, self.options,
+                            "the polygonal Tresca problem").x
         if x is None or not np.all(np.isfinite(x)):
-            raise InvalidInputError(
+            raise SolverError(
                 f"backend {self.backend!r} found no solution of the polygonal Tresca problem "
                 f"(is W positive semidefinite?)")
         x = np.asarray(x)
@@ -207,8 +204,10 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
     Raises
     ------
     InvalidInputError
-        Bad ``problem``, ``tol``, ``max_iter``, ``r0``, ``facets < 3`` (or not an integer), an
-        unknown backend, or a backend that finds no solution.
+        Bad ``problem``, ``tol``, ``max_iter``, ``r0``, ``facets < 3`` (or not an integer) or
+        an unknown backend.
+    SolverError
+        The backend raises, or finds no solution of one of the quadratic programs.
     MissingDependencyError
         qpsolvers is not installed.
     """
