@@ -96,7 +96,7 @@ def test_pip_install_without_a_compiler_gives_a_working_package(tmp_path):
          "s = solve_coulomb(LocalProblem(np.diag([1.0, 2.0]), [-1.0, 0.8], [0.3], 2))\n"
          "print(k.IMPLEMENTATION, s.converged, k.__file__)"],
         capture_output=True, text=True, cwd=tmp_path, timeout=120,
-        env={**os.environ, "PYTHONPATH": str(installed)})
+        env={**os.environ, "PYTHONPATH": str(installed), "CONTACTQP_PURE_NUMPY": ""})
     assert check.returncode == 0, check.stderr
     implementation, converged, where = check.stdout.split()
     assert (implementation, converged) == ("pure_numpy", "True")

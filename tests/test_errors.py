@@ -21,8 +21,14 @@ import pytest
 import contactqp.errors as errors
 from contactqp.cli import main
 from contactqp.core.local_problem import LocalProblem
-from contactqp.errors import (ContactError, InvalidInputError, LayersError, ReferenceSolveError,
-                              RigidBodyModeError, SolverError)
+from contactqp.errors import (
+    ContactError,
+    InvalidInputError,
+    LayersError,
+    ReferenceSolveError,
+    RigidBodyModeError,
+    SolverError,
+)
 from contactqp.io.problem_file import load_problem_file
 from contactqp.optional import require_backend
 
