@@ -29,10 +29,10 @@ import scipy.sparse as sp
 from ..errors import (
     ContactError,
     FileFormatError,
-    FileLayoutError,
     InvalidInputError,
     UnsupportedProblemError,
 )
+from ..errors import FileLayoutError as _Bad  # a layout problem inside an HDF5 file
 from .siconos import read_dat
 from ..core.local_problem import GlobalProblem, LocalProblem
 from ..optional import require
@@ -73,26 +73,26 @@ def is_hdf5(path) -> bool:
 def _dataset(group, name):
     obj = group.get(name)
     if obj is None:
-        raise FileLayoutError(f"{group.name}/{name} is missing")
+        raise _Bad(f"{group.name}/{name} is missing")
     if not hasattr(obj, "shape") or not hasattr(obj, "dtype"):
-        raise FileLayoutError(f"{group.name}/{name} is not a dataset")
+        raise _Bad(f"{group.name}/{name} is not a dataset")
     return obj
 
 
 def _int(group, name):
     arr = np.asarray(_dataset(group, name)[()])
     if arr.size != 1 or arr.dtype.kind not in "iu":
-        raise FileLayoutError(f"{group.name}/{name} must hold one integer, got {arr.dtype} {arr.shape}")
+        raise _Bad(f"{group.name}/{name} must hold one integer, got {arr.dtype} {arr.shape}")
     return int(arr.reshape(-1)[0])
 
 
 def _vector(group, name, length=None, dtype=float):
     arr = np.asarray(_dataset(group, name)[()])
     if arr.dtype.kind not in "iuf":
-        raise FileLayoutError(f"{group.name}/{name} is not numeric ({arr.dtype})")
+        raise _Bad(f"{group.name}/{name} is not numeric ({arr.dtype})")
     arr = arr.reshape(-1).astype(dtype, copy=False)
     if length is not None and arr.shape[0] < length:
-        raise FileLayoutError(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} expected")
+        raise _Bad(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} expected")
     return arr if length is None else arr[:length]
 
 
@@ -113,21 +113,21 @@ def _read_matrix(group):
     m, n, nz = _int(group, "m"), _int(group, "n"), _int(group, "nz")
     where = group.name
     if m < 0 or n < 0:
-        raise FileLayoutError(f"{where}: negative size {m}x{n}")
+        raise _Bad(f"{where}: negative size {m}x{n}")
     if nz in (-1, -2):
         outer, inner = (m, n) if nz == -2 else (n, m)
         p = _vector(group, "p", outer + 1, np.int64)
         nnz = int(p[-1])
         if p[0] != 0 or np.any(np.diff(p) < 0):
-            raise FileLayoutError(f"{where}/p is not a valid pointer array")
+            raise _Bad(f"{where}/p is not a valid pointer array")
         idx = _vector(group, "i", nnz, np.int64)
         x = _vector(group, "x", nnz)
         if nnz and (idx.min() < 0 or idx.max() >= inner):
-            raise FileLayoutError(f"{where}/i has indices outside [0, {inner})")
+            raise _Bad(f"{where}/i has indices outside [0, {inner})")
         cls = sp.csr_matrix if nz == -2 else sp.csc_matrix
         return sp.csr_matrix(cls((x, idx, p), shape=(m, n)))
     if nz < -2:
-        raise FileLayoutError(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, >= 0 triplets)")
+        raise _Bad(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, >= 0 triplets)")
     rows = _vector(group, "i", nz, np.int64)
     cols = _vector(group, "p", nz, np.int64)
     x = _vector(group, "x", nz)
@@ -139,7 +139,7 @@ def _read_matrix(group):
         if fits(cols, rows):  # the other convention: p rows, i columns
             rows, cols = cols, rows
         else:
-            raise FileLayoutError(f"{where}: triplet indices do not fit the {m}x{n} matrix")
+            raise _Bad(f"{where}: triplet indices do not fit the {m}x{n} matrix")
     return sp.csr_matrix((x, (rows, cols)), shape=(m, n))
 
 
@@ -168,8 +168,8 @@ def _read_hdf5(path):
                 mu = _vector(vec, "mu")
                 title = _text(g["info"], "title") if "info" in g else ""
                 return GlobalProblem(M, H, f, w, mu, dim, title)
-            raise FileLayoutError("has neither /fclib_local nor /fclib_global")
-    except FileLayoutError as exc:
+            raise _Bad("has neither /fclib_local nor /fclib_global")
+    except _Bad as exc:
         raise FileFormatError(f"{path}: {exc}") from None
     except ContactError as exc:
         raise FileFormatError(f"{path}: {exc}") from None
@@ -183,7 +183,7 @@ def _read_hdf5(path):
 def _group(parent, name):
     obj = parent.get(name)
     if obj is None or not hasattr(obj, "keys"):
-        raise FileLayoutError(f"{parent.name.rstrip('/')}/{name} is missing or not a group")
+        raise _Bad(f"{parent.name.rstrip('/')}/{name} is missing or not a group")
     return obj
 
 
