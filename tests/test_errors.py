@@ -221,3 +221,17 @@ def test_fclib_exits_1_for_a_solver_error_and_2_for_bad_input(tmp_path, monkeypa
     assert_one_line(status, err, 1, "FrictionContact3D_1c.dat: the method found no answer")
     status, _, err = run("fclib", good, bad)
     assert status == 2 and len(err.strip().splitlines()) == 2, err
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "osqp", "quadprog"])
+def test_a_setting_the_backend_refuses_is_bad_input_not_a_solver_error(backend):
+    from contactqp.methods.polygonal import solve_polygonal
+    from contactqp.methods.qp import solve_qp
+
+    if backend not in qpsolvers.available_solvers:
+        pytest.skip(f"{backend} not installed")
+    with pytest.raises(InvalidInputError, match=f"^backend '{backend}' refuses foo = 1 "):
+        solve_qp(two_springs(), backend=backend, foo=1)
+    problem = LocalProblem(np.diag([1.0, 2.0, 2.0]), [-1.0, 0.8, 0.0], [0.3], 3)
+    with pytest.raises(InvalidInputError, match=f"^backend '{backend}' refuses foo = 1 "):
+        solve_polygonal(problem, backend=backend, foo=1)

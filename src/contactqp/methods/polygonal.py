@@ -73,6 +73,7 @@ class _PolygonalTresca:
         self.qpsolvers = installed_backend(backend, "the polygonal cone")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
+        self.chosen = tuple(options)
         self.w, self.data = data.w, data  # data.f, the force scale, may change between calls
         self.sparse = backend in self.qpsolvers.sparse_solvers
         P = self.W = data.W_sym / self.w
@@ -113,7 +114,7 @@ class _PolygonalTresca:
             # judged by the outer loop, which measures every iterate itself.
             warnings.simplefilter("ignore", UserWarning)
             x = run_backend(self.qpsolvers, problem, self.backend, self.options,
-                            "the polygonal Tresca problem").x
+                            "the polygonal Tresca problem", chosen=self.chosen).x
         if x is None or not np.all(np.isfinite(x)):
             raise SolverError(
                 f"backend {self.backend!r} found no solution of the polygonal Tresca problem "
@@ -204,8 +205,8 @@ def solve_polygonal(problem: LocalProblem, facets: int = 8, backend: str = "clar
     Raises
     ------
     InvalidInputError
-        Bad ``problem``, ``tol``, ``max_iter``, ``r0``, ``facets < 3`` (or not an integer) or
-        an unknown backend.
+        Bad ``problem``, ``tol``, ``max_iter``, ``r0``, ``facets < 3`` (or not an integer), an
+        unknown backend or a setting the backend refuses.
     SolverError
         The backend raises, or finds no solution of one of the quadratic programs.
     MissingDependencyError

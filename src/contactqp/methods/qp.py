@@ -12,7 +12,7 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse
 
-from ..errors import SolverError
+from ..errors import InvalidInputError, SolverError
 from ..optional import require, require_backend
 
 __all__ = ["solve_qp", "available_backends", "backend_options", "refused_setting",
@@ -53,14 +53,29 @@ def installed_backend(backend: str, purpose: str = "the 'qp' solver"):
     return qpsolvers
 
 
-def run_backend(qpsolvers, problem, backend: str, settings: dict, what: str):
-    """``qpsolvers.solve_problem`` of ``problem``; a backend that raises is a SolverError.
+def run_backend(qpsolvers, problem, backend: str, settings: dict, what: str, *,
+                chosen=()):
+    """``qpsolvers.solve_problem`` of ``problem`` with ``settings``.
 
-    ``what`` names the problem in the message (``"the contact QP"``).
+    ``what`` names the problem in the messages (``"the contact QP"``), ``chosen`` the keys of
+    ``settings`` that the caller chose (the others are contactqp's defaults).
+
+    Raises
+    ------
+    InvalidInputError
+        The backend raises and refuses one of the ``chosen`` settings
+        (:func:`refused_setting`): bad input.
+    SolverError
+        The backend raises otherwise: it found no answer.
     """
     try:
         return qpsolvers.solve_problem(problem, solver=backend, **settings)
-    except Exception as exc:  # noqa: BLE001  (whatever a backend raises: it found no answer)
+    except Exception as exc:  # noqa: BLE001  (whatever a backend raises)
+        for key in chosen:
+            reason = refused_setting(backend, key, settings[key])
+            if reason:
+                raise InvalidInputError(f"backend {backend!r} refuses {key} = "
+                                        f"{settings[key]!r} ({reason})") from exc
         raise SolverError(f"qp backend {backend!r} failed on {what}: {type(exc).__name__}: "
                           f"{' '.join(str(exc).split())}") from exc
 
@@ -96,7 +111,7 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
     Raises
     ------
     InvalidInputError
-        ``backend`` is not installed.
+        ``backend`` is not installed, or refuses one of ``options``.
     SolverError
         The backend raised, or returned no point or a non-finite one.
     """
@@ -120,7 +135,8 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
     settings.update(options)
     with warnings.catch_warnings(record=True) as said:  # a backend's warnings go in the message
         warnings.simplefilter("always")
-        solution = run_backend(qpsolvers, qp, backend, settings, "the contact QP")
+        solution = run_backend(qpsolvers, qp, backend, settings, "the contact QP",
+                               chosen=options)
     elapsed = time.perf_counter() - start
     notes = list(dict.fromkeys(" ".join(str(w.message).split()) for w in said))
     z = np.zeros(0) if solution.z is None and problem.n_constraints == 0 else solution.z
