@@ -7,7 +7,8 @@ Which error, or a result, when a solve goes wrong:
 
 * :class:`InvalidInputError` (exit status 2 on the command line): the input is wrong, whatever
   the method: a shape, a non-finite value, a matrix that is not positive semidefinite, an
-  unknown option or backend name. It is raised before any work is done where it can be.
+  unknown option or backend name, a setting the backend refuses. It is raised before any work
+  is done where it can be.
 * :class:`MissingDependencyError` (exit 2): an optional package is not installed; the message,
   written by :func:`contactqp.optional.require`, says which ``pip install`` fixes it.
 * :class:`SolverError` (exit 1): the input is valid but the method produced no answer: a
