@@ -19,15 +19,15 @@ $(BIN_NASTRAN)/python:
 	$(PYTHON) -m venv $(VENV_NASTRAN)
 	$(BIN_NASTRAN)/python -m pip install --quiet --upgrade pip
 
-$(STAMP_DEMO): pyproject.toml src/contactqp/kernels.pyx | $(BIN)/python
+$(STAMP_DEMO): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[demo]"
 	touch $@
 
-$(STAMP_TEST): pyproject.toml src/contactqp/kernels.pyx | $(BIN)/python
+$(STAMP_TEST): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
-$(STAMP_NASTRAN): pyproject.toml src/contactqp/kernels.pyx | $(BIN_NASTRAN)/python
+$(STAMP_NASTRAN): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN_NASTRAN)/python
 	$(BIN_NASTRAN)/python -m pip install --quiet -e ".[test-nastran]"
 	touch $@
 
@@ -52,4 +52,4 @@ bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_frictionless.py
 
 clean:
-	rm -rf $(VENV) $(VENV_NASTRAN) out build src/*.egg-info src/contactqp/kernels.c src/contactqp/kernels.*.so
+	rm -rf $(VENV) $(VENV_NASTRAN) out build src/*.egg-info src/contactqp/kernels/compiled.c src/contactqp/kernels/compiled.*.so

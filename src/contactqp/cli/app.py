@@ -1,8 +1,9 @@
 """The ``contactqp`` command group, its exit codes and the shared output helpers.
 
-Exit status: 0 success; 1 a solve did not converge (or its certificate failed, or the problem asks
-for what this version cannot do); 2 unreadable or invalid input. Errors are one line on stderr,
-never a traceback.
+Exit status: 0 success; 1 a solve did not converge, its certificate failed, or the method found
+no answer (:class:`~contactqp.errors.SolverError`); 2 unreadable or invalid input, a missing
+optional package, or a problem this version cannot do. Errors are one line on stderr, never a
+traceback (see :mod:`contactqp.errors` for which failure is which).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from contextlib import contextmanager
 
 import click
 
-from ..errors import ContactError, ContactWarning
+from ..errors import ContactError, ContactWarning, SolverError
 
 __all__ = ["cli", "console", "fail", "float_list", "main", "progress", "warn"]
 
@@ -115,6 +116,9 @@ def _run(argv) -> int:
     except click.ClickException as exc:
         fail(exc.format_message().replace("\n", " "))
         return EXIT_BAD_INPUT
+    except SolverError as exc:
+        fail(str(exc).replace("\n", " "))
+        return EXIT_NOT_SOLVED
     except ContactError as exc:
         fail(str(exc).replace("\n", " "))
         return EXIT_BAD_INPUT

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..errors import ContactError
+from ..errors import ContactError, SolverError
 from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
 
 STATUSES = ("open", "stick", "slip")
@@ -40,8 +40,9 @@ def fclib(files, tol, as_json, solution_dir):
     ("digits"), and "limits" the sentence, also printed under the table, naming any above --tol.
 
     Exit status 1 when a problem is not solved to --tol (its error and the solver's stages on
-    stderr, no solution written), 2 when a file is unreadable or invalid, or a solution would
-    overwrite an input, another input's solution or a file this command did not write.
+    stderr, no solution written) or its solver fails, 2 when a file is unreadable or invalid,
+    or a solution would overwrite an input, another input's solution or a file this command
+    did not write.
     """
     from ..io.fclib import read_any, write_solution
     from ..methods import solve
@@ -56,7 +57,8 @@ def fclib(files, tol, as_json, solution_dir):
         except ContactError as exc:
             message = str(exc)  # the reader's messages may already name the file
             fail(message if message.startswith(str(path)) else f"{path}: {message}")
-            exit_code = EXIT_BAD_INPUT
+            exit_code = max(exit_code, EXIT_NOT_SOLVED if isinstance(exc, SolverError)
+                            else EXIT_BAD_INPUT)
             continue
         record = {"file": str(path), "dim": problem.dim, "contacts": problem.n_contacts,
                   "converged": solution.converged, "error": solution.error,

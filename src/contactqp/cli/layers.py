@@ -30,15 +30,11 @@ def layers(mu, cohesion, steps, as_json, plot):
     The interface is Mohr-Coulomb; sliding starts when the load reaches c A + mu N. Exit status
     1 when a step is not solved or the layer does not slide within the travel.
     """
-    from ..applications.layers import Layers, LayersError, plot_layers
+    from ..applications.layers import Layers, plot_layers
 
     model = Layers(mu=mu, cohesion=cohesion, steps=steps)
-    try:
-        with progress("step") as report:
-            result = model.solve(progress=report)
-    except LayersError as exc:
-        fail(str(exc))
-        sys.exit(EXIT_NOT_SOLVED)
+    with progress("step") as report:  # a step not solved: a LayersError (SolverError), exit 1
+        result = model.solve(progress=report)
     if as_json:
         click.echo(json.dumps(result.as_record()))
     else:

@@ -30,7 +30,7 @@ import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..errors import InvalidInputError, NotPositiveDefiniteError
+from ..errors import InvalidInputError, NotPositiveDefiniteError, RigidBodyModeError
 from ..core.model import SYMMETRY_RTOL
 
 __all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
@@ -42,10 +42,6 @@ __all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
 #: 2e-12 at 8,000, where it is off by 10 %), so the test also refuses models too
 #: ill-conditioned to condense.
 SINGULAR_PIVOT_RTOL = 1e-10
-
-
-class RigidBodyModeError(NotPositiveDefiniteError):
-    """The stiffness matrix is singular: the model can move without deforming."""
 
 
 def _checked_stiffness(stiffness) -> sp.csc_matrix:

@@ -32,6 +32,7 @@ from ..errors import (
     InvalidInputError,
     UnsupportedProblemError,
 )
+from ..errors import FileLayoutError as _Bad  # a layout problem inside an HDF5 file
 from .siconos import read_dat
 from ..core.local_problem import GlobalProblem, LocalProblem
 from ..optional import require
@@ -67,10 +68,6 @@ def is_hdf5(path) -> bool:
     except OSError:
         return False
     return False
-
-
-class _Bad(Exception):
-    """Internal: a layout problem inside an HDF5 file."""
 
 
 def _dataset(group, name):

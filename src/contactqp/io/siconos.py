@@ -43,13 +43,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ContactError, FileFormatError
+from ..errors import FileLayoutError as _ParseError  # turned into FileFormatError with the name
 from ..core.local_problem import GlobalProblem, LocalProblem
 
 __all__ = ["read_dat", "parse_dat"]
-
-
-class _ParseError(Exception):
-    """Internal: a parse failure, turned into FileFormatError with the file name."""
 
 
 _CS_COMPRESSED = re.compile(r"^\s*(\d+)-by-(\d+),\s*nzmax:\s*(-?\d+)\s+nnz:\s*(-?\d+)")
