@@ -205,7 +205,7 @@ def test_cli_exits_2_in_one_line_for_an_unknown_backend(tmp_path):
 
 
 def test_fclib_exits_1_for_a_solver_error_and_2_for_bad_input(tmp_path, monkeypatch):
-    from contactqp.methods import local_global
+    import contactqp.methods
 
     good = FCLIB / "FrictionContact3D_1c.dat"
     if not good.exists():
@@ -216,7 +216,7 @@ def test_fclib_exits_1_for_a_solver_error_and_2_for_bad_input(tmp_path, monkeypa
     def no_answer(problem, **options):
         raise SolverError("the method found no answer")
 
-    monkeypatch.setattr(local_global, "solve_local", no_answer)
+    monkeypatch.setattr(contactqp.methods, "solve", no_answer)  # what the command calls
     status, _, err = run("fclib", good)
     assert_one_line(status, err, 1, "FrictionContact3D_1c.dat: the method found no answer")
     status, _, err = run("fclib", good, bad)
