@@ -43,8 +43,8 @@ def fclib(files, tol, as_json, solution_dir):
     stderr, no solution written), 2 when a file is unreadable or invalid, or a solution would
     overwrite an input, another input's solution or a file this command did not write.
     """
-    from ..io.fclib import read_any, write_solution
     from ..core.local_problem import GlobalProblem
+    from ..io.fclib import read_any, write_solution
     from ..methods.local_global import solve_global, solve_local
 
     targets = _solution_targets(files, solution_dir) if solution_dir else {}

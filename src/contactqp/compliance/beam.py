@@ -14,13 +14,13 @@ J. S. Przemieniecki, *Theory of Matrix Structural Analysis*, McGraw-Hill, 1968, 
 from __future__ import annotations
 
 import numbers
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import InvalidInputError
 from ..core.model import finite_array
+from ..errors import InvalidInputError
 from .condensation import condense, factorize
 
 __all__ = ["Frame2D", "frame_element_stiffness", "COMPONENTS"]
@@ -147,7 +147,7 @@ class Frame2D:
 
     @classmethod
     def straight(cls, length: float, n_elements: int, young, area, inertia,
-                 fixed: Mapping[int, str] | None = None) -> "Frame2D":
+                 fixed: Mapping[int, str] | None = None) -> Frame2D:
         """A straight rod along ``x`` from 0 to ``length`` (m), in equal elements."""
         if not isinstance(length, numbers.Real) or not isinstance(n_elements, numbers.Real) \
                 or not (np.isfinite(length) and length > 0) or int(n_elements) != n_elements \

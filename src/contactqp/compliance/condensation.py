@@ -30,8 +30,8 @@ import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..errors import InvalidInputError, NotPositiveDefiniteError
 from ..core.model import SYMMETRY_RTOL
+from ..errors import InvalidInputError, NotPositiveDefiniteError
 
 __all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
 

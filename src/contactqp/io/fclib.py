@@ -26,15 +26,15 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.local_problem import GlobalProblem, LocalProblem
 from ..errors import (
     ContactError,
     FileFormatError,
     InvalidInputError,
     UnsupportedProblemError,
 )
-from .siconos import read_dat
-from ..core.local_problem import GlobalProblem, LocalProblem
 from ..optional import require
+from .siconos import read_dat
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
            "is_hdf5", "is_own_solution", "solution_source", "file_key", "SOLUTION_OF"]

@@ -42,8 +42,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import ContactError, FileFormatError
 from ..core.local_problem import GlobalProblem, LocalProblem
+from ..errors import ContactError, FileFormatError
 
 __all__ = ["read_dat", "parse_dat"]
 

@@ -30,8 +30,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
-from ...errors import InvalidInputError, UnsupportedProblemError
 from ...core.model import ReducedModel, finite_array
+from ...errors import InvalidInputError, UnsupportedProblemError
 from ..condensation import RigidBodyModeError, condense, factorize
 from .meshes import SUPPORTED_MESHES, straight_sided
 from .rigid import free_rigid_motions
@@ -74,7 +74,7 @@ def _positive(value, name: str, unit: str) -> float:
 class _FreedomLabels:
     """Names of the free freedoms, built only for the one an error message needs."""
 
-    def __init__(self, model: "ElasticModel", free: np.ndarray):
+    def __init__(self, model: ElasticModel, free: np.ndarray):
         self._model, self._free = model, free
 
     def __len__(self) -> int:
@@ -177,7 +177,7 @@ class ElasticModel:
         """Indices of the fixed freedoms."""
         return np.flatnonzero(self._fixed)
 
-    def fix(self, selector, components=None) -> "ElasticModel":
+    def fix(self, selector, components=None) -> ElasticModel:
         """Clamp the freedoms that ``selector`` picks (zero displacement).
 
         Parameters

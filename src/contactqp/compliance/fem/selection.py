@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import InvalidInputError
 from ...core.model import finite_array
+from ...errors import InvalidInputError
 
 __all__ = ["Box", "boundary_facets", "node_mask", "dof_mask"]
 

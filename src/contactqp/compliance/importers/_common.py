@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Hashable, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Hashable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
+from ...errors import FileFormatError, InvalidInputError
 from ...optional import require
 from ..condensation import condense
 

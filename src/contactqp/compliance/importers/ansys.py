@@ -8,15 +8,22 @@ the end of a truncated file.
 from __future__ import annotations
 
 import warnings
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from ...errors import ContactError, FileFormatError, UnsupportedProblemError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
-                      reduced_model)
+from ...errors import ContactError, FileFormatError, UnsupportedProblemError
+from ._common import (
+    about,
+    backend,
+    existing_file,
+    freedom_indices,
+    node_major,
+    one_line,
+    reduced_model,
+)
 
 __all__ = ["read_ansys_full", "DOF_LABELS"]
 

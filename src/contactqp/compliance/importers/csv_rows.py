@@ -13,14 +13,21 @@ ordered node by node: the columns of one node are adjacent.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
-from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import (about, existing_file, freedom_indices, node_major, one_line, reduced_model,
-                      whole_numbers)
+from ...errors import FileFormatError, InvalidInputError
+from ._common import (
+    about,
+    existing_file,
+    freedom_indices,
+    node_major,
+    one_line,
+    reduced_model,
+    whole_numbers,
+)
 
 __all__ = ["read_unit_load_csv"]
 

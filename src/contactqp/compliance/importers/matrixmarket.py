@@ -6,8 +6,8 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
-from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
+from ...errors import FileFormatError, InvalidInputError
 from ._common import about, existing_file, one_line, reduced_model
 
 __all__ = ["read_matrix_market"]

@@ -5,16 +5,24 @@ from __future__ import annotations
 import contextlib
 import io
 import logging
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from ...errors import ContactError, FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
-                      reduced_model, whole_numbers)
+from ...errors import ContactError, FileFormatError, InvalidInputError
+from ._common import (
+    about,
+    backend,
+    existing_file,
+    freedom_indices,
+    node_major,
+    one_line,
+    reduced_model,
+    whole_numbers,
+)
 
 __all__ = ["read_op4", "op4_matrix", "read_dmig", "dmig_matrix"]
 
