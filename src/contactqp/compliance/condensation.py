@@ -25,10 +25,13 @@ move without deforming.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike
 
 from ..core.model import SYMMETRY_RTOL
 from ..errors import InvalidInputError, NotPositiveDefiniteError
@@ -76,8 +79,9 @@ def _checked_freedoms(freedoms, n: int) -> np.ndarray:
     return idx
 
 
-def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
-              symmetry_rtol: float = SYMMETRY_RTOL):
+def factorize(stiffness: ArrayLike | sp.spmatrix | sp.sparray, *,
+              labels: Sequence[str] | None = None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+              symmetry_rtol: float = SYMMETRY_RTOL) -> spla.SuperLU:
     """Factorise a symmetric positive definite sparse stiffness, refusing singular ones.
 
     Parameters
@@ -161,7 +165,8 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
     return lu
 
 
-def condense(stiffness, freedoms, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+def condense(stiffness: ArrayLike | sp.spmatrix | sp.sparray, freedoms: ArrayLike, *,
+             labels: Sequence[str] | None = None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
              symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
     """Flexibility matrix of ``freedoms`` for the (fixed, non-singular) sparse ``stiffness``.
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Mapping, Sequence
-from typing import NamedTuple
+from typing import NamedTuple, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -80,7 +80,7 @@ def _positive(value: object, name: str, unit: str) -> float:
     return number
 
 
-class _FreedomLabels:
+class _FreedomLabels(Sequence[str]):
     """Names of the free freedoms, built only for the one an error message needs."""
 
     def __init__(self, model: ElasticModel, free: np.ndarray) -> None:
@@ -89,7 +89,14 @@ class _FreedomLabels:
     def __len__(self) -> int:
         return self._free.size
 
-    def __getitem__(self, index: int) -> str:
+    @overload
+    def __getitem__(self, index: int) -> str: ...
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[str]: ...
+
+    def __getitem__(self, index: int | slice) -> str | Sequence[str]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
         return self._model._freedom_name(int(self._free[index]))
 
 

@@ -5,15 +5,17 @@ from __future__ import annotations
 import numpy as np
 import scipy.io
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from ...core.model import SYMMETRY_RTOL, ReducedModel
 from ...errors import FileFormatError, InvalidInputError
-from ._common import about, existing_file, one_line, reduced_model
+from ._common import DofsPerNode, Matrix, StrPath, about, existing_file, one_line, reduced_model
 
 __all__ = ["read_matrix_market"]
 
 
-def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_node=1,
+def read_matrix_market(path: StrPath, *, kind: str, freedoms: ArrayLike | None = None,
+                       fixed: ArrayLike | None = None, dofs_per_node: DofsPerNode = 1,
                        symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """Reduced model from a MatrixMarket file (coordinate or array, ``symmetric`` included).
 
@@ -49,13 +51,14 @@ def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_n
     """
     path = existing_file(path)
     try:
-        matrix = scipy.io.mmread(str(path))
+        read = scipy.io.mmread(str(path))
     except (OSError, ValueError, EOFError, UnicodeDecodeError, IndexError) as exc:
         raise FileFormatError(
             f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
-    if np.iscomplexobj(matrix.data if sp.issparse(matrix) else matrix):
+    if np.iscomplexobj(read.data if sp.issparse(read) else read):
         raise InvalidInputError(f"{path}: the matrix is complex; a real matrix is needed")
-    matrix = sp.csc_matrix(matrix, dtype=float) if sp.issparse(matrix) else matrix.astype(float)
+    matrix: Matrix = (read.astype(float) if isinstance(read, np.ndarray)
+                      else sp.csc_matrix(read, dtype=float))
     with about(path):
         return reduced_model(matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node,
                              symmetry_rtol=symmetry_rtol)
