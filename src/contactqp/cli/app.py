@@ -40,7 +40,8 @@ def warn(message: str) -> None:
 def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
                   file: TextIO | None = None, line: str | None = None) -> None:
     """Python warnings as one :func:`warn` line; one not of contactqp's tree names its class."""
-    warn(str(message) if issubclass(category, ContactWarning) else f"{message} ({category.__name__})")
+    own = issubclass(category, ContactWarning)
+    warn(str(message) if own else f"{message} ({category.__name__})")
 
 
 def console() -> Console:

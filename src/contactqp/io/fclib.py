@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from ..core.local_problem import GlobalProblem, LocalProblem
 from ..errors import (
@@ -49,7 +50,7 @@ def _h5py():
     return require("h5py", "reading or writing FCLIB HDF5 files", "hdf5")
 
 
-def is_hdf5(path) -> bool:
+def is_hdf5(path: str | os.PathLike[str]) -> bool:
     """Tell whether ``path`` starts with the HDF5 signature (also after a user block).
 
     The signature is looked for at byte 0 and at 512, 1024, 2048, ... as the HDF5
@@ -194,7 +195,7 @@ def _group(parent, name):
 HDF5_SUFFIXES = (".hdf5", ".h5", ".hdf")
 
 
-def read_any(path) -> LocalProblem | GlobalProblem:
+def read_any(path: str | os.PathLike[str]) -> LocalProblem | GlobalProblem:
     """Read a problem file as written: a :class:`LocalProblem` or an uncondensed
     :class:`GlobalProblem` (formats and errors as :func:`read_problem`)."""
     p = Path(os.fspath(path))
@@ -213,14 +214,14 @@ def read_any(path) -> LocalProblem | GlobalProblem:
                               f"text problem ({str(exc).removeprefix(f'{p}: ')})") from None
 
 
-def read_problem(path) -> LocalProblem:
+def read_problem(path: str | os.PathLike[str]) -> LocalProblem:
     """Read a frictional-contact problem as a local problem.
 
     The format is found from the content: a file with the HDF5 signature is read as FCLIB
     (``/fclib_local``, or ``/fclib_global`` condensed, as given, with
     :func:`~contactqp.core.local_problem.condense_global`; :func:`read_any` keeps it global, for
-    :func:`~contactqp.methods.local_global.solve_global`), anything else as a Siconos ``.dat`` text file
-    (see :mod:`contactqp.io.siconos`).
+    :func:`~contactqp.methods.local_global.solve_global`), anything else as a Siconos ``.dat``
+    text file (see :mod:`contactqp.io.siconos`).
 
     Parameters
     ----------
@@ -251,7 +252,7 @@ def read_problem(path) -> LocalProblem:
     return problem
 
 
-def read_global_problem(path) -> GlobalProblem:
+def read_global_problem(path: str | os.PathLike[str]) -> GlobalProblem:
     """Read a global problem (``/fclib_global`` or a global ``.dat``) without condensing it.
 
     Raises
@@ -269,7 +270,7 @@ def _create(fh, name, data):
     fh.create_dataset(name, data=data)
 
 
-def write_problem(path, problem: LocalProblem) -> None:
+def write_problem(path: str | os.PathLike[str], problem: LocalProblem) -> None:
     """Write a local problem as an FCLIB HDF5 file (created or overwritten).
 
     ``W`` is stored in compressed rows (``nz = -2``) with int32 indices, as FCLIB does; a
@@ -292,7 +293,7 @@ def write_problem(path, problem: LocalProblem) -> None:
     """
     if not isinstance(problem, LocalProblem):
         raise TypeError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if np.any(problem.cohesion > 0):
+    if problem.cohesion is not None and np.any(problem.cohesion > 0):
         raise UnsupportedProblemError(
             f"{path}: FCLIB has no field for cohesion; the problem's Mohr-Coulomb cohesion "
             f"would be lost")
@@ -322,7 +323,7 @@ def write_problem(path, problem: LocalProblem) -> None:
         raise FileFormatError(f"{p}: cannot be written ({exc})") from None
 
 
-def solution_source(path) -> str | None:
+def solution_source(path: str | os.PathLike[str]) -> str | None:
     """The input a solution file was written for (:data:`SOLUTION_OF`), or None.
 
     None unless ``path`` is an HDF5 file holding only ``/solution`` and marked by
@@ -340,7 +341,8 @@ def solution_source(path) -> str | None:
     return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
-def is_own_solution(path, source=None) -> bool:
+def is_own_solution(path: str | os.PathLike[str],
+                    source: str | os.PathLike[str] | None = None) -> bool:
     """True if ``path`` is a solution file written by ``write_solution(..., source=...)``.
 
     With ``source``, only if it was written for that input (compared as real paths).
@@ -351,12 +353,14 @@ def is_own_solution(path, source=None) -> bool:
     return file_key(written_for) == file_key(source)
 
 
-def file_key(path) -> str:
+def file_key(path: str | os.PathLike[str]) -> str:
     """``path`` as the real, case-normalised path: equal for two names of one file."""
     return os.path.normcase(os.path.realpath(path))
 
 
-def write_solution(path, r, u, v=None, *, source=None) -> None:
+def write_solution(path: str | os.PathLike[str], r: ArrayLike, u: ArrayLike,
+                   v: ArrayLike | None = None, *,
+                   source: str | os.PathLike[str] | None = None) -> None:
     """Store a solution as ``/solution/{r,u[,v]}`` in an HDF5 file.
 
     Without ``source``: a missing file is created; an existing HDF5 file (e.g. the problem
@@ -384,8 +388,9 @@ def write_solution(path, r, u, v=None, *, source=None) -> None:
     InvalidInputError
         If ``r`` and ``u`` are not 1-D arrays of the same length.
     """
-    arrays = {"r": r, "u": u} if v is None else {"r": r, "u": u, "v": v}
-    for key, value in arrays.items():
+    given = {"r": r, "u": u} if v is None else {"r": r, "u": u, "v": v}
+    arrays: dict[str, np.ndarray] = {}
+    for key, value in given.items():
         arr = np.asarray(value, dtype=float)
         if arr.ndim != 1:
             raise InvalidInputError(f"{key} must be 1-D, got shape {arr.shape}")

@@ -23,8 +23,9 @@ Precision: the problem is the one written, digit for digit. Each array's signifi
 (those of its longest non-integer value; a value without a decimal point or exponent is exact) are
 recorded in the problem's ``digits`` when from 4 to 15 (e.g. ``{"W": 6}`` for a ``cs_print``
 dump, 7 for ``%e``; an array whose values all have at most 3 digits, such as ``0.5 1.25``, is
-taken as written by hand, exactly), so that a solution can say how far the rounding of the data limits its
-meaning for the problem the file was written from (:func:`contactqp.core.local_problem.accuracy_limits`).
+taken as written by hand, exactly), so that a solution can say how far the rounding of the data
+limits its meaning for the problem the file was written from
+(:func:`contactqp.core.local_problem.accuracy_limits`).
 
 Local or global is decided by content, not by the file name: the tokens are first read as a
 local problem, which is accepted only if ``W`` is ``(d*nc) x (d*nc)`` and at most one integer
@@ -300,11 +301,11 @@ def _read_cs_dump(tk, rows, cols, what):
     except ValueError:
         raise _ParseError(f"{what}: a CSparse entry value is not a number") from None
     tk.note_digits(X)
-    rr = np.asarray(rr, dtype=np.int64)
-    cc = np.asarray(cc, dtype=np.int64)
-    if nnz and (rr.max() >= rows or cc.max() >= cols):
+    row_index = np.asarray(rr, dtype=np.int64)
+    column_index = np.asarray(cc, dtype=np.int64)
+    if nnz and (row_index.max() >= rows or column_index.max() >= cols):
         raise _ParseError(f"{what}: a CSparse index is outside the {rows}x{cols} matrix")
-    return sp.csr_matrix((x, (rr, cc)), shape=(rows, cols))
+    return sp.csr_matrix((x, (row_index, column_index)), shape=(rows, cols))
 
 
 def _read_matrix(tk, what):
@@ -336,9 +337,9 @@ def _check_end(tk):
         raise _ParseError(f"unexpected extra content at the end: {shown!r}...")
 
 
-def _parse_local(tk, d, nc, title):
+def _parse_local(tk: _Tokens, d: int, nc: int, title: str) -> LocalProblem:
     m = d * nc
-    digits = {}
+    digits: dict[str, int] = {}
     W = _read(tk, digits, "W", lambda: _read_matrix(tk, "W"))
     if W.shape != (m, m):
         raise _ParseError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, nc={nc}")
@@ -348,9 +349,9 @@ def _parse_local(tk, d, nc, title):
     return LocalProblem(W, q, mu, d, title, digits=digits)
 
 
-def _parse_global(tk, d, nc, title):
+def _parse_global(tk: _Tokens, d: int, nc: int, title: str) -> GlobalProblem:
     m = d * nc
-    digits = {}
+    digits: dict[str, int] = {}
     M = _read(tk, digits, "M", lambda: _read_matrix(tk, "M"))
     ndof = M.shape[0]
     if M.shape != (ndof, ndof):
@@ -365,7 +366,8 @@ def _parse_global(tk, d, nc, title):
     return GlobalProblem(M, H, f, w, mu, d, title, digits=digits)
 
 
-def parse_dat(text, name="<string>", title=""):
+def parse_dat(text: str, name: str = "<string>",
+              title: str = "") -> LocalProblem | GlobalProblem:
     """Parse the content of a Siconos ``.dat`` file.
 
     Parameters
@@ -415,7 +417,7 @@ def parse_dat(text, name="<string>", title=""):
         raise FileFormatError(f"{name}: {exc}") from None
 
 
-def read_dat(path):
+def read_dat(path: str | os.PathLike[str]) -> LocalProblem | GlobalProblem:
     """Read a Siconos ``.dat`` problem file.
 
     Parameters
@@ -426,8 +428,8 @@ def read_dat(path):
     -------
     LocalProblem or GlobalProblem
         The global form (``GFC3D_*`` files) is returned as read; call its
-        :meth:`~contactqp.core.local_problem.GlobalProblem.condense` for the local form. The title is the
-        file name without its suffix.
+        :meth:`~contactqp.core.local_problem.GlobalProblem.condense` for the local form. The
+        title is the file name without its suffix.
 
     Raises
     ------
