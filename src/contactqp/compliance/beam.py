@@ -249,7 +249,7 @@ class Frame2D:
         full[self.free] = factorize(self.stiffness(), labels=self.labels).solve(loads)
         return full.reshape(-1, 3)
 
-    def compliance(self, nodes: Sequence[int], components: str = "xy") -> np.ndarray:
+    def compliance(self, nodes: Iterable[int], components: str = "xy") -> np.ndarray:
         """Flexibility of ``components`` (letters ``x``, ``y``, ``r``) of ``nodes``, node by node.
 
         Returns

@@ -13,7 +13,7 @@ the node, or of the first node relative to the second, along ``t``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Protocol, TypeAlias, runtime_checkable
 
@@ -147,9 +147,9 @@ class GapObstacle:
         ``[1.0]`` (default) or ``[-1.0]``.
     """
 
-    nodes: Sequence[int]
-    gaps: Sequence[float]
-    directions: Sequence[float] | Sequence[Sequence[float]] = (1.0,)
+    nodes: ArrayLike
+    gaps: ArrayLike
+    directions: ArrayLike = (1.0,)
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
@@ -179,9 +179,9 @@ class PlaneObstacle:
         Nodes that may touch the plane (default: all).
     """
 
-    point: Sequence[float]
-    normal: Sequence[float]
-    nodes: Sequence[int] | None = None
+    point: ArrayLike
+    normal: ArrayLike
+    nodes: ArrayLike | None = None
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
@@ -215,8 +215,8 @@ class ProfileObstacle:
     """
 
     profile: Callable[[np.ndarray], np.ndarray]
-    direction: Sequence[float]
-    nodes: Sequence[int] | None = None
+    direction: ArrayLike
+    nodes: ArrayLike | None = None
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
@@ -250,9 +250,9 @@ class NodePairs:
         Directions from the first node towards the second; normalised.
     """
 
-    pairs: Sequence[Sequence[int]]
-    gaps: Sequence[float]
-    directions: Sequence[float] | Sequence[Sequence[float]] = (1.0,)
+    pairs: ArrayLike
+    gaps: ArrayLike
+    directions: ArrayLike = (1.0,)
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
