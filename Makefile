@@ -9,7 +9,7 @@ VENV_NASTRAN := .venv-nastran
 BIN_NASTRAN := $(VENV_NASTRAN)/bin
 STAMP_NASTRAN := $(VENV_NASTRAN)/.test-installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test lint bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -47,6 +47,12 @@ test: $(STAMP_TEST) $(STAMP_NASTRAN)
 	$(BIN)/python -m pytest -q -m "not nastran"
 	@$(BIN_NASTRAN)/python -c "import numpy; print('NASTRAN tests on numpy', numpy.__version__)"
 	$(BIN_NASTRAN)/python -m pytest -q -m nastran tests/test_importers.py
+
+# ruff (lint and format) and mypy, configured in pyproject.toml; the `test` extra brings them
+lint: $(STAMP_TEST)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
 
 bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_frictionless.py

@@ -26,7 +26,6 @@ from contactqp.errors import (
     InvalidInputError,
     LayersError,
     ReferenceSolveError,
-    RigidBodyModeError,
     SolverError,
 )
 from contactqp.io.problem_file import load_problem_file
@@ -57,15 +56,6 @@ def test_every_exception_class_is_defined_in_errors_py():
                  if path.name != "errors.py" and (names := exception_classes(path))}
     assert elsewhere == {}
     assert set(exception_classes(PACKAGE / "errors.py")) == set(errors.__all__)
-
-
-def test_the_moved_classes_keep_their_names_and_old_addresses():
-    from contactqp.applications.layers import LayersError as from_layers
-    from contactqp.applications.rod import ReferenceSolveError as from_rod
-    from contactqp.compliance.condensation import RigidBodyModeError as from_condensation
-
-    assert (from_layers, from_rod, from_condensation) == (LayersError, ReferenceSolveError,
-                                                          RigidBodyModeError)
 
 
 def test_a_solver_error_is_not_bad_input():

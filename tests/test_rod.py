@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from contactqp.compliance.beam import Frame2D, frame_element_stiffness
-from contactqp.compliance.condensation import RigidBodyModeError
+from contactqp.errors import RigidBodyModeError
 from contactqp.errors import InvalidInputError
 from contactqp.applications.rod import (ABSOLUTE_BELOW, DEFAULT_CASES, MAX_ELEMENTS, Rod, RodLoad,
                            RodLoadCase, compare, deviations, solve_full)

@@ -44,7 +44,7 @@ from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..methods import solve_history
 
-__all__ = ["Layers", "LayersResult", "LayersError", "plot_layers"]
+__all__ = ["Layers", "LayersResult", "plot_layers"]
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, NoReturn
 
 import click
 import numpy as np
@@ -30,7 +32,7 @@ SOLUTION_SUFFIX = ".solution.hdf5"
                    "only. Refused if a target is an input, two inputs share a target, or a "
                    "target exists and is not the solution file this command wrote for the same "
                    "input.")
-def fclib(files, tol, as_json, solution_dir):
+def fclib(files: tuple[Path, ...], tol: float, as_json: bool, solution_dir: Path | None) -> None:
     """Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.
 
     Each problem is solved as written: a global one is certified on M v = H r + f,
@@ -83,7 +85,7 @@ def fclib(files, tol, as_json, solution_dir):
     sys.exit(exit_code)
 
 
-def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
+def _solution_targets(files: Sequence[Path], solution_dir: Path) -> dict[Path, Path]:
     """The solution file of each input; exit 2 (one line) if any would damage a file.
 
     A target is refused when it is one of the inputs, when two different inputs share it, or
@@ -94,7 +96,8 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
     from ..io.fclib import is_own_solution, solution_source
 
     inputs = {key(p): p for p in files}
-    targets, owners = {}, {}
+    targets: dict[Path, Path] = {}
+    owners: dict[str, Path] = {}
     for path in files:
         target = solution_dir / f"{path.name}{SOLUTION_SUFFIX}"
         where = key(target)
@@ -115,12 +118,12 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
     return targets
 
 
-def _refuse(message: str):
+def _refuse(message: str) -> NoReturn:
     fail(message)
     sys.exit(EXIT_BAD_INPUT)
 
 
-def _fclib_table(rows):
+def _fclib_table(rows: list[dict[str, Any]]) -> None:
     from rich.table import Table
 
     table = Table(title="FCLIB problems")

@@ -24,7 +24,7 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
                    "onset_force, curve [[load, relative displacement], ...].")
 @click.option("--plot", type=click.Path(dir_okay=False, path_type=Path),
               help="Draw the load against the relative displacement to this PNG file.")
-def layers(mu, cohesion, steps, as_json, plot):
+def layers(mu: float, cohesion: float, steps: int, as_json: bool, plot: Path | None) -> None:
     """A 1 m soil layer on a 2 m one (10 m long, plane strain), pulled sideways under gravity.
 
     The interface is Mohr-Coulomb; sliding starts when the load reaches c A + mu N. Exit status
