@@ -9,7 +9,7 @@ VENV_NASTRAN := .venv-nastran
 BIN_NASTRAN := $(VENV_NASTRAN)/bin
 STAMP_NASTRAN := $(VENV_NASTRAN)/.test-installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test lint bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,15 +19,15 @@ $(BIN_NASTRAN)/python:
 	$(PYTHON) -m venv $(VENV_NASTRAN)
 	$(BIN_NASTRAN)/python -m pip install --quiet --upgrade pip
 
-$(STAMP_DEMO): pyproject.toml src/contactqp/kernels.pyx | $(BIN)/python
+$(STAMP_DEMO): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[demo]"
 	touch $@
 
-$(STAMP_TEST): pyproject.toml src/contactqp/kernels.pyx | $(BIN)/python
+$(STAMP_TEST): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
-$(STAMP_NASTRAN): pyproject.toml src/contactqp/kernels.pyx | $(BIN_NASTRAN)/python
+$(STAMP_NASTRAN): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN_NASTRAN)/python
 	$(BIN_NASTRAN)/python -m pip install --quiet -e ".[test-nastran]"
 	touch $@
 
@@ -48,8 +48,14 @@ test: $(STAMP_TEST) $(STAMP_NASTRAN)
 	@$(BIN_NASTRAN)/python -c "import numpy; print('NASTRAN tests on numpy', numpy.__version__)"
 	$(BIN_NASTRAN)/python -m pytest -q -m nastran tests/test_importers.py
 
+# ruff (lint and format) and mypy, configured in pyproject.toml; the `test` extra brings them
+lint: $(STAMP_TEST)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
 bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_frictionless.py
 
 clean:
-	rm -rf $(VENV) $(VENV_NASTRAN) out build src/*.egg-info src/contactqp/kernels.c src/contactqp/kernels.*.so
+	rm -rf $(VENV) $(VENV_NASTRAN) out build src/*.egg-info src/contactqp/kernels/compiled.c src/contactqp/kernels/compiled.*.so

@@ -4,11 +4,17 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from contactqp.compliance.condensation import (RigidBodyModeError, _by_schur_complement,
-                                               _by_solves, _schur_pays, condense, factorize)
+from contactqp.compliance.condensation import (
+    RigidBodyModeError,
+    _by_schur_complement,
+    _by_solves,
+    _schur_pays,
+    condense,
+    factorize,
+)
 from contactqp.compliance.fem import ElasticModel, block, plate
-from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.core.model import unit_load_compliance
+from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 
 
 def bar_stiffness(n, k=3.0, fixed=True):

@@ -16,6 +16,13 @@ import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from contactqp.core.local_problem import (
+    GlobalProblem,
+    LocalProblem,
+    condense_global,
+    natural_map_error,
+    projection_on_cones,
+)
 from contactqp.errors import (
     FileFormatError,
     InvalidInputError,
@@ -26,13 +33,6 @@ from contactqp.errors import (
 from contactqp.io import read_problem, write_problem, write_solution
 from contactqp.io.fclib import read_global_problem
 from contactqp.io.siconos import parse_dat
-from contactqp.core.local_problem import (
-    GlobalProblem,
-    LocalProblem,
-    condense_global,
-    natural_map_error,
-    projection_on_cones,
-)
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
 FILES = (

@@ -5,9 +5,16 @@ import numpy as np
 import pytest
 import skfem
 
-from contactqp.compliance.condensation import RigidBodyModeError
-from contactqp.compliance.fem import (Box, ElasticModel, bar, block, elastic_compliance, plate,
-                                      read_mesh)
+from contactqp.errors import RigidBodyModeError
+from contactqp.compliance.fem import (
+    Box,
+    ElasticModel,
+    bar,
+    block,
+    elastic_compliance,
+    plate,
+    read_mesh,
+)
 from contactqp.errors import FileFormatError, InvalidInputError, UnsupportedProblemError
 
 E, NU = 200e9, 0.3  # steel (Pa, -)

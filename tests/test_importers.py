@@ -14,14 +14,28 @@ import pytest
 import scipy.io
 import scipy.sparse as sp
 
-from contactqp.compliance.condensation import RigidBodyModeError
-from contactqp.compliance.importers import (READERS, dmig_matrix, load_compliance,
-                                            op4_matrix, read_ansys_full, read_dmig,
-                                            read_matrix_market, read_op4, read_unit_load_csv)
-from contactqp.errors import (FileFormatError, InvalidInputError, MissingDependencyError,
-                              NotPositiveDefiniteError, UnsupportedProblemError)
+from contactqp.errors import RigidBodyModeError
+from contactqp.compliance.importers import (
+    READERS,
+    dmig_matrix,
+    load_compliance,
+    op4_matrix,
+    read_ansys_full,
+    read_dmig,
+    read_matrix_market,
+    read_op4,
+    read_unit_load_csv,
+)
+from contactqp.errors import (
+    FileFormatError,
+    InvalidInputError,
+    MissingDependencyError,
+    NotPositiveDefiniteError,
+    UnsupportedProblemError,
+)
 from contactqp.io.problem_file import load_problem_file, read_array
 from fe_files import write_ansys_full, write_op4_binary
+
 # pyNastran holds numpy < 2: the tests that need it are marked `nastran` and run in their own
 # environment (`make test` makes it; the main run deselects them), so they import it inside.
 nastran = pytest.mark.nastran

@@ -58,3 +58,15 @@ def test_stiffness_and_flexibility_are_inverse():
     assert model.n_nodes == 1 and list(model.freedoms(0)) == [0, 1]
     with pytest.raises(cq.InvalidInputError, match="multiple of dofs_per_node"):
         cq.ReducedModel(flexibility=np.eye(4), dofs_per_node=3)
+
+
+@pytest.mark.parametrize("count", [2.5, "2", 2j, 4, 0])
+def test_dofs_per_node_must_be_a_whole_count_of_1_to_3(count):
+    # 2.5 was truncated to 2 and 2j raised TypeError; both now name the argument
+    with pytest.raises(cq.InvalidInputError, match="dofs_per_node must be 1, 2 or 3"):
+        cq.ReducedModel(flexibility=np.eye(4), dofs_per_node=count)
+
+
+def test_dofs_per_node_accepts_a_whole_float_or_numpy_integer():
+    assert cq.ReducedModel(flexibility=np.eye(4), dofs_per_node=2.0).n_nodes == 2
+    assert cq.ReducedModel(flexibility=np.eye(6), dofs_per_node=np.int64(3)).n_nodes == 2

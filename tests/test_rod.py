@@ -18,7 +18,7 @@ import pytest
 
 from contactqp.core.status import ContactStatus
 from contactqp.compliance.beam import Frame2D, frame_element_stiffness
-from contactqp.compliance.condensation import RigidBodyModeError
+from contactqp.errors import RigidBodyModeError
 from contactqp.errors import InvalidInputError
 from contactqp.applications.rod import (ABSOLUTE_BELOW, DEFAULT_CASES, MAX_ELEMENTS, Rod, RodLoad,
                            RodLoadCase, compare, deviations, solve_full)

@@ -8,6 +8,7 @@ from .errors import (
     InvalidInputError,
     MissingDependencyError,
     NotPositiveDefiniteError,
+    SolverError,
     UnsupportedProblemError,
 )
 from .core.model import ReducedModel, unit_load_compliance
@@ -59,6 +60,7 @@ __all__ = [
     "FileFormatError",
     "UnsupportedProblemError",
     "MissingDependencyError",
+    "SolverError",
 ]
 
 __version__ = "0.1.0"

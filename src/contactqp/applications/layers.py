@@ -38,18 +38,14 @@ import scipy.linalg
 import scipy.sparse
 
 from ..core.contact import NodePairs
-from ..errors import ContactError, InvalidInputError
+from ..errors import InvalidInputError, LayersError
 from ..core.history import MAX_STEPS
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..core.status import ContactStatus
 from ..methods import solve_history
 
-__all__ = ["Layers", "LayersResult", "LayersError", "plot_layers"]
-
-
-class LayersError(ContactError):
-    """A step of the load history was not solved."""
+__all__ = ["Layers", "LayersResult", "plot_layers"]
 
 
 @dataclass(frozen=True)

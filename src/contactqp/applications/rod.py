@@ -48,7 +48,7 @@ import scipy.sparse.linalg as spla
 
 from ..compliance.beam import Frame2D
 from ..core.contact import GapObstacle
-from ..errors import ContactError, InvalidInputError
+from ..errors import InvalidInputError, ReferenceSolveError
 from ..io import export
 from ..core.model import ReducedModel
 from ..optional import require
@@ -69,10 +69,6 @@ ABSOLUTE_BELOW = 1e-6
 #: (the same-node deviation, zero in exact arithmetic, is 6e-3 %; 7e-8 % at 80), and from about
 #: 2400 the stiffness is singular to working precision (the condensation refuses it).
 MAX_ELEMENTS = 1600
-
-
-class ReferenceSolveError(ContactError):
-    """The finite-element reference contact solve failed or could not be verified."""
 
 
 @dataclass(frozen=True)

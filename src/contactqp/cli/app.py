@@ -1,8 +1,9 @@
 """The ``contactqp`` command group, its exit codes and the shared output helpers.
 
-Exit status: 0 success; 1 a solve did not converge (or its certificate failed, or the problem asks
-for what this version cannot do); 2 unreadable or invalid input. Errors are one line on stderr,
-never a traceback.
+Exit status: 0 success; 1 a solve did not converge, its certificate failed, or the method found
+no answer (:class:`~contactqp.errors.SolverError`); 2 unreadable or invalid input, a missing
+optional package, or a problem this version cannot do. Errors are one line on stderr, never a
+traceback (see :mod:`contactqp.errors` for which failure is which).
 """
 
 from __future__ import annotations
@@ -10,11 +11,17 @@ from __future__ import annotations
 import sys
 import time
 import warnings
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import TYPE_CHECKING, TextIO
 
 import click
 
-from ..errors import ContactError, ContactWarning
+from ..errors import ContactError, ContactWarning, SolverError
+
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.progress import Progress, TaskID
 
 __all__ = ["cli", "console", "fail", "float_list", "main", "progress", "warn"]
 
@@ -22,6 +29,7 @@ EXIT_OK, EXIT_NOT_SOLVED, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def fail(message: str) -> None:
+    """One line on stderr: ``contactqp: error: MESSAGE``."""
     click.echo(f"contactqp: error: {message}", err=True)
 
 
@@ -30,19 +38,23 @@ def warn(message: str) -> None:
     click.echo(f"contactqp: warning: {' '.join(str(message).split())}", err=True)
 
 
-def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: TextIO | None = None, line: str | None = None) -> None:
     """Python warnings as one :func:`warn` line; one not of contactqp's tree names its class."""
-    warn(message if issubclass(category, ContactWarning) else f"{message} ({category.__name__})")
+    own = issubclass(category, ContactWarning)
+    warn(str(message) if own else f"{message} ({category.__name__})")
 
 
-def console():
+def console() -> Console:
+    """A rich console on stdout (rich is imported only when a command prints a table)."""
     from rich.console import Console
 
     return Console()
 
 
 @contextmanager
-def progress(what: str, after: float = 2.0, every: float = 10.0):
+def progress(what: str, after: float = 2.0,
+             every: float = 10.0) -> Iterator[Callable[[int, int], None]]:
     """Show on stderr how far a long run is; yield the callback ``report(done, total)``.
 
     Nothing is shown for runs shorter than ``after`` seconds. Then, on a terminal, a rich
@@ -50,35 +62,38 @@ def progress(what: str, after: float = 2.0, every: float = 10.0):
     ``contactqp: step 5200 of 30001 (17 %), 10 s``.
     """
     start = time.monotonic()
-    state = {"bar": None, "task": None, "last": start}
+    last = start
+    bar: Progress | None = None
+    task: TaskID | None = None
     terminal = sys.stderr.isatty()
 
     def report(done: int, total: int) -> None:
+        nonlocal bar, task, last
         now = time.monotonic()
         if now - start < after:
             return
         if terminal:
-            if state["bar"] is None:
+            if bar is None or task is None:
                 from rich.console import Console
                 from rich.progress import Progress
 
-                state["bar"] = Progress(console=Console(stderr=True), transient=True)
-                state["bar"].start()
-                state["task"] = state["bar"].add_task(f"{what}s", total=total)
-            state["bar"].update(state["task"], completed=done)
-        elif now - state["last"] >= every or state["last"] == start:
-            state["last"] = now
+                bar = Progress(console=Console(stderr=True), transient=True)
+                bar.start()
+                task = bar.add_task(f"{what}s", total=total)
+            bar.update(task, completed=done)
+        elif now - last >= every or last == start:
+            last = now
             click.echo(f"contactqp: {what} {done} of {total} ({100 * done // total} %), "
                        f"{now - start:.0f} s", err=True)
 
     try:
         yield report
     finally:
-        if state["bar"] is not None:
-            state["bar"].stop()
+        if bar is not None:
+            bar.stop()
 
 
-def float_list(ctx, param, text: str) -> list[float]:
+def float_list(ctx: click.Context, param: click.Parameter, text: str) -> list[float]:
     """Click callback: parse comma-separated numbers."""
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
@@ -91,18 +106,18 @@ def float_list(ctx, param, text: str) -> list[float]:
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="contactqp")
-def cli():
+def cli() -> None:
     """Fast elastic contact with friction on reduced (compliance-matrix) models."""
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status instead of raising."""
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
         return _run(argv)
 
 
-def _run(argv) -> int:
+def _run(argv: Sequence[str] | None) -> int:
     try:
         cli.main(args=argv, prog_name="contactqp", standalone_mode=False)
     except click.exceptions.Exit as exc:
@@ -115,6 +130,9 @@ def _run(argv) -> int:
     except click.ClickException as exc:
         fail(exc.format_message().replace("\n", " "))
         return EXIT_BAD_INPUT
+    except SolverError as exc:
+        fail(str(exc).replace("\n", " "))
+        return EXIT_NOT_SOLVED
     except ContactError as exc:
         fail(str(exc).replace("\n", " "))
         return EXIT_BAD_INPUT

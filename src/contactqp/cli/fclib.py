@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, NoReturn
 
 import click
 
 from ..core.result import LocalResult
 from ..core.status import status_counts
-from ..errors import ContactError
+from ..errors import ContactError, SolverError
 from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
 
 STATUSES = tuple(status.label for status in LocalResult.STATUSES)
@@ -31,7 +33,7 @@ SOLUTION_SUFFIX = ".solution.hdf5"
                    "only. Refused if a target is an input, two inputs share a target, or a "
                    "target exists and is not the solution file this command wrote for the same "
                    "input.")
-def fclib(files, tol, as_json, solution_dir):
+def fclib(files: tuple[Path, ...], tol: float, as_json: bool, solution_dir: Path | None) -> None:
     """Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.
 
     Each problem is solved as written: a global one is certified on M v = H r + f,
@@ -41,8 +43,9 @@ def fclib(files, tol, as_json, solution_dir):
     ("digits"), and "limits" the sentence, also printed under the table, naming any above --tol.
 
     Exit status 1 when a problem is not solved to --tol (its error and the solver's stages on
-    stderr, no solution written), 2 when a file is unreadable or invalid, or a solution would
-    overwrite an input, another input's solution or a file this command did not write.
+    stderr, no solution written) or its solver fails, 2 when a file is unreadable or invalid,
+    or a solution would overwrite an input, another input's solution or a file this command
+    did not write.
     """
     from ..io.fclib import read_any, write_solution
     from ..methods import solve
@@ -57,7 +60,8 @@ def fclib(files, tol, as_json, solution_dir):
         except ContactError as exc:
             message = str(exc)  # the reader's messages may already name the file
             fail(message if message.startswith(str(path)) else f"{path}: {message}")
-            exit_code = EXIT_BAD_INPUT
+            exit_code = max(exit_code, EXIT_NOT_SOLVED if isinstance(exc, SolverError)
+                            else EXIT_BAD_INPUT)
             continue
         certificate = solution.certificate
         counts = status_counts(solution.contact_status)
@@ -85,7 +89,7 @@ def fclib(files, tol, as_json, solution_dir):
     sys.exit(exit_code)
 
 
-def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
+def _solution_targets(files: Sequence[Path], solution_dir: Path) -> dict[Path, Path]:
     """The solution file of each input; exit 2 (one line) if any would damage a file.
 
     A target is refused when it is one of the inputs, when two different inputs share it, or
@@ -96,7 +100,8 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
     from ..io.fclib import is_own_solution, solution_source
 
     inputs = {key(p): p for p in files}
-    targets, owners = {}, {}
+    targets: dict[Path, Path] = {}
+    owners: dict[str, Path] = {}
     for path in files:
         target = solution_dir / f"{path.name}{SOLUTION_SUFFIX}"
         where = key(target)
@@ -117,12 +122,12 @@ def _solution_targets(files, solution_dir: Path) -> dict[Path, Path]:
     return targets
 
 
-def _refuse(message: str):
+def _refuse(message: str) -> NoReturn:
     fail(message)
     sys.exit(EXIT_BAD_INPUT)
 
 
-def _fclib_table(rows):
+def _fclib_table(rows: list[dict[str, Any]]) -> None:
     from rich.table import Table
 
     table = Table(title="FCLIB problems")

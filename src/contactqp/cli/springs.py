@@ -29,7 +29,8 @@ MAX_BODIES = 1_000_000
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per force and line.")
 @click.option("--plot", type=click.Path(dir_okay=False, path_type=Path),
               help="Draw the bodies' displacements to this PNG file.")
-def springs(n, stiffness, mu, mass, gravity, forces, as_json, plot):
+def springs(n: int, stiffness: float, mu: float, mass: float, gravity: float,
+            forces: list[float], as_json: bool, plot: Path | None) -> None:
     """A chain of bodies linked by springs on a floor with friction, pulled at its end."""
     from ..applications.springs import SpringChain
 

@@ -17,9 +17,9 @@ fem
     imported on its own (``contactqp.compliance.fem``) because it needs the ``fem`` extra.
 """
 
-from .condensation import RigidBodyModeError, condense, factorize
+from .condensation import condense, factorize
 from .halfspace import grid, influence_matrix, normal_influence
 from .importers import load_compliance
 
 __all__ = ["grid", "normal_influence", "influence_matrix", "condense", "factorize",
-           "RigidBodyModeError", "load_compliance"]
+           "load_compliance"]

@@ -14,13 +14,14 @@ J. S. Przemieniecki, *Theory of Matrix Structural Analysis*, McGraw-Hill, 1968, 
 from __future__ import annotations
 
 import numbers
-from typing import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
-from ..errors import InvalidInputError
 from ..core.model import finite_array
+from ..errors import InvalidInputError
 from .condensation import condense, factorize
 
 __all__ = ["Frame2D", "frame_element_stiffness", "COMPONENTS"]
@@ -30,7 +31,8 @@ COMPONENTS = ("ux", "uy", "rz")
 _LETTERS = {"x": 0, "y": 1, "r": 2}
 
 
-def frame_element_stiffness(start, end, young: float, area: float, inertia: float) -> np.ndarray:
+def frame_element_stiffness(start: ArrayLike, end: ArrayLike, young: float, area: float,
+                            inertia: float) -> np.ndarray:
     """Stiffness of one plane frame element in global coordinates.
 
     Parameters
@@ -69,7 +71,7 @@ def frame_element_stiffness(start, end, young: float, area: float, inertia: floa
     return rotation.T @ local @ rotation
 
 
-def _positive(value, name: str, count: int) -> np.ndarray:
+def _positive(value: ArrayLike, name: str, count: int) -> np.ndarray:
     """``value`` as ``count`` positive finite floats (one value is repeated)."""
     try:
         array = np.broadcast_to(np.asarray(value, dtype=float), (count,))
@@ -82,14 +84,15 @@ def _positive(value, name: str, count: int) -> np.ndarray:
     return array
 
 
-def _node_number(node, n_nodes: int, what: str = "node") -> int:
+def _node_number(node: object, n_nodes: int, what: str = "node") -> int:
     """``node`` as a whole index in ``-n_nodes..n_nodes - 1``; InvalidInputError otherwise."""
     if isinstance(node, (bool, np.bool_)) or not isinstance(node, numbers.Real) \
             or not float(node).is_integer():
         raise InvalidInputError(f"{what} must be a whole node index, got {node!r}")
-    if not -n_nodes <= int(node) < n_nodes:
+    index = int(float(node))
+    if not -n_nodes <= index < n_nodes:
         raise InvalidInputError(f"{what} {node} outside the {n_nodes} nodes")
-    return int(node)
+    return index
 
 
 class Frame2D:
@@ -113,8 +116,9 @@ class Frame2D:
         Wrong shapes, non-positive properties, zero-length elements or unknown fixations.
     """
 
-    def __init__(self, coordinates, elements, young, area, inertia,
-                 fixed: Mapping[int, str] | None = None):
+    def __init__(self, coordinates: ArrayLike, elements: ArrayLike, young: ArrayLike,
+                 area: ArrayLike, inertia: ArrayLike,
+                 fixed: Mapping[int, str] | None = None) -> None:
         coords = finite_array(coordinates, "coordinates", 2)
         if coords.shape[1] != 2 or coords.shape[0] < 2:
             raise InvalidInputError(f"coordinates must have shape (n >= 2, 2), got {coords.shape}")
@@ -133,7 +137,7 @@ class Frame2D:
         self.young = _positive(young, "young", len(conn))
         self.area = _positive(area, "area", len(conn))
         self.inertia = _positive(inertia, "inertia", len(conn))
-        held = []
+        held: list[int] = []
         for node, letters in dict(fixed or {}).items():
             _node_number(node, len(coords), "fixed node")
             if not isinstance(letters, str) or not letters or set(letters) - set(_LETTERS):
@@ -146,14 +150,14 @@ class Frame2D:
         self._position[self.free] = np.arange(self.free.size)
 
     @classmethod
-    def straight(cls, length: float, n_elements: int, young, area, inertia,
-                 fixed: Mapping[int, str] | None = None) -> "Frame2D":
+    def straight(cls, length: float, n_elements: int, young: ArrayLike, area: ArrayLike,
+                 inertia: ArrayLike, fixed: Mapping[int, str] | None = None) -> Frame2D:
         """A straight rod along ``x`` from 0 to ``length`` (m), in equal elements."""
         if not isinstance(length, numbers.Real) or not isinstance(n_elements, numbers.Real) \
                 or not (np.isfinite(length) and length > 0) or int(n_elements) != n_elements \
                 or n_elements < 1:
-            raise InvalidInputError(
-                f"length must be > 0 and n_elements a whole number >= 1, got {length}, {n_elements}")
+            raise InvalidInputError(f"length must be > 0 and n_elements a whole number >= 1, got "
+                                    f"{length}, {n_elements}")
         x = np.linspace(0.0, length, int(n_elements) + 1)
         nodes = np.column_stack([x, np.zeros_like(x)])
         elements = np.column_stack([np.arange(n_elements), np.arange(1, n_elements + 1)])
@@ -171,20 +175,26 @@ class Frame2D:
 
     def index(self, node: int, component: str) -> int:
         """Position of a freedom (``"ux"``, ``"uy"`` or ``"rz"``) in the free vectors."""
+        return self._free_position(node, component)
+
+    def _free_position(self, node: object, component: str) -> int:
+        """:meth:`index` of a node not yet known to be a whole number (refused if it is not)."""
         if component not in COMPONENTS:
             raise InvalidInputError(f"component must be one of {COMPONENTS}, got {component!r}")
-        node = _node_number(node, self.n_nodes)
-        if node < 0:
-            raise InvalidInputError(f"node {node} outside 0..{self.n_nodes - 1}")
-        position = int(self._position[3 * node + COMPONENTS.index(component)])
+        number = _node_number(node, self.n_nodes)
+        if number < 0:
+            raise InvalidInputError(f"node {number} outside 0..{self.n_nodes - 1}")
+        position = int(self._position[3 * number + COMPONENTS.index(component)])
         if position < 0:
-            raise InvalidInputError(f"node {node} {component} is fixed")
+            raise InvalidInputError(f"node {number} {component} is fixed")
         return position
 
     def full_stiffness(self) -> sp.csr_matrix:
         """Stiffness of all ``3 n_nodes`` freedoms, fixations ignored (singular), shape (3n, 3n)."""
-        blocks = [frame_element_stiffness(self.coordinates[a], self.coordinates[b], E, A, I)
-                  for (a, b), E, A, I in zip(self.elements, self.young, self.area, self.inertia)]
+        blocks = [frame_element_stiffness(self.coordinates[a], self.coordinates[b], young, area,
+                                          inertia)
+                  for (a, b), young, area, inertia
+                  in zip(self.elements, self.young, self.area, self.inertia, strict=True)]
         dofs = (3 * self.elements[:, :, None] + np.arange(3)).reshape(-1, 6)
         rows = np.repeat(dofs, 6, axis=1).ravel()
         cols = np.tile(dofs, (1, 6)).ravel()
@@ -195,29 +205,31 @@ class Frame2D:
         """Stiffness of the free freedoms, shape (n_free, n_free), in the order of :attr:`free`."""
         return self.full_stiffness()[self.free][:, self.free].tocsc()
 
-    def load_vector(self, loads: Sequence[Sequence[float]]) -> np.ndarray:
+    def load_vector(self, loads: Iterable[Sequence[float]]) -> np.ndarray:
         """Free-freedom load vector from ``[(node, fx, fy), ...]`` or ``(node, fx, fy, mz)`` rows.
 
         Forces in N, moments in N m; loads on fixed freedoms are rejected.
         """
         vector = np.zeros(self.free.size)
         for row in loads:
+            node: object = None
+            values: list[float] = []
             try:
                 node, *values = row
-                finite = np.all(np.isfinite(np.asarray(values, dtype=float)))
+                finite = bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
             except (TypeError, ValueError):
-                node, values, finite = None, (), False
+                finite = False
             if len(values) not in (2, 3) or not finite:
                 raise InvalidInputError(
                     f"a load must be (node, fx, fy) or (node, fx, fy, mz) with finite values, "
                     f"got {row!r}")
-            for component, value in zip(COMPONENTS, values):
+            for component, value in zip(COMPONENTS, values, strict=False):  # mz is optional
                 if value != 0.0:
-                    vector[self.index(node, component)] += value
+                    vector[self._free_position(node, component)] += value
         return vector
 
-    def displacements(self, load_vector) -> np.ndarray:
-        """Nodal displacements ``(ux, uy, rz)`` under a free-freedom load vector, shape (n_nodes, 3).
+    def displacements(self, load_vector: ArrayLike) -> np.ndarray:
+        """Nodal displacements ``(ux, uy, rz)``, shape (n_nodes, 3), under a free-freedom load.
 
         Fixed freedoms are zero.
 
@@ -237,7 +249,7 @@ class Frame2D:
         full[self.free] = factorize(self.stiffness(), labels=self.labels).solve(loads)
         return full.reshape(-1, 3)
 
-    def compliance(self, nodes: Sequence[int], components: str = "xy") -> np.ndarray:
+    def compliance(self, nodes: Iterable[int], components: str = "xy") -> np.ndarray:
         """Flexibility of ``components`` (letters ``x``, ``y``, ``r``) of ``nodes``, node by node.
 
         Returns

@@ -25,15 +25,18 @@ move without deforming.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike
 
-from ..errors import InvalidInputError, NotPositiveDefiniteError
+from ..errors import InvalidInputError, NotPositiveDefiniteError, RigidBodyModeError
 from ..core.model import SYMMETRY_RTOL
 
-__all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
+__all__ = ["condense", "factorize", "SINGULAR_PIVOT_RTOL"]
 
 #: A pivot smaller than this fraction of its own diagonal stiffness means a singular model.
 #: Measured on finite-element solids: rigid-body modes leave pivots of 1e-15 to 1e-12 of the
@@ -42,10 +45,6 @@ __all__ = ["condense", "factorize", "RigidBodyModeError", "SINGULAR_PIVOT_RTOL"]
 #: 2e-12 at 8,000, where it is off by 10 %), so the test also refuses models too
 #: ill-conditioned to condense.
 SINGULAR_PIVOT_RTOL = 1e-10
-
-
-class RigidBodyModeError(NotPositiveDefiniteError):
-    """The stiffness matrix is singular: the model can move without deforming."""
 
 
 def _checked_stiffness(stiffness) -> sp.csc_matrix:
@@ -76,8 +75,9 @@ def _checked_freedoms(freedoms, n: int) -> np.ndarray:
     return idx
 
 
-def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
-              symmetry_rtol: float = SYMMETRY_RTOL):
+def factorize(stiffness: ArrayLike | sp.spmatrix | sp.sparray, *,
+              labels: Sequence[str] | None = None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+              symmetry_rtol: float = SYMMETRY_RTOL) -> spla.SuperLU:
     """Factorise a symmetric positive definite sparse stiffness, refusing singular ones.
 
     Parameters
@@ -161,7 +161,8 @@ def factorize(stiffness, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL
     return lu
 
 
-def condense(stiffness, freedoms, *, labels=None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+def condense(stiffness: ArrayLike | sp.spmatrix | sp.sparray, freedoms: ArrayLike, *,
+             labels: Sequence[str] | None = None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
              symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
     """Flexibility matrix of ``freedoms`` for the (fixed, non-singular) sparse ``stiffness``.
 

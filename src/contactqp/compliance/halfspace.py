@@ -56,6 +56,7 @@ from __future__ import annotations
 import numbers
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 
@@ -115,7 +116,7 @@ def _centres(x, y) -> tuple[np.ndarray, np.ndarray]:
     return xs, ys
 
 
-def rectangle_potential(u, v) -> np.ndarray:
+def rectangle_potential(u: ArrayLike, v: ArrayLike) -> np.ndarray:
     """Primitive of the Boussinesq kernel, ``d^2 Phi / du dv = 1 / sqrt(u^2 + v^2)``.
 
     .. math::
@@ -170,7 +171,8 @@ def _overlap_message(i: int, j: int, xs, ys) -> str:
             f"({xs[j]:.6g}, {ys[j]:.6g}) m are closer than one cell dx, dy)")
 
 
-def normal_influence(x, y, dx, dy, young, poisson) -> np.ndarray:
+def normal_influence(x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: float,
+                     poisson: float) -> np.ndarray:
     """Normal flexibility matrix of an elastic half-space discretised into uniformly loaded cells.
 
     Entry ``(i, j)`` is the normal surface displacement (m) at the centre of cell ``i`` caused by
@@ -180,7 +182,8 @@ def normal_influence(x, y, dx, dy, young, poisson) -> np.ndarray:
     .. math::
 
         R_{ij} = \\frac{1 - \\nu^2}{\\pi E\\, dx\\, dy}
-            \\iint_{\\text{cell } j} \\frac{d\\xi\\, d\\eta}{\\sqrt{(x_i - \\xi)^2 + (y_i - \\eta)^2}}
+            \\iint_{\\text{cell } j}
+            \\frac{d\\xi\\, d\\eta}{\\sqrt{(x_i - \\xi)^2 + (y_i - \\eta)^2}}
 
     Displacements and forces are measured along the same normal axis, so ``U = R P`` with ``R``
     symmetric and positive definite. For a distant cell ``R_ij`` tends to the point-load value
@@ -338,7 +341,8 @@ def _cerruti_integrals(X, Y, half_x: float, half_y: float):
             corners(log_term), corners(lambda u, v: log_term(v, u)))
 
 
-def influence_matrix(x, y, dx, dy, young, poisson, coupling=True) -> np.ndarray:
+def influence_matrix(x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: float,
+                     poisson: float, coupling: bool = True) -> np.ndarray:
     """Full (3 per cell) flexibility of an elastic half-space under uniform cell tractions.
 
     Entry ``(3 i + a, 3 j + b)`` is the displacement (m) along axis ``a`` of the centre of cell
@@ -433,7 +437,7 @@ def influence_matrix(x, y, dx, dy, young, poisson, coupling=True) -> np.ndarray:
     return result
 
 
-def grid(nx, ny, dx, dy) -> tuple[np.ndarray, np.ndarray]:
+def grid(nx: int, ny: int, dx: float, dy: float) -> tuple[np.ndarray, np.ndarray]:
     """Centres of an ``nx`` by ``ny`` grid of ``dx`` by ``dy`` cells, centred on the origin.
 
     Parameters
@@ -454,7 +458,7 @@ def grid(nx, ny, dx, dy) -> tuple[np.ndarray, np.ndarray]:
     InvalidInputError
         A count is not a positive integer, or a size is not a positive finite length.
     """
-    counts = []
+    counts: list[int] = []
     for name, value in (("nx", nx), ("ny", ny)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
             raise InvalidInputError(f"{name} must be a positive integer, got {value!r}")

@@ -13,11 +13,13 @@ the node, or of the first node relative to the second, along ``t``).
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Protocol, TypeAlias, runtime_checkable
 
 import numpy as np
 import scipy.sparse
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .model import MAX_MAGNITUDE, ReducedModel, real_array
@@ -32,7 +34,22 @@ __all__ = [
     "LocalFrames",
     "local_frames",
     "tangent_basis",
+    "Obstacle",
+    "ConstraintRow",
 ]
+
+#: One constraint row: ``(node, freedoms, coefficients, gap, label)``; the row reads
+#: ``coefficients . U[freedoms] <= gap``.
+ConstraintRow: TypeAlias = tuple[int, np.ndarray, np.ndarray, float, str]
+
+
+@runtime_checkable
+class Obstacle(Protocol):
+    """What :func:`assemble_constraints` accepts: anything that lists its constraint rows."""
+
+    def rows(self, model: ReducedModel) -> list[ConstraintRow]:
+        """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -53,7 +70,7 @@ class Constraints:
     matrix: scipy.sparse.csr_matrix
     gaps: np.ndarray
     nodes: np.ndarray
-    labels: list = field(default_factory=list)
+    labels: list[str] = field(default_factory=list)
 
     @property
     def n_constraints(self) -> int:
@@ -61,14 +78,13 @@ class Constraints:
         return len(self.gaps)
 
 
-def _unit_directions(directions, count: int, name: str) -> np.ndarray:
+def _unit_directions(directions: ArrayLike, count: int, name: str) -> np.ndarray:
     dirs = real_array(directions, name)
     if dirs.ndim == 1:
         dirs = np.tile(dirs, (count, 1))
     if dirs.ndim != 2 or dirs.shape[0] != count or dirs.shape[1] not in (1, 2, 3):
-        raise InvalidInputError(
-            f"{name} must have shape (d,) or ({count}, d) with d in 1..3, got {np.shape(directions)}"
-        )
+        raise InvalidInputError(f"{name} must have shape (d,) or ({count}, d) with d in 1..3, "
+                                f"got {np.shape(directions)}")
     if not np.all(np.isfinite(dirs)):
         raise InvalidInputError(f"{name} contains NaN or inf")
     norms = np.linalg.norm(dirs, axis=1)
@@ -77,7 +93,7 @@ def _unit_directions(directions, count: int, name: str) -> np.ndarray:
     return dirs / norms[:, None]
 
 
-def _node_indices(model: ReducedModel, nodes, name: str) -> np.ndarray:
+def _node_indices(model: ReducedModel, nodes: ArrayLike | None, name: str) -> np.ndarray:
     if nodes is None:
         return np.arange(model.n_nodes)
     idx = np.asarray(nodes).reshape(-1)
@@ -100,14 +116,15 @@ def _node_freedoms(model: ReducedModel, node: int, direction: np.ndarray, name: 
     return dofs
 
 
-def _node_rows(model: ReducedModel, nodes, gaps, directions, name: str, label: str):
+def _node_rows(model: ReducedModel, nodes: np.ndarray, gaps: np.ndarray, directions: np.ndarray,
+               name: str, label: str) -> list[ConstraintRow]:
     """One constraint row per node: ``(node, freedoms, direction, gap, label)``.
 
     ``directions`` is one unit vector for all nodes, shape (d,), or one per node, shape (k, d).
     """
     directions = np.broadcast_to(directions, (len(nodes), np.shape(directions)[-1]))
     return [(int(k), _node_freedoms(model, k, d, name), d, float(g), f"node {k}{label}")
-            for k, g, d in zip(nodes, gaps, directions)]
+            for k, g, d in zip(nodes, gaps, directions, strict=True)]
 
 
 def _coordinates(model: ReducedModel, name: str) -> np.ndarray:
@@ -130,11 +147,11 @@ class GapObstacle:
         ``[1.0]`` (default) or ``[-1.0]``.
     """
 
-    nodes: Sequence[int]
-    gaps: Sequence[float]
-    directions: Sequence = (1.0,)
+    nodes: ArrayLike
+    gaps: ArrayLike
+    directions: ArrayLike = (1.0,)
 
-    def rows(self, model: ReducedModel):
+    def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
         nodes = _node_indices(model, self.nodes, "GapObstacle.nodes")
         gaps = real_array(self.gaps, "GapObstacle.gaps").reshape(-1)
@@ -162,11 +179,11 @@ class PlaneObstacle:
         Nodes that may touch the plane (default: all).
     """
 
-    point: Sequence[float]
-    normal: Sequence[float]
-    nodes: Sequence[int] | None = None
+    point: ArrayLike
+    normal: ArrayLike
+    nodes: ArrayLike | None = None
 
-    def rows(self, model: ReducedModel):
+    def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
         coords = _coordinates(model, "PlaneObstacle")
         nodes = _node_indices(model, self.nodes, "PlaneObstacle.nodes")
@@ -198,23 +215,21 @@ class ProfileObstacle:
     """
 
     profile: Callable[[np.ndarray], np.ndarray]
-    direction: Sequence[float]
-    nodes: Sequence[int] | None = None
+    direction: ArrayLike
+    nodes: ArrayLike | None = None
 
-    def rows(self, model: ReducedModel):
+    def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
         coords = _coordinates(model, "ProfileObstacle")
         nodes = _node_indices(model, self.nodes, "ProfileObstacle.nodes")
         direction = _unit_directions(self.direction, 1, "ProfileObstacle.direction")[0]
         if coords.shape[1] != len(direction):
-            raise InvalidInputError(
-                f"ProfileObstacle.direction has {len(direction)} components, coordinates {coords.shape[1]}"
-            )
+            raise InvalidInputError(f"ProfileObstacle.direction has {len(direction)} components, "
+                                    f"coordinates {coords.shape[1]}")
         surface = real_array(self.profile(coords[nodes]), "ProfileObstacle.profile").reshape(-1)
         if surface.shape != nodes.shape or not np.all(np.isfinite(surface)):
-            raise InvalidInputError(
-                f"ProfileObstacle.profile must return {nodes.size} finite values, got shape {surface.shape}"
-            )
+            raise InvalidInputError(f"ProfileObstacle.profile must return {nodes.size} finite "
+                                    f"values, got shape {surface.shape}")
         gaps = surface - coords[nodes] @ direction
         return _node_rows(model, nodes, gaps, direction, "ProfileObstacle", " / profile")
 
@@ -235,11 +250,11 @@ class NodePairs:
         Directions from the first node towards the second; normalised.
     """
 
-    pairs: Sequence[Sequence[int]]
-    gaps: Sequence[float]
-    directions: Sequence = (1.0,)
+    pairs: ArrayLike
+    gaps: ArrayLike
+    directions: ArrayLike = (1.0,)
 
-    def rows(self, model: ReducedModel):
+    def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
         pairs = np.asarray(self.pairs)
         if pairs.ndim != 2 or pairs.shape[1] != 2:
@@ -254,15 +269,16 @@ class NodePairs:
                 f"NodePairs.gaps must hold {first.size} finite values, got shape {gaps.shape}"
             )
         dirs = _unit_directions(self.directions, len(first), "NodePairs.directions")
-        rows = []
-        for a, b, g, d in zip(first, second, gaps, dirs):
+        rows: list[ConstraintRow] = []
+        for a, b, g, d in zip(first, second, gaps, dirs, strict=True):
             dofs = np.concatenate([_node_freedoms(model, a, d, "NodePairs"),
                                    _node_freedoms(model, b, d, "NodePairs")])
             rows.append((int(a), dofs, np.concatenate([d, -d]), float(g), f"pair {a}-{b}"))
         return rows
 
 
-def assemble_constraints(model: ReducedModel, obstacles) -> Constraints:
+def assemble_constraints(model: ReducedModel,
+                         obstacles: Obstacle | Iterable[Obstacle]) -> Constraints:
     """Stack the rows of every obstacle and pair into ``A U <= Delta``.
 
     Parameters
@@ -304,9 +320,9 @@ def assemble_constraints(model: ReducedModel, obstacles) -> Constraints:
     )
 
 
-def _obstacle_list(obstacles) -> list:
+def _obstacle_list(obstacles: Obstacle | Iterable[Obstacle]) -> list[Obstacle]:
     """``obstacles`` as a list of objects with ``rows``: one obstacle alone is accepted."""
-    if hasattr(obstacles, "rows"):
+    if isinstance(obstacles, Obstacle):
         return [obstacles]
     try:
         listed = list(obstacles)
@@ -315,7 +331,7 @@ def _obstacle_list(obstacles) -> list:
             f"obstacles must be an obstacle or a sequence of obstacles, got "
             f"{type(obstacles).__name__}") from None
     for position, obstacle in enumerate(listed):
-        if not hasattr(obstacle, "rows"):
+        if not isinstance(obstacle, Obstacle):
             raise InvalidInputError(
                 f"obstacles[{position}] is a {type(obstacle).__name__}, not an obstacle "
                 f"(GapObstacle, PlaneObstacle, ProfileObstacle or NodePairs)")
@@ -327,7 +343,7 @@ def _obstacle_list(obstacles) -> list:
 _DUPLICATE_DECIMALS = 9
 
 
-def _refuse_duplicates(rows) -> None:
+def _refuse_duplicates(rows: list[ConstraintRow]) -> None:
     """Raise if two rows constrain the same freedoms along the same direction.
 
     Rows are compared by size, vectorised: each row's freedoms sorted, with its unit
@@ -357,7 +373,7 @@ def _refuse_duplicates(rows) -> None:
             f"be singular; give each node and direction once (keep the smaller gap)")
 
 
-def tangent_basis(normals) -> np.ndarray:
+def tangent_basis(normals: ArrayLike) -> np.ndarray:
     """Deterministic orthonormal tangents completing unit normals.
 
     2-D: ``t = (-n_y, n_x)`` (the normal turned by +90 degrees). 3-D: the branchless basis of
@@ -449,8 +465,9 @@ def local_frames(model: ReducedModel, constraints: Constraints) -> LocalFrames:
         raise InvalidInputError(f"constraint row {coo.row[~inside][0]} touches a node with more "
                                 f"than {d} freedoms")
     comp = component[coo.col]
-    signs = scipy.sparse.coo_matrix((coo.data * normals[coo.row, comp], (coo.row, node_of[coo.col])),
-                                    shape=(m, model.n_nodes)).tocsr()
+    signs = scipy.sparse.coo_matrix(
+        (coo.data * normals[coo.row, comp], (coo.row, node_of[coo.col])),
+        shape=(m, model.n_nodes)).tocsr()
     signed = signs[coo.row, node_of[coo.col]].A1
     if not (np.allclose(np.abs(signs.data[signs.data != 0]), 1.0)
             and np.allclose(coo.data, signed * normals[coo.row, comp])):

@@ -10,11 +10,12 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Sequence
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
 
@@ -22,7 +23,8 @@ __all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_
            "checked_cholesky", "finite_array", "real_array", "positive_tolerance", "iteration_cap",
            "MAX_MAGNITUDE"]
 
-#: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised silently-with-warning.
+#: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised (with a
+#: warning) instead of refused.
 SYMMETRY_RTOL = 1e-6
 
 
@@ -33,7 +35,7 @@ SYMMETRY_RTOL = 1e-6
 MAX_MAGNITUDE = 1e50
 
 
-def real_array(value, name: str) -> np.ndarray:
+def real_array(value: ArrayLike, name: str) -> np.ndarray:
     """``value`` as a float array; complex values and non-numbers are refused, naming ``name``."""
     if _is_complex(value):
         raise InvalidInputError(f"{name} must be real, got complex values")
@@ -43,7 +45,8 @@ def real_array(value, name: str) -> np.ndarray:
         raise InvalidInputError(f"{name} must be an array of real numbers: {exc}") from None
 
 
-def finite_array(value, name: str, ndim: int, *, magnitude: float | None = None) -> np.ndarray:
+def finite_array(value: ArrayLike, name: str, ndim: int, *,
+                 magnitude: float | None = None) -> np.ndarray:
     """``value`` as a float array of ``ndim`` dimensions, real and finite; errors name ``name``.
 
     ``magnitude``: also refuse entries larger in absolute value (see :data:`MAX_MAGNITUDE`).
@@ -60,7 +63,7 @@ def finite_array(value, name: str, ndim: int, *, magnitude: float | None = None)
     return array
 
 
-def _is_complex(value) -> bool:
+def _is_complex(value: ArrayLike) -> bool:
     """True when ``value`` holds complex numbers (which a cast to float would truncate)."""
     if isinstance(value, np.ndarray) or hasattr(value, "dtype"):
         return bool(np.iscomplexobj(value))
@@ -70,23 +73,26 @@ def _is_complex(value) -> bool:
         return False
 
 
-def positive_tolerance(value, name: str = "tol", *, below_one: bool = False) -> float:
+def positive_tolerance(value: object, name: str = "tol", *, below_one: bool = False) -> float:
     """``value`` as a float, refused unless a finite number > 0 (and < 1 with ``below_one``)."""
-    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
-            or not math.isfinite(value) or value <= 0 or (below_one and value >= 1)):
+    number = None
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        number = float(value)
+    if number is None or not math.isfinite(number) or number <= 0 or (below_one and number >= 1):
         raise InvalidInputError(f"{name} must be a positive finite number"
                                 f"{' below 1' if below_one else ''}, got {value!r}")
-    return float(value)
+    return number
 
 
-def iteration_cap(value, name: str = "max_iter") -> int:
+def iteration_cap(value: object, name: str = "max_iter") -> int:
     """``value`` as an int, refused unless an integer >= 1."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise InvalidInputError(f"{name} must be an integer >= 1, got {value!r}")
     return int(value)
 
 
-def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
+def check_spd_matrix(matrix: ArrayLike, name: str,
+                     symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
     """Validate a symmetric positive definite matrix and return it as a float array.
 
     See :func:`checked_cholesky`, which also returns the factor computed by the check.
@@ -94,7 +100,8 @@ def check_spd_matrix(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL) ->
     return checked_cholesky(matrix, name, symmetry_rtol)[0]
 
 
-def checked_cholesky(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL):
+def checked_cholesky(matrix: ArrayLike, name: str,
+                     symmetry_rtol: float = SYMMETRY_RTOL) -> tuple[np.ndarray, np.ndarray]:
     """Validate a symmetric positive definite matrix; return it and its lower Cholesky factor.
 
     Parameters
@@ -124,10 +131,12 @@ def checked_cholesky(matrix, name: str, symmetry_rtol: float = SYMMETRY_RTOL):
     array = finite_array(matrix, name, 2, magnitude=MAX_MAGNITUDE)
     n, m = array.shape
     if n != m or n == 0:
-        raise InvalidInputError(f"{name} must be a non-empty square matrix, got shape {array.shape}")
+        raise InvalidInputError(
+            f"{name} must be a non-empty square matrix, got shape {array.shape}")
     scale = np.max(np.abs(array))
     if scale == 0.0:
-        raise InvalidInputError(f"{name} is singular: all its entries are zero (shape {array.shape})")
+        raise InvalidInputError(
+            f"{name} is singular: all its entries are zero (shape {array.shape})")
     if scale < 1.0 / MAX_MAGNITUDE:
         raise InvalidInputError(
             f"{name}'s largest entry is {scale:.3g}, below {1.0 / MAX_MAGNITUDE:g}: its products "
@@ -224,8 +233,8 @@ class ReducedModel:
     Parameters
     ----------
     flexibility, stiffness : array_like, shape (n, n)
-        Symmetric positive definite, in metres per newton (resp. newtons per metre), freedoms ordered
-        node by node.
+        Symmetric positive definite, in metres per newton (resp. newtons per metre), freedoms
+        ordered node by node.
     dofs_per_node : int or sequence of int
         Freedoms of every node (1, 2 or 3), or one count per node.
     coordinates : array_like, shape (n_nodes, d), optional
@@ -234,12 +243,16 @@ class ReducedModel:
         See :func:`check_spd_matrix`.
     """
 
-    def __init__(self, flexibility=None, stiffness=None, dofs_per_node: int | Sequence[int] = 1,
-                 coordinates=None, symmetry_rtol: float = SYMMETRY_RTOL):
-        if (flexibility is None) == (stiffness is None):
+    def __init__(self, flexibility: ArrayLike | None = None, stiffness: ArrayLike | None = None,
+                 dofs_per_node: int | Sequence[int] | np.ndarray = 1,
+                 coordinates: ArrayLike | None = None,
+                 symmetry_rtol: float = SYMMETRY_RTOL) -> None:
+        if stiffness is None and flexibility is not None:
+            name, given = "flexibility", flexibility
+        elif flexibility is None and stiffness is not None:
+            name, given = "stiffness", stiffness
+        else:
             raise InvalidInputError("give exactly one of flexibility or stiffness")
-        name = "flexibility" if flexibility is not None else "stiffness"
-        given = flexibility if flexibility is not None else stiffness
         matrix, factor = checked_cholesky(given, name, symmetry_rtol)
         given = finite_array(given, name, 2)  # validated above; kept when it was symmetrised
         #: The matrix exactly as given (``flexibility`` or ``stiffness``): the certificates'
@@ -249,12 +262,13 @@ class ReducedModel:
         self._stiffness = matrix if name == "stiffness" else None
         # a stiffness always needs its factor (U = K^-1 P): keep the validation's; a flexibility
         # needs one only if K is asked for, so its (n x n) factor is not held meanwhile
-        self._factor = (factor, True) if name == "stiffness" else None
+        self._factor: tuple[np.ndarray, bool] | None = (
+            (factor, True) if name == "stiffness" else None)
         n = matrix.shape[0]
         counts = self._dof_counts(dofs_per_node, n)
         self.dofs_per_node = counts
         self.offsets = np.concatenate(([0], np.cumsum(counts)))
-        self.coordinates = None
+        self.coordinates: np.ndarray | None = None
         if coordinates is not None:
             coords = finite_array(coordinates, "coordinates", 2)
             if coords.shape[0] != len(counts):
@@ -265,11 +279,14 @@ class ReducedModel:
             self.coordinates = coords
 
     @staticmethod
-    def _dof_counts(dofs_per_node, n_freedoms: int) -> np.ndarray:
+    def _dof_counts(dofs_per_node: int | Sequence[int] | np.ndarray,
+                    n_freedoms: int) -> np.ndarray:
         if np.isscalar(dofs_per_node):
+            # a whole number: 2.0 is 2, while 2.5, "2" or 2j are refused (not truncated or cast)
+            if (not isinstance(dofs_per_node, numbers.Integral | float)
+                    or dofs_per_node not in (1, 2, 3)):
+                raise InvalidInputError(f"dofs_per_node must be 1, 2 or 3, got {dofs_per_node!r}")
             per = int(dofs_per_node)
-            if per not in (1, 2, 3):
-                raise InvalidInputError(f"dofs_per_node must be 1, 2 or 3, got {dofs_per_node}")
             if n_freedoms % per:
                 raise InvalidInputError(
                     f"matrix size {n_freedoms} is not a multiple of dofs_per_node={per}"
@@ -300,9 +317,9 @@ class ReducedModel:
             raise InvalidInputError(f"node {node} out of range 0..{self.n_nodes - 1}")
         return np.arange(self.offsets[node], self.offsets[node + 1])
 
-    def _cholesky(self):
-        if self._factor is None:
-            self._factor = scipy.linalg.cho_factor(self._flexibility, lower=True,
+    def _cholesky(self) -> tuple[np.ndarray, bool]:
+        if self._factor is None:  # built from a flexibility, whose factor was not kept
+            self._factor = scipy.linalg.cho_factor(self.flexibility, lower=True,
                                                    check_finite=False)
         return self._factor
 
@@ -313,7 +330,8 @@ class ReducedModel:
 
     def _inverse(self) -> np.ndarray:
         """The inverse of the given matrix, from its Cholesky factor."""
-        return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms), check_finite=False)
+        return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms),
+                                      check_finite=False)
 
     @property
     def asymmetry(self) -> float:
@@ -337,19 +355,19 @@ class ReducedModel:
             self._stiffness = self._inverse()
         return self._stiffness
 
-    def displacements(self, loads) -> np.ndarray:
+    def displacements(self, loads: ArrayLike) -> np.ndarray:
         """``U = R P`` without forming ``R`` when only ``K`` is known. ``loads``: (n,) or (n, k)."""
-        loads = np.asarray(loads, dtype=float)
+        values = np.asarray(loads, dtype=float)
         if self._flexibility is not None:
-            return self._flexibility @ loads
-        return scipy.linalg.cho_solve(self._cholesky(), loads, check_finite=False)
+            return self._flexibility @ values
+        return scipy.linalg.cho_solve(self._cholesky(), values, check_finite=False)
 
-    def forces(self, displacements) -> np.ndarray:
+    def forces(self, displacements: ArrayLike) -> np.ndarray:
         """``P = K U`` without forming ``K`` when only ``R`` is known."""
-        displacements = np.asarray(displacements, dtype=float)
+        values = np.asarray(displacements, dtype=float)
         if self._stiffness is not None:
-            return self._stiffness @ displacements
-        return scipy.linalg.cho_solve(self._cholesky(), displacements, check_finite=False)
+            return self._stiffness @ values
+        return scipy.linalg.cho_solve(self._cholesky(), values, check_finite=False)
 
     def __repr__(self) -> str:
         return (f"ReducedModel({self.n_nodes} nodes, {self.n_freedoms} freedoms, "

@@ -220,7 +220,9 @@ class LocalResult(ContactResult):
     v: np.ndarray | None = None
 
     def _summary_extra(self) -> dict:
-        return {"error": self.certificate.natural_map}
+        certificate = self.certificate
+        assert isinstance(certificate, LocalCertificate)  # set so by every local method
+        return {"error": certificate.natural_map}
 
 
 @dataclass(kw_only=True, repr=False)
@@ -254,7 +256,7 @@ class FastenedResult(ContactResult):
 
     @classmethod
     def from_contact(cls, contact: ContactResult, fasteners, fastener_forces, multipliers,
-                     initial_gaps) -> "FastenedResult":
+                     initial_gaps) -> FastenedResult:
         """The state whose contact problem, pulled by the ``fastener_forces`` (N) at the
         ``fasteners`` rows, has the certified result ``contact``: the closure is checked against
         the certificate's tolerance times the largest initial gap or displacement (m), and the

@@ -48,4 +48,4 @@ def status_labels(codes) -> list[str]:
 def status_counts(codes) -> dict[str, int]:
     """``{label: count}`` of ``codes`` for every label, in code order (zeros included)."""
     counts = np.bincount(np.asarray(codes, dtype=int).reshape(-1), minlength=len(STATUS_LABELS))
-    return {label: int(count) for label, count in zip(STATUS_LABELS, counts)}
+    return {label: int(count) for label, count in zip(STATUS_LABELS, counts, strict=True)}

@@ -12,6 +12,7 @@ array of the archive is read; :func:`read_numpy_array` turns each into a
 
 from __future__ import annotations
 
+import os
 import warnings
 import zipfile
 import zlib
@@ -118,7 +119,7 @@ def array_format(path: Path, fmt: str | None = None) -> str:
     )
 
 
-def read_numpy_array(path, key: str | None = None) -> np.ndarray:
+def read_numpy_array(path: str | os.PathLike[str], key: str | None = None) -> np.ndarray:
     """The array of a ``.npy`` file, or the array ``key`` of a ``.npz`` archive.
 
     Parameters
@@ -158,7 +159,7 @@ def read_numpy_array(path, key: str | None = None) -> np.ndarray:
                               f"({kind}: {_one_line(exc)})") from None
 
 
-def read_csv_array(path) -> np.ndarray:
+def read_csv_array(path: str | os.PathLike[str]) -> np.ndarray:
     """The numbers of a CSV table (commas or blanks between them; ``#`` starts a comment).
 
     Returns
@@ -190,7 +191,7 @@ def read_csv_array(path) -> np.ndarray:
         raise FileFormatError(f"{path}: not a table of numbers: {_one_line(exc)}") from None
 
 
-def _archive_array(path: Path, archive, key: str | None) -> np.ndarray:
+def _archive_array(path: Path, archive: np.lib.npyio.NpzFile, key: str | None) -> np.ndarray:
     names = list(archive.files)
     if key is None and SCIPY_SPARSE_NPZ <= set(names):
         import scipy.sparse
@@ -207,5 +208,5 @@ def _archive_array(path: Path, archive, key: str | None) -> np.ndarray:
     return archive[key]
 
 
-def _one_line(exc) -> str:
+def _one_line(exc: BaseException) -> str:
     return "; ".join(part.strip() for part in str(exc).splitlines() if part.strip())

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import csv
+import os
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from ..optional import require
@@ -26,7 +29,8 @@ class PointMesh(NamedTuple):
     point_data: dict
 
 
-def write_vtu(path, points, cells, point_data) -> Path:
+def write_vtu(path: str | os.PathLike[str], points: ArrayLike,
+              cells: Iterable[tuple[str, ArrayLike]], point_data: Mapping[str, ArrayLike]) -> Path:
     """Write a mesh and its point fields to a VTU file (ParaView): the one VTU writer.
 
     Parameters
@@ -60,7 +64,7 @@ def write_vtu(path, points, cells, point_data) -> Path:
     return path
 
 
-def write_csv(path, columns) -> Path:
+def write_csv(path: str | os.PathLike[str], columns: Mapping[str, ArrayLike]) -> Path:
     """Write equal-length columns as a CSV table with a header row.
 
     Parameters
@@ -79,10 +83,11 @@ def write_csv(path, columns) -> Path:
     if not names or len({len(v) for v in values}) != 1:
         raise InvalidInputError("columns must be non-empty and of one length, got lengths "
                                 f"{[len(v) for v in values]}")
-    return write_rows(path, names, zip(*(v.tolist() for v in values)))
+    return write_rows(path, names, zip(*(v.tolist() for v in values), strict=True))
 
 
-def write_rows(path, header, rows) -> Path:
+def write_rows(path: str | os.PathLike[str], header: Sequence[str],
+               rows: Iterable[Iterable[object]]) -> Path:
     """Write a header row and ``rows`` (iterables of values) as a UTF-8 CSV table.
 
     Parameters

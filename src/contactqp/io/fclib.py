@@ -25,15 +25,17 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
+from ..core.local_problem import GlobalProblem, LocalProblem
 from ..errors import (
     ContactError,
     FileFormatError,
     InvalidInputError,
     UnsupportedProblemError,
 )
+from ..errors import FileLayoutError
 from .siconos import read_dat
-from ..core.local_problem import GlobalProblem, LocalProblem
 from ..optional import require
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
@@ -49,7 +51,7 @@ def _h5py():
     return require("h5py", "reading or writing FCLIB HDF5 files", "hdf5")
 
 
-def is_hdf5(path) -> bool:
+def is_hdf5(path: str | os.PathLike[str]) -> bool:
     """Tell whether ``path`` starts with the HDF5 signature (also after a user block).
 
     The signature is looked for at byte 0 and at 512, 1024, 2048, ... as the HDF5
@@ -69,33 +71,29 @@ def is_hdf5(path) -> bool:
     return False
 
 
-class _Bad(Exception):
-    """Internal: a layout problem inside an HDF5 file."""
-
-
 def _dataset(group, name):
     obj = group.get(name)
     if obj is None:
-        raise _Bad(f"{group.name}/{name} is missing")
+        raise FileLayoutError(f"{group.name}/{name} is missing")
     if not hasattr(obj, "shape") or not hasattr(obj, "dtype"):
-        raise _Bad(f"{group.name}/{name} is not a dataset")
+        raise FileLayoutError(f"{group.name}/{name} is not a dataset")
     return obj
 
 
 def _int(group, name):
     arr = np.asarray(_dataset(group, name)[()])
     if arr.size != 1 or arr.dtype.kind not in "iu":
-        raise _Bad(f"{group.name}/{name} must hold one integer, got {arr.dtype} {arr.shape}")
+        raise FileLayoutError(f"{group.name}/{name} must hold one integer, got {arr.dtype} {arr.shape}")
     return int(arr.reshape(-1)[0])
 
 
 def _vector(group, name, length=None, dtype=float):
     arr = np.asarray(_dataset(group, name)[()])
     if arr.dtype.kind not in "iuf":
-        raise _Bad(f"{group.name}/{name} is not numeric ({arr.dtype})")
+        raise FileLayoutError(f"{group.name}/{name} is not numeric ({arr.dtype})")
     arr = arr.reshape(-1).astype(dtype, copy=False)
     if length is not None and arr.shape[0] < length:
-        raise _Bad(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} expected")
+        raise FileLayoutError(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} expected")
     return arr if length is None else arr[:length]
 
 
@@ -116,21 +114,21 @@ def _read_matrix(group):
     m, n, nz = _int(group, "m"), _int(group, "n"), _int(group, "nz")
     where = group.name
     if m < 0 or n < 0:
-        raise _Bad(f"{where}: negative size {m}x{n}")
+        raise FileLayoutError(f"{where}: negative size {m}x{n}")
     if nz in (-1, -2):
         outer, inner = (m, n) if nz == -2 else (n, m)
         p = _vector(group, "p", outer + 1, np.int64)
         nnz = int(p[-1])
         if p[0] != 0 or np.any(np.diff(p) < 0):
-            raise _Bad(f"{where}/p is not a valid pointer array")
+            raise FileLayoutError(f"{where}/p is not a valid pointer array")
         idx = _vector(group, "i", nnz, np.int64)
         x = _vector(group, "x", nnz)
         if nnz and (idx.min() < 0 or idx.max() >= inner):
-            raise _Bad(f"{where}/i has indices outside [0, {inner})")
+            raise FileLayoutError(f"{where}/i has indices outside [0, {inner})")
         cls = sp.csr_matrix if nz == -2 else sp.csc_matrix
         return sp.csr_matrix(cls((x, idx, p), shape=(m, n)))
     if nz < -2:
-        raise _Bad(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, >= 0 triplets)")
+        raise FileLayoutError(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, >= 0 triplets)")
     rows = _vector(group, "i", nz, np.int64)
     cols = _vector(group, "p", nz, np.int64)
     x = _vector(group, "x", nz)
@@ -142,7 +140,7 @@ def _read_matrix(group):
         if fits(cols, rows):  # the other convention: p rows, i columns
             rows, cols = cols, rows
         else:
-            raise _Bad(f"{where}: triplet indices do not fit the {m}x{n} matrix")
+            raise FileLayoutError(f"{where}: triplet indices do not fit the {m}x{n} matrix")
     return sp.csr_matrix((x, (rows, cols)), shape=(m, n))
 
 
@@ -171,8 +169,8 @@ def _read_hdf5(path):
                 mu = _vector(vec, "mu")
                 title = _text(g["info"], "title") if "info" in g else ""
                 return GlobalProblem(M, H, f, w, mu, dim, title)
-            raise _Bad("has neither /fclib_local nor /fclib_global")
-    except _Bad as exc:
+            raise FileLayoutError("has neither /fclib_local nor /fclib_global")
+    except FileLayoutError as exc:
         raise FileFormatError(f"{path}: {exc}") from None
     except ContactError as exc:
         raise FileFormatError(f"{path}: {exc}") from None
@@ -186,7 +184,7 @@ def _read_hdf5(path):
 def _group(parent, name):
     obj = parent.get(name)
     if obj is None or not hasattr(obj, "keys"):
-        raise _Bad(f"{parent.name.rstrip('/')}/{name} is missing or not a group")
+        raise FileLayoutError(f"{parent.name.rstrip('/')}/{name} is missing or not a group")
     return obj
 
 
@@ -194,7 +192,7 @@ def _group(parent, name):
 HDF5_SUFFIXES = (".hdf5", ".h5", ".hdf")
 
 
-def read_any(path) -> LocalProblem | GlobalProblem:
+def read_any(path: str | os.PathLike[str]) -> LocalProblem | GlobalProblem:
     """Read a problem file as written: a :class:`LocalProblem` or an uncondensed
     :class:`GlobalProblem` (formats and errors as :func:`read_problem`)."""
     p = Path(os.fspath(path))
@@ -213,7 +211,7 @@ def read_any(path) -> LocalProblem | GlobalProblem:
                               f"text problem ({str(exc).removeprefix(f'{p}: ')})") from None
 
 
-def read_problem(path) -> LocalProblem:
+def read_problem(path: str | os.PathLike[str]) -> LocalProblem:
     """Read a frictional-contact problem as a local problem.
 
     The format is found from the content: a file with the HDF5 signature is read as FCLIB
@@ -251,7 +249,7 @@ def read_problem(path) -> LocalProblem:
     return problem
 
 
-def read_global_problem(path) -> GlobalProblem:
+def read_global_problem(path: str | os.PathLike[str]) -> GlobalProblem:
     """Read a global problem (``/fclib_global`` or a global ``.dat``) without condensing it.
 
     Raises
@@ -269,7 +267,7 @@ def _create(fh, name, data):
     fh.create_dataset(name, data=data)
 
 
-def write_problem(path, problem: LocalProblem) -> None:
+def write_problem(path: str | os.PathLike[str], problem: LocalProblem) -> None:
     """Write a local problem as an FCLIB HDF5 file (created or overwritten).
 
     ``W`` is stored in compressed rows (``nz = -2``) with int32 indices, as FCLIB does; a
@@ -292,7 +290,7 @@ def write_problem(path, problem: LocalProblem) -> None:
     """
     if not isinstance(problem, LocalProblem):
         raise TypeError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if np.any(problem.cohesion > 0):
+    if problem.cohesion is not None and np.any(problem.cohesion > 0):
         raise UnsupportedProblemError(
             f"{path}: FCLIB has no field for cohesion; the problem's Mohr-Coulomb cohesion "
             f"would be lost")
@@ -322,7 +320,7 @@ def write_problem(path, problem: LocalProblem) -> None:
         raise FileFormatError(f"{p}: cannot be written ({exc})") from None
 
 
-def solution_source(path) -> str | None:
+def solution_source(path: str | os.PathLike[str]) -> str | None:
     """The input a solution file was written for (:data:`SOLUTION_OF`), or None.
 
     None unless ``path`` is an HDF5 file holding only ``/solution`` and marked by
@@ -340,7 +338,8 @@ def solution_source(path) -> str | None:
     return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
-def is_own_solution(path, source=None) -> bool:
+def is_own_solution(path: str | os.PathLike[str],
+                    source: str | os.PathLike[str] | None = None) -> bool:
     """True if ``path`` is a solution file written by ``write_solution(..., source=...)``.
 
     With ``source``, only if it was written for that input (compared as real paths).
@@ -351,12 +350,14 @@ def is_own_solution(path, source=None) -> bool:
     return file_key(written_for) == file_key(source)
 
 
-def file_key(path) -> str:
+def file_key(path: str | os.PathLike[str]) -> str:
     """``path`` as the real, case-normalised path: equal for two names of one file."""
     return os.path.normcase(os.path.realpath(path))
 
 
-def write_solution(path, r, u, v=None, *, source=None) -> None:
+def write_solution(path: str | os.PathLike[str], r: ArrayLike, u: ArrayLike,
+                   v: ArrayLike | None = None, *,
+                   source: str | os.PathLike[str] | None = None) -> None:
     """Store a solution as ``/solution/{r,u[,v]}`` in an HDF5 file.
 
     Without ``source``: a missing file is created; an existing HDF5 file (e.g. the problem
@@ -384,8 +385,9 @@ def write_solution(path, r, u, v=None, *, source=None) -> None:
     InvalidInputError
         If ``r`` and ``u`` are not 1-D arrays of the same length.
     """
-    arrays = {"r": r, "u": u} if v is None else {"r": r, "u": u, "v": v}
-    for key, value in arrays.items():
+    given = {"r": r, "u": u} if v is None else {"r": r, "u": u, "v": v}
+    arrays: dict[str, np.ndarray] = {}
+    for key, value in given.items():
         arr = np.asarray(value, dtype=float)
         if arr.ndim != 1:
             raise InvalidInputError(f"{key} must be 1-D, got shape {arr.shape}")

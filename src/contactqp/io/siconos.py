@@ -23,8 +23,9 @@ Precision: the problem is the one written, digit for digit. Each array's signifi
 (those of its longest non-integer value; a value without a decimal point or exponent is exact) are
 recorded in the problem's ``digits`` when from 4 to 15 (e.g. ``{"W": 6}`` for a ``cs_print``
 dump, 7 for ``%e``; an array whose values all have at most 3 digits, such as ``0.5 1.25``, is
-taken as written by hand, exactly), so that a solution can say how far the rounding of the data limits its
-meaning for the problem the file was written from (:func:`contactqp.core.local_problem.accuracy_limits`).
+taken as written by hand, exactly), so that a solution can say how far the rounding of the data
+limits its meaning for the problem the file was written from
+(:func:`contactqp.core.local_problem.accuracy_limits`).
 
 Local or global is decided by content, not by the file name: the tokens are first read as a
 local problem, which is accepted only if ``W`` is ``(d*nc) x (d*nc)`` and at most one integer
@@ -43,13 +44,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ContactError, FileFormatError
+from ..errors import FileLayoutError
 from ..core.local_problem import GlobalProblem, LocalProblem
 
 __all__ = ["read_dat", "parse_dat"]
-
-
-class _ParseError(Exception):
-    """Internal: a parse failure, turned into FileFormatError with the file name."""
 
 
 _CS_COMPRESSED = re.compile(r"^\s*(\d+)-by-(\d+),\s*nzmax:\s*(-?\d+)\s+nnz:\s*(-?\d+)")
@@ -104,7 +102,7 @@ class _Tokens:
     def _fill(self, what):
         while self.ti >= len(self.toks):
             if self.li >= len(self.lines):
-                raise _ParseError(f"unexpected end of file while reading {what}")
+                raise FileLayoutError(f"unexpected end of file while reading {what}")
             self.toks = self.lines[self.li].split()
             self.ti = 0
             self.li += 1
@@ -120,11 +118,11 @@ class _Tokens:
         try:
             value = int(tok)
         except ValueError:
-            raise _ParseError(
+            raise FileLayoutError(
                 f"expected an integer ({what}) at {self.where()}, got {tok!r}"
             ) from None
         if value < minimum:
-            raise _ParseError(f"{what} must be >= {minimum} at {self.where()}, got {value}")
+            raise FileLayoutError(f"{what} must be >= {minimum} at {self.where()}, got {value}")
         return value
 
     def ints(self, count, what):
@@ -144,7 +142,7 @@ class _Tokens:
             return np.array(out, dtype=float)
         except ValueError:
             bad = next(t for t in out if not _is_float(t))
-            raise _ParseError(
+            raise FileLayoutError(
                 f"expected a number ({what}) near {self.where()}, got {bad!r}"
             ) from None
 
@@ -184,7 +182,7 @@ def _read_dense(tk, rows, cols, what):
     r2 = tk.int(f"{what} dense row count")
     c2 = tk.int(f"{what} dense column count")
     if (r2, c2) != (rows, cols):
-        raise _ParseError(
+        raise FileLayoutError(
             f"{what}: dense header {r2}x{c2} differs from the block size {rows}x{cols}"
         )
     values = tk.floats(rows * cols, f"{what} dense values")
@@ -204,7 +202,7 @@ def _read_sbm(tk, rows, cols, what):
     rowptr = tk.ints(filled1, f"{what} SBM block-row pointers")
     colidx = tk.ints(filled2, f"{what} SBM block-column indices")
     if row_ends[-1] != rows or col_ends[-1] != cols:
-        raise _ParseError(
+        raise FileLayoutError(
             f"{what}: SBM block sizes end at {row_ends[-1]}x{col_ends[-1]}, "
             f"not at the matrix size {rows}x{cols}"
         )
@@ -214,7 +212,7 @@ def _read_sbm(tk, rows, cols, what):
         or row_ends[0] <= 0
         or col_ends[0] <= 0
     ):
-        raise _ParseError(f"{what}: SBM block-row or block-column ends are not increasing")
+        raise FileLayoutError(f"{what}: SBM block-row or block-column ends are not increasing")
     if (
         filled1 - 1 > nbr
         or rowptr[0] != 0
@@ -223,7 +221,7 @@ def _read_sbm(tk, rows, cols, what):
         or filled2 != nbblocks
         or (filled2 and colidx.max() >= nbc)
     ):
-        raise _ParseError(f"{what}: inconsistent SBM index arrays")
+        raise FileLayoutError(f"{what}: inconsistent SBM index arrays")
     row_start = np.concatenate(([0], row_ends[:-1]))
     col_start = np.concatenate(([0], col_ends[:-1]))
     rr, cc, X = [], [], []
@@ -232,7 +230,7 @@ def _read_sbm(tk, rows, cols, what):
         for blk in range(rowptr[brow], rowptr[brow + 1]):
             number = tk.int(f"{what} SBM block number")
             if number != blk:
-                raise _ParseError(
+                raise FileLayoutError(
                     f"{what}: SBM block number {number} found where {blk} was expected"
                 )
             bcol = colidx[blk]
@@ -252,20 +250,20 @@ def _read_sbm(tk, rows, cols, what):
 def _read_cs_dump(tk, rows, cols, what):
     origin = tk.int(f"{what} sparse origin code")
     if origin not in (1, 2, 3):
-        raise _ParseError(f"{what}: unknown sparse origin code {origin} (expected 1, 2 or 3)")
+        raise FileLayoutError(f"{what}: unknown sparse origin code {origin} (expected 1, 2 or 3)")
     if not tk.rest_of_line_empty():
-        raise _ParseError(f"{what}: unexpected text after the sparse origin code")
+        raise FileLayoutError(f"{what}: unexpected text after the sparse origin code")
     line = tk.next_line()
     if line is not None and line.lstrip().startswith("CSparse"):
         line = tk.next_line()
     if line is None:
-        raise _ParseError(f"{what}: unexpected end of file in the CSparse header")
+        raise FileLayoutError(f"{what}: unexpected end of file in the CSparse header")
     head = (_CS_TRIPLET if origin == 1 else _CS_COMPRESSED).match(line)
     if not head:
-        raise _ParseError(f"{what}: cannot read the CSparse header {line.strip()!r}")
+        raise FileLayoutError(f"{what}: cannot read the CSparse header {line.strip()!r}")
     m, n, _, nnz = (int(g) for g in head.groups())
     if (m, n) != (rows, cols):
-        raise _ParseError(f"{what}: CSparse size {m}x{n} differs from the block size {rows}x{cols}")
+        raise FileLayoutError(f"{what}: CSparse size {m}x{n} differs from the block size {rows}x{cols}")
     rr, cc, X = [], [], []
     outer = -1
     while True:
@@ -292,19 +290,19 @@ def _read_cs_dump(tk, rows, cols, what):
                 X.append(me.group(2))
         tk.next_line()
     if len(X) != nnz:
-        raise _ParseError(f"{what}: CSparse dump holds {len(X)} entries, its header says {nnz}")
+        raise FileLayoutError(f"{what}: CSparse dump holds {len(X)} entries, its header says {nnz}")
     if origin == 2:  # compressed columns: the outer index is the column
         rr, cc = cc, rr
     try:
         x = np.array(X, dtype=float)
     except ValueError:
-        raise _ParseError(f"{what}: a CSparse entry value is not a number") from None
+        raise FileLayoutError(f"{what}: a CSparse entry value is not a number") from None
     tk.note_digits(X)
-    rr = np.asarray(rr, dtype=np.int64)
-    cc = np.asarray(cc, dtype=np.int64)
-    if nnz and (rr.max() >= rows or cc.max() >= cols):
-        raise _ParseError(f"{what}: a CSparse index is outside the {rows}x{cols} matrix")
-    return sp.csr_matrix((x, (rr, cc)), shape=(rows, cols))
+    row_index = np.asarray(rr, dtype=np.int64)
+    column_index = np.asarray(cc, dtype=np.int64)
+    if nnz and (row_index.max() >= rows or column_index.max() >= cols):
+        raise FileLayoutError(f"{what}: a CSparse index is outside the {rows}x{cols} matrix")
+    return sp.csr_matrix((x, (row_index, column_index)), shape=(rows, cols))
 
 
 def _read_matrix(tk, what):
@@ -317,7 +315,7 @@ def _read_matrix(tk, what):
         return _read_sbm(tk, rows, cols, what)
     if storage == 2:
         return _read_cs_dump(tk, rows, cols, what)
-    raise _ParseError(f"{what}: unknown storage type {storage} (expected 0, 1 or 2)")
+    raise FileLayoutError(f"{what}: unknown storage type {storage} (expected 0, 1 or 2)")
 
 
 def _read(tk, digits, name, read):
@@ -333,31 +331,31 @@ def _check_end(tk):
     rest = tk.remaining()
     if len(rest) > 1 or (rest and not re.fullmatch(r"[+-]?\d+", rest[0])):
         shown = " ".join(rest[:3])
-        raise _ParseError(f"unexpected extra content at the end: {shown!r}...")
+        raise FileLayoutError(f"unexpected extra content at the end: {shown!r}...")
 
 
-def _parse_local(tk, d, nc, title):
+def _parse_local(tk: _Tokens, d: int, nc: int, title: str) -> LocalProblem:
     m = d * nc
-    digits = {}
+    digits: dict[str, int] = {}
     W = _read(tk, digits, "W", lambda: _read_matrix(tk, "W"))
     if W.shape != (m, m):
-        raise _ParseError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, nc={nc}")
+        raise FileLayoutError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, nc={nc}")
     q = _read(tk, digits, "q", lambda: tk.floats(m, "q"))
     mu = tk.floats(nc, "mu")
     _check_end(tk)
     return LocalProblem(W, q, mu, d, title, digits=digits)
 
 
-def _parse_global(tk, d, nc, title):
+def _parse_global(tk: _Tokens, d: int, nc: int, title: str) -> GlobalProblem:
     m = d * nc
-    digits = {}
+    digits: dict[str, int] = {}
     M = _read(tk, digits, "M", lambda: _read_matrix(tk, "M"))
     ndof = M.shape[0]
     if M.shape != (ndof, ndof):
-        raise _ParseError(f"M is {M.shape[0]}x{M.shape[1]}, not square")
+        raise FileLayoutError(f"M is {M.shape[0]}x{M.shape[1]}, not square")
     H = _read(tk, digits, "H", lambda: _read_matrix(tk, "H"))
     if H.shape != (ndof, m):
-        raise _ParseError(f"H is {H.shape[0]}x{H.shape[1]}, expected {ndof}x{m}")
+        raise FileLayoutError(f"H is {H.shape[0]}x{H.shape[1]}, expected {ndof}x{m}")
     f = _read(tk, digits, "f", lambda: tk.floats(ndof, "f"))
     w = _read(tk, digits, "w", lambda: tk.floats(m, "w"))
     mu = tk.floats(nc, "mu")
@@ -365,7 +363,8 @@ def _parse_global(tk, d, nc, title):
     return GlobalProblem(M, H, f, w, mu, d, title, digits=digits)
 
 
-def parse_dat(text, name="<string>", title=""):
+def parse_dat(text: str, name: str = "<string>",
+              title: str = "") -> LocalProblem | GlobalProblem:
     """Parse the content of a Siconos ``.dat`` file.
 
     Parameters
@@ -393,19 +392,19 @@ def parse_dat(text, name="<string>", title=""):
         d = tk.int("space dimension")
         nc = tk.int("number of contacts")
         if d not in (2, 3):
-            raise _ParseError(f"space dimension must be 2 or 3, got {d}")
-    except _ParseError as exc:
+            raise FileLayoutError(f"space dimension must be 2 or 3, got {d}")
+    except FileLayoutError as exc:
         raise FileFormatError(f"{name}: not a Siconos .dat problem: {exc}") from None
     start = tk.state()
     try:
         try:
             return _parse_local(tk, d, nc, title)
-        except _ParseError as exc:
+        except FileLayoutError as exc:
             local_error = exc
         tk.restore(start)
         try:
             return _parse_global(tk, d, nc, title)
-        except _ParseError as exc:
+        except FileLayoutError as exc:
             raise FileFormatError(
                 f"{name}: not a Siconos .dat problem: as local, {local_error}; as global, {exc}"
             ) from None
@@ -415,7 +414,7 @@ def parse_dat(text, name="<string>", title=""):
         raise FileFormatError(f"{name}: {exc}") from None
 
 
-def read_dat(path):
+def read_dat(path: str | os.PathLike[str]) -> LocalProblem | GlobalProblem:
     """Read a Siconos ``.dat`` problem file.
 
     Parameters
@@ -426,8 +425,8 @@ def read_dat(path):
     -------
     LocalProblem or GlobalProblem
         The global form (``GFC3D_*`` files) is returned as read; call its
-        :meth:`~contactqp.core.local_problem.GlobalProblem.condense` for the local form. The title is the
-        file name without its suffix.
+        :meth:`~contactqp.core.local_problem.GlobalProblem.condense` for the local form. The
+        title is the file name without its suffix.
 
     Raises
     ------

@@ -38,10 +38,10 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..core.friction import polygon_normals
+from ..errors import SolverError
 from ..core.local_problem import LocalProblem
 from ..core.result import LocalResult
-from ..errors import InvalidInputError
-from .qp import _qpsolvers, available_backends, backend_options
+from .qp import backend_options, installed_backend, run_backend
 from .tresca import (
     FixedPointData,
     check_fixed_point_arguments,
@@ -56,13 +56,10 @@ class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
 
     def __init__(self, data: FixedPointData, facets: int, backend: str, options: dict):
-        self.qpsolvers = _qpsolvers("the polygonal cone")
-        if backend not in self.qpsolvers.available_solvers:
-            raise InvalidInputError(
-                f"backend {backend!r} is not installed; available: "
-                f"{', '.join(available_backends())}")
+        self.qpsolvers = installed_backend(backend, "the polygonal cone")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
+        self.chosen = tuple(options)
         self.w = data.w
         self.sparse = backend in self.qpsolvers.sparse_solvers
         P = self.W = data.W_sym / self.w
@@ -101,9 +98,10 @@ class _PolygonalTresca:
             # An inexact status (e.g. Clarabel's "AlmostSolved" at the tight tolerances) is
             # judged by the outer loop, which measures every iterate itself.
             warnings.simplefilter("ignore", UserWarning)
-            x = self.qpsolvers.solve_problem(problem, solver=self.backend, **self.options).x
+            x = run_backend(self.qpsolvers, problem, self.backend, self.options,
+                            "the polygonal Tresca problem", chosen=self.chosen).x
         if x is None or not np.all(np.isfinite(x)):
-            raise InvalidInputError(
+            raise SolverError(
                 f"backend {self.backend!r} found no solution of the polygonal Tresca problem "
                 f"(is W positive semidefinite?)")
         x = np.asarray(x)
@@ -193,7 +191,9 @@ def solve_polygonal(problem: LocalProblem, *, r0=None, facets: int = 8, backend:
     ------
     InvalidInputError
         Bad ``problem``, ``tol``, ``max_iter``, ``r0``, ``facets < 3`` (or not an integer), an
-        unknown backend, or a backend that finds no solution.
+        unknown backend or a setting the backend refuses.
+    SolverError
+        The backend raises, or finds no solution of one of the quadratic programs.
     MissingDependencyError
         qpsolvers is not installed.
     """

@@ -12,11 +12,11 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse
 
-from ..errors import InvalidInputError
-from ..optional import require
+from ..errors import InvalidInputError, SolverError
+from ..optional import require, require_backend
 
 __all__ = ["solve_qp", "available_backends", "backend_options", "refused_setting",
-           "DEFAULT_BACKEND"]
+           "installed_backend", "run_backend", "DEFAULT_BACKEND"]
 
 DEFAULT_BACKEND = "clarabel"
 
@@ -36,6 +36,48 @@ _TIGHT = {
 
 def _qpsolvers(purpose: str = "the 'qp' solver"):
     return require("qpsolvers", purpose, "qp")
+
+
+def installed_backend(backend: str, purpose: str = "the 'qp' solver"):
+    """qpsolvers, once ``backend`` is known to be one of its installed backends.
+
+    Raises
+    ------
+    MissingDependencyError
+        qpsolvers is not installed.
+    InvalidInputError
+        ``backend`` is not installed (the message lists those that are).
+    """
+    qpsolvers = _qpsolvers(purpose)
+    require_backend(backend, qpsolvers.available_solvers)
+    return qpsolvers
+
+
+def run_backend(qpsolvers, problem, backend: str, settings: dict, what: str, *,
+                chosen=()):
+    """``qpsolvers.solve_problem`` of ``problem`` with ``settings``.
+
+    ``what`` names the problem in the messages (``"the contact QP"``), ``chosen`` the keys of
+    ``settings`` that the caller chose (the others are contactqp's defaults).
+
+    Raises
+    ------
+    InvalidInputError
+        The backend raises and refuses one of the ``chosen`` settings
+        (:func:`refused_setting`): bad input.
+    SolverError
+        The backend raises otherwise: it found no answer.
+    """
+    try:
+        return qpsolvers.solve_problem(problem, solver=backend, **settings)
+    except Exception as exc:  # noqa: BLE001  (whatever a backend raises)
+        for key in chosen:
+            reason = refused_setting(backend, key, settings[key])
+            if reason:
+                raise InvalidInputError(f"backend {backend!r} refuses {key} = "
+                                        f"{settings[key]!r} ({reason})") from exc
+        raise SolverError(f"qp backend {backend!r} failed on {what}: {type(exc).__name__}: "
+                          f"{' '.join(str(exc).split())}") from exc
 
 
 def available_backends() -> list[str]:
@@ -62,13 +104,18 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
     Returns
     -------
     ContactResult
-        Contact forces are the backend's multipliers of ``A U <= Delta``.
+        Contact forces are the backend's multipliers of ``A U <= Delta``. ``converged`` is
+        False when the backend returns a point without claiming it solves the QP (an
+        iteration cap, an inexact status): the point is the result, its message says so.
+
+    Raises
+    ------
+    InvalidInputError
+        ``backend`` is not installed, or refuses one of ``options``.
+    SolverError
+        The backend raised, or returned no point or a non-finite one.
     """
-    qpsolvers = _qpsolvers()
-    if backend not in qpsolvers.available_solvers:
-        raise InvalidInputError(
-            f"qp backend {backend!r} is not installed; available: {', '.join(available_backends())}"
-        )
+    qpsolvers = installed_backend(backend)
     start = time.perf_counter()
     # scaled unknowns U = s_u V and multipliers lambda = s_f z keep the backend's tolerances
     # meaningful in SI units (stiffnesses of 1e6..1e9 N/m)
@@ -88,14 +135,19 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
     settings.update(options)
     with warnings.catch_warnings(record=True) as said:  # a backend's warnings go in the message
         warnings.simplefilter("always")
-        solution = qpsolvers.solve_problem(qp, solver=backend, **settings)
+        solution = run_backend(qpsolvers, qp, backend, settings, "the contact QP",
+                               chosen=options)
     elapsed = time.perf_counter() - start
-    found = solution.x is not None and solution.z is not None and solution.found is not False
-    U = length_scale * solution.x if found else np.full(problem.model.n_freedoms, np.nan)
-    forces = (force_scale * np.maximum(solution.z, 0.0) if found
-              else np.full(problem.n_constraints, np.nan))
-    message = "backend found a solution" if found else "backend found no solution"
     notes = list(dict.fromkeys(" ".join(str(w.message).split()) for w in said))
+    z = np.zeros(0) if solution.z is None and problem.n_constraints == 0 else solution.z
+    if not all(v is not None and np.all(np.isfinite(v)) for v in (solution.x, z)):
+        raise SolverError(f"qp backend {backend!r} found no solution of the contact QP"
+                          + (f" ({'; '.join(notes)})" if notes else ""))
+    found = solution.found is not False
+    U = length_scale * np.asarray(solution.x)
+    forces = force_scale * np.maximum(np.asarray(z), 0.0)
+    message = ("backend found a solution" if found
+               else "backend stopped without claiming a solution; its last point is returned")
     return problem.make_result(
         U, forces, method=f"qp:{backend}", converged=bool(found),
         message=f"{message} ({'; '.join(notes)})" if notes else message,

@@ -41,7 +41,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, SolverError
 from ..core.local_problem import LocalProblem, natural_map_error
 from ..core.model import iteration_cap, positive_tolerance
 from ..optional import require
@@ -347,9 +347,16 @@ class _ClarabelTresca:
         P = self.P[keep][:, keep]
         solver = clarabel.DefaultSolver(P, q[keep] / (f * self.w), A, b, cones,
                                         self.settings)
-        solution = solver.solve()
+        try:
+            solution = solver.solve()
+        except Exception as exc:  # noqa: BLE001  (whatever the backend raises: no answer)
+            raise SolverError(f"Clarabel failed on the Tresca cone program: "
+                              f"{type(exc).__name__}: {exc}") from exc
         x = np.zeros(m)
         x[keep] = np.asarray(solution.x)
+        if not np.all(np.isfinite(x)):
+            raise SolverError(f"Clarabel found no solution of the Tresca cone program "
+                              f"(status {solution.status})")
         return f * polish(self.W, q / (f * self.w), s / f, x, d)
 
 
@@ -391,6 +398,8 @@ def solve_tresca_fixed_point(problem: LocalProblem, *, r0=None, tol: float = 1e-
     InvalidInputError
         ``problem`` is not a LocalProblem, ``tol`` not in (0, 1), ``max_iter`` not a positive
         integer or ``r0`` of the wrong shape.
+    SolverError
+        Clarabel raises, or returns a non-finite point, on one of the cone programs.
     MissingDependencyError
         Clarabel is not installed.
     """

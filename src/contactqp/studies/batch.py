@@ -20,7 +20,6 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from .executors import check_scheduler, executor
-from .statistics import GapStatistics
 from .store import BatchStore
 
 __all__ = ["BatchSummary", "DEFAULT_CHUNK", "MAX_SAMPLES", "run_batch"]

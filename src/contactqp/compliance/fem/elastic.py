@@ -21,21 +21,23 @@ thickness.
 from __future__ import annotations
 
 import numbers
-from typing import NamedTuple
+from collections.abc import Mapping, Sequence
+from typing import NamedTuple, overload
 
 import numpy as np
 import scipy.sparse as sp
 import skfem
+from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
-from ...errors import InvalidInputError, UnsupportedProblemError
 from ...core.model import ReducedModel, finite_array
-from ..condensation import RigidBodyModeError, condense, factorize
+from ...errors import InvalidInputError, RigidBodyModeError, UnsupportedProblemError
+from ..condensation import condense, factorize
 from .meshes import SUPPORTED_MESHES, straight_sided
 from .rigid import free_rigid_motions
-from .selection import boundary_facets, dof_mask, node_mask
+from .selection import Selector, boundary_facets, dof_mask, node_mask
 
 __all__ = ["ElasticModel", "NodeSelection", "elastic_compliance"]
 
@@ -64,23 +66,37 @@ class NodeSelection(NamedTuple):
     distances: np.ndarray
 
 
-def _positive(value, name: str, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
-            np.isfinite(value) and value > 0):
+def _real(value: object) -> float | None:
+    """``value`` as a float if it is a real number (not a bool), else None."""
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        return float(value)
+    return None
+
+
+def _positive(value: object, name: str, unit: str) -> float:
+    number = _real(value)
+    if number is None or not (np.isfinite(number) and number > 0):
         raise InvalidInputError(f"{name} must be a positive finite number ({unit}), got {value!r}")
-    return float(value)
+    return number
 
 
-class _FreedomLabels:
+class _FreedomLabels(Sequence[str]):
     """Names of the free freedoms, built only for the one an error message needs."""
 
-    def __init__(self, model: "ElasticModel", free: np.ndarray):
+    def __init__(self, model: ElasticModel, free: np.ndarray) -> None:
         self._model, self._free = model, free
 
     def __len__(self) -> int:
         return self._free.size
 
-    def __getitem__(self, index: int) -> str:
+    @overload
+    def __getitem__(self, index: int) -> str: ...
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[str]: ...
+
+    def __getitem__(self, index: int | slice) -> str | Sequence[str]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
         return self._model._freedom_name(int(self._free[index]))
 
 
@@ -112,8 +128,9 @@ class ElasticModel:
     removed. ``model.mesh`` is the mesh as used, to which node indices refer.
     """
 
-    def __init__(self, mesh, young, poisson, *, plane: str | None = None, thickness=None,
-                 order: int = 1):
+    def __init__(self, mesh: skfem.Mesh, young: float, poisson: float, *,
+                 plane: str | None = None, thickness: float | None = None,
+                 order: int = 1) -> None:
         cell = next((name for name, kind in SUPPORTED_MESHES.items() if isinstance(mesh, kind)),
                     None)
         if cell is None:
@@ -125,10 +142,10 @@ class ElasticModel:
             mesh = mesh.remove_unused_nodes()
         self.mesh, self.dim = mesh, mesh.p.shape[0]
         self.young = _positive(young, "young", "Pa")
-        if isinstance(poisson, bool) or not isinstance(poisson, numbers.Real) or not (
-                -1 < poisson < 0.5):
+        ratio = _real(poisson)
+        if ratio is None or not -1 < ratio < 0.5:
             raise InvalidInputError(f"poisson must lie in (-1, 0.5), got {poisson!r}")
-        self.poisson = float(poisson)
+        self.poisson = ratio
         if self.dim == 2:
             if plane not in ("stress", "strain"):
                 raise InvalidInputError(f"plane must be 'stress' or 'strain' for a 2D mesh, "
@@ -148,8 +165,8 @@ class ElasticModel:
         for axis, indices in enumerate(self.basis.split_indices()):
             self._component[indices] = axis
         self._fixed = np.zeros(self.basis.N, dtype=bool)
-        self._stiffness = None
-        self._free_stiffness = None
+        self._stiffness: sp.csr_matrix | None = None
+        self._free_stiffness: tuple[np.ndarray, sp.csc_matrix] | None = None
 
     @property
     def lame(self) -> tuple[float, float]:
@@ -177,7 +194,7 @@ class ElasticModel:
         """Indices of the fixed freedoms."""
         return np.flatnonzero(self._fixed)
 
-    def fix(self, selector, components=None) -> "ElasticModel":
+    def fix(self, selector: Selector, components: Sequence[int] | None = None) -> ElasticModel:
         """Clamp the freedoms that ``selector`` picks (zero displacement).
 
         Parameters
@@ -202,7 +219,8 @@ class ElasticModel:
         self._free_stiffness = None
         return self
 
-    def select_nodes(self, points=None, *, where=None) -> NodeSelection:
+    def select_nodes(self, points: ArrayLike | None = None, *,
+                     where: Selector | None = None) -> NodeSelection:
         """Mesh nodes nearest to ``points``, or all the nodes ``where`` picks.
 
         Parameters
@@ -242,9 +260,10 @@ class ElasticModel:
             which = np.flatnonzero(nodes == node)
             raise InvalidInputError(f"points {which.tolist()} share their nearest node {node}: "
                                     "refine the mesh or move the points apart")
-        return NodeSelection(nodes, distances)
+        return NodeSelection(nodes, np.asarray(distances))
 
-    def solve(self, loads=None, *, tractions=None) -> np.ndarray:
+    def solve(self, loads: ArrayLike | None = None, *,
+              tractions: Mapping[str, ArrayLike] | None = None) -> np.ndarray:
         """One full analysis: nodal displacements under loads (factorises at every call).
 
         Parameters
@@ -280,7 +299,7 @@ class ElasticModel:
         displacement[free] = factorize(K, labels=_FreedomLabels(self, free)).solve(vector[free])
         return displacement[self.basis.nodal_dofs].T
 
-    def _traction_load(self, name, traction) -> np.ndarray:
+    def _traction_load(self, name: object, traction: ArrayLike) -> np.ndarray:
         """Consistent load vector (N), shape (N,), of a uniform traction on a named boundary."""
         if not isinstance(name, str):
             raise InvalidInputError(f"tractions keys must be boundary names, got {name!r}")
@@ -292,12 +311,13 @@ class ElasticModel:
                                   facets=boundary_facets(self.mesh, name, "tractions"))
 
         @skfem.LinearForm
-        def work(v, _):
+        def work(v: skfem.DiscreteField, _: skfem.DiscreteField) -> skfem.DiscreteField:
             return sum(value[axis] * v[axis] for axis in range(self.dim))
 
         return skfem.asm(work, facets) * self.thickness
 
-    def reduced_model(self, nodes, *, components=None) -> ReducedModel:
+    def reduced_model(self, nodes: ArrayLike | NodeSelection, *,
+                      components: Sequence[int] | None = None) -> ReducedModel:
         """Flexibility of computational nodes by static condensation.
 
         Parameters
@@ -335,7 +355,7 @@ class ElasticModel:
         return ReducedModel(flexibility=R, dofs_per_node=len(axes),
                             coordinates=self.mesh.p[:, ids].T)
 
-    def _components(self, components, name: str) -> np.ndarray:
+    def _components(self, components: Sequence[int] | None, name: str) -> np.ndarray:
         if components is None:
             return np.arange(self.dim)
         axes = np.atleast_1d(np.asarray(components))
@@ -397,8 +417,11 @@ class ElasticModel:
                                          f"({', '.join(free)}); fix more freedoms")
 
 
-def elastic_compliance(mesh, young, poisson, fixed, points, *, plane=None, thickness=None,
-                       order: int = 1, where=None, components=None) -> ReducedModel:
+def elastic_compliance(mesh: skfem.Mesh, young: float, poisson: float, fixed: Selector,
+                       points: ArrayLike, *, plane: str | None = None,
+                       thickness: float | None = None, order: int = 1,
+                       where: Selector | None = None,
+                       components: Sequence[int] | None = None) -> ReducedModel:
     """Reduced model of an elastic body at the mesh nodes nearest to ``points``, in one call.
 
     Parameters

@@ -8,13 +8,19 @@ The generated meshes start at the origin and carry the named boundaries ``"left"
 from __future__ import annotations
 
 import numbers
+import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import skfem
 
 from ...errors import FileFormatError, InvalidInputError, UnsupportedProblemError
 from ...optional import require
+
+if TYPE_CHECKING:
+    import meshio
 
 __all__ = ["plate", "block", "bar", "read_mesh", "straight_sided", "SUPPORTED_MESHES"]
 
@@ -24,38 +30,45 @@ SUPPORTED_MESHES = {"tri": skfem.MeshTri, "quad": skfem.MeshQuad, "tet": skfem.M
 _CELLS_2D, _CELLS_3D = ("tri", "quad"), ("tet", "hex")
 
 
-def _length(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
-            np.isfinite(value) and value > 0):
+def _length(value: object, name: str) -> float:
+    number = None
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        number = float(value)
+    if number is None or not (np.isfinite(number) and number > 0):
         raise InvalidInputError(f"{name} must be a positive finite length in metres, got {value!r}")
-    return float(value)
+    return number
 
 
-def _count(value, name: str) -> int:
+def _count(value: object, name: str) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise InvalidInputError(f"{name} must be a positive integer, got {value!r}")
     return int(value)
 
 
-def _cell(cell: str, allowed: tuple[str, ...]) -> type:
+def _cell(cell: str, allowed: tuple[str, ...]) -> type[skfem.Mesh]:
     if cell not in allowed:
         raise InvalidInputError(f"cell must be one of {', '.join(allowed)}, got {cell!r}")
     return SUPPORTED_MESHES[cell]
 
 
-def _faces(extents: tuple[float, ...]) -> dict:
+def _faces(extents: tuple[float, ...]) -> dict[str, Callable[[np.ndarray], np.ndarray]]:
     """Boundary predicates of the box ``[0, extents]`` (2 or 3 extents)."""
     tol = 1e-9 * max(extents)
     axes = [("left", "right"), ("bottom", "top")] if len(extents) == 2 else [
         ("left", "right"), ("front", "back"), ("bottom", "top")]
     faces = {}
-    for axis, ((low, high), extent) in enumerate(zip(axes, extents)):
-        faces[low] = lambda x, a=axis: np.abs(x[a]) < tol
-        faces[high] = lambda x, a=axis, e=extent: np.abs(x[a] - e) < tol
+    for axis, ((low, high), extent) in enumerate(zip(axes, extents, strict=True)):
+        faces[low] = _plane(axis, 0.0, tol)
+        faces[high] = _plane(axis, extent, tol)
     return faces
 
 
-def plate(length, width, nx, ny, *, cell: str = "quad"):
+def _plane(axis: int, at: float, tol: float) -> Callable[[np.ndarray], np.ndarray]:
+    """Predicate of the points (coordinates by row) within ``tol`` of the plane ``x[axis] = at``."""
+    return lambda x: np.abs(x[axis] - at) < tol
+
+
+def plate(length: float, width: float, nx: int, ny: int, *, cell: str = "quad") -> skfem.Mesh:
     """Rectangle ``[0, length] x [0, width]`` split into ``nx`` by ``ny`` cells.
 
     Parameters
@@ -74,11 +87,12 @@ def plate(length, width, nx, ny, *, cell: str = "quad"):
     extents = (_length(length, "length"), _length(width, "width"))
     counts = (_count(nx, "nx"), _count(ny, "ny"))
     mesh_type = _cell(cell, _CELLS_2D)
-    axes = [np.linspace(0.0, e, n + 1) for e, n in zip(extents, counts)]
+    axes = [np.linspace(0.0, e, n + 1) for e, n in zip(extents, counts, strict=True)]
     return mesh_type.init_tensor(*axes).with_boundaries(_faces(extents))
 
 
-def block(length, width, height, nx, ny, nz, *, cell: str = "hex"):
+def block(length: float, width: float, height: float, nx: int, ny: int, nz: int, *,
+          cell: str = "hex") -> skfem.Mesh:
     """Box ``[0, length] x [0, width] x [0, height]`` split into ``nx * ny * nz`` cells.
 
     Parameters
@@ -97,11 +111,12 @@ def block(length, width, height, nx, ny, nz, *, cell: str = "hex"):
     extents = (_length(length, "length"), _length(width, "width"), _length(height, "height"))
     counts = (_count(nx, "nx"), _count(ny, "ny"), _count(nz, "nz"))
     mesh_type = _cell(cell, _CELLS_3D)
-    axes = [np.linspace(0.0, e, n + 1) for e, n in zip(extents, counts)]
+    axes = [np.linspace(0.0, e, n + 1) for e, n in zip(extents, counts, strict=True)]
     return mesh_type.init_tensor(*axes).with_boundaries(_faces(extents))
 
 
-def bar(length, height, width=None, *, across: int = 2, cell: str | None = None):
+def bar(length: float, height: float, width: float | None = None, *, across: int = 2,
+        cell: str | None = None) -> skfem.Mesh:
     """A bar along ``x`` meshed with nearly cubic cells: a :func:`plate` or a :func:`block`.
 
     Parameters
@@ -125,7 +140,7 @@ def bar(length, height, width=None, *, across: int = 2, cell: str | None = None)
                  across, cell=cell or "hex")
 
 
-def straight_sided(mesh, cell: str):
+def straight_sided(mesh: skfem.Mesh, cell: str) -> skfem.Mesh:
     """The mesh with first-order geometry: second-order cells lose their mid-side nodes.
 
     Parameters
@@ -149,7 +164,7 @@ def straight_sided(mesh, cell: str):
                   _subdomains=mesh._subdomains)
 
 
-def read_mesh(source):
+def read_mesh(source: str | os.PathLike[str] | meshio.Mesh) -> skfem.Mesh:
     """A mesh read by meshio from a file, or converted from a ``meshio.Mesh``.
 
     The cells of the highest dimension make the mesh (triangles, quadrilaterals, tetrahedra or

@@ -77,7 +77,8 @@ def free_rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.nd
     T = rigid_motions(points, components, centre, scale)
     square = np.zeros((n_modes, n_modes))  # T's triangular factor: same singular values
     if T.shape[0]:
-        triangle = np.linalg.qr(T, mode="r")
+        # numpy's stubs type every mode as QRResult, but mode="r" returns the array R alone
+        triangle: np.ndarray = np.linalg.qr(T, mode="r")  # type: ignore[assignment]
         square[:triangle.shape[0]] = triangle
     _, sigma, vt = np.linalg.svd(square)
     null = vt[sigma <= _RANK_RTOL * max(1.0, sigma[0])]

@@ -17,14 +17,24 @@ freedom located inside, node indices only the freedoms of those nodes.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeGuard
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from ...errors import InvalidInputError
 from ...core.model import finite_array
+from ...errors import InvalidInputError
 
-__all__ = ["Box", "boundary_facets", "node_mask", "dof_mask"]
+if TYPE_CHECKING:
+    import skfem
+
+__all__ = ["Box", "Selector", "boundary_facets", "node_mask", "dof_mask"]
+
+#: What a fixation or a choice of nodes takes (see the module's documentation): a boundary name,
+#: a :class:`Box`, a predicate of coordinates, node indices, or a tuple of them (all must hold).
+Selector: TypeAlias = "str | Box | Callable[[np.ndarray], Any] | ArrayLike | tuple[Selector, ...]"
 
 
 @dataclass(frozen=True, init=False, eq=False)
@@ -43,7 +53,7 @@ class Box:
     lower: np.ndarray
     upper: np.ndarray
 
-    def __init__(self, lower, upper):
+    def __init__(self, lower: ArrayLike, upper: ArrayLike) -> None:
         low, high = finite_array(lower, "lower", 1), finite_array(upper, "upper", 1)
         if low.shape != high.shape or low.size not in (2, 3) or np.any(low > high):
             raise InvalidInputError(
@@ -61,7 +71,7 @@ class Box:
         return np.all(inside, axis=0)
 
 
-def boundary_facets(mesh, name: str, argument: str) -> np.ndarray:
+def boundary_facets(mesh: skfem.Mesh, name: str, argument: str) -> np.ndarray:
     """Facet indices of the boundary ``name`` (``"boundary"``: all); errors name ``argument``."""
     if name == "boundary":
         return mesh.boundary_facets()
@@ -72,7 +82,8 @@ def boundary_facets(mesh, name: str, argument: str) -> np.ndarray:
     return np.asarray(mesh.boundaries[name])
 
 
-def _predicate_mask(function, x: np.ndarray, argument: str) -> np.ndarray:
+def _predicate_mask(function: Callable[[np.ndarray], Any], x: np.ndarray,
+                    argument: str) -> np.ndarray:
     mask = np.asarray(function(x))
     if mask.shape != (x.shape[1],) or mask.dtype != bool:
         raise InvalidInputError(f"{argument}: a selector function must return {x.shape[1]} "
@@ -81,7 +92,7 @@ def _predicate_mask(function, x: np.ndarray, argument: str) -> np.ndarray:
     return mask
 
 
-def _node_ids(selector, n_nodes: int, argument: str) -> np.ndarray:
+def _node_ids(selector: Selector, n_nodes: int, argument: str) -> np.ndarray:
     ids = np.asarray(selector)
     if ids.ndim != 1 or not (np.issubdtype(ids.dtype, np.integer) or ids.size == 0):
         raise InvalidInputError(f"{argument} must be a boundary name, a Box, a function, a tuple "
@@ -92,12 +103,12 @@ def _node_ids(selector, n_nodes: int, argument: str) -> np.ndarray:
     return ids.astype(int)
 
 
-def _is_intersection(selector) -> bool:
+def _is_intersection(selector: Selector) -> TypeGuard[tuple[Selector, ...]]:
     return isinstance(selector, tuple) and not all(
         isinstance(s, (int, np.integer)) for s in selector)
 
 
-def node_mask(selector, mesh, argument: str = "selector") -> np.ndarray:
+def node_mask(selector: Selector, mesh: skfem.Mesh, argument: str = "selector") -> np.ndarray:
     """Mask of the mesh nodes (vertices) that ``selector`` picks, shape (n_nodes,)."""
     if _is_intersection(selector):
         return np.logical_and.reduce([node_mask(s, mesh, argument) for s in selector])
@@ -111,7 +122,7 @@ def node_mask(selector, mesh, argument: str = "selector") -> np.ndarray:
     return mask
 
 
-def dof_mask(selector, basis, argument: str = "selector") -> np.ndarray:
+def dof_mask(selector: Selector, basis: skfem.Basis, argument: str = "selector") -> np.ndarray:
     """Mask of the freedoms of a vector ``basis`` that ``selector`` picks, shape (basis.N,)."""
     if _is_intersection(selector):
         return np.logical_and.reduce([dof_mask(s, basis, argument) for s in selector])

@@ -10,8 +10,8 @@ MatrixMarket ``.mtx``      :func:`read_matrix_market`          row indices, ``fi
 unit-load CSV              :func:`read_unit_load_csv`          header ``NODE:COMPONENT``
 =========================  ==================================  ===============================
 
-Every reader returns a :class:`~contactqp.core.model.ReducedModel` whose freedoms are ordered node by
-node, in the order of the chosen nodes and components. A stiffness is condensed to the chosen
+Every reader returns a :class:`~contactqp.core.model.ReducedModel` whose freedoms are ordered node
+by node, in the order of the chosen nodes and components. A stiffness is condensed to the chosen
 freedoms by one sparse factorisation (static condensation, exact for a linear model); when every
 free freedom is kept the model holds the stiffness itself. :func:`load_compliance` picks the
 reader from the file's extension.
@@ -21,7 +21,8 @@ readers ``pip install 'contactqp[nastran]'`` (pyNastran, which requires numpy < 
 ``contactqp[importers]`` is both. They are imported when a file is read. Every error is one line
 that starts with the file's path: :class:`~contactqp.errors.FileFormatError` for a missing,
 foreign, truncated or malformed file, :class:`~contactqp.errors.InvalidInputError` for a
-selection the file cannot satisfy or an inconsistent matrix, :class:`~contactqp.errors.NotPositiveDefiniteError` (and
+selection the file cannot satisfy or an inconsistent matrix,
+:class:`~contactqp.errors.NotPositiveDefiniteError` (and
 :class:`~contactqp.compliance.condensation.RigidBodyModeError`) for a model that is not fixed
 enough.
 """
@@ -29,9 +30,13 @@ enough.
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
+from ...core.model import ReducedModel
 from ...errors import FileFormatError, InvalidInputError
+from ._common import StrPath
 from .ansys import read_ansys_full
 from .csv_rows import read_unit_load_csv
 from .matrixmarket import mtx_matrix, read_matrix_market
@@ -42,7 +47,7 @@ __all__ = ["load_compliance", "read_ansys_full", "read_op4", "op4_matrix", "read
            "READERS"]
 
 #: File name endings and the reader :func:`load_compliance` chooses for them.
-READERS = {
+READERS: dict[tuple[str, ...], Callable[..., ReducedModel]] = {
     (".full",): read_ansys_full,
     (".op4",): read_op4,
     (".bdf", ".nas", ".dat", ".blk", ".bulk", ".pch"): read_dmig,
@@ -51,7 +56,7 @@ READERS = {
 }
 
 
-def load_compliance(path, *args, **selection):
+def load_compliance(path: StrPath, *args: Any, **selection: Any) -> ReducedModel:
     """Read a reduced model with the reader chosen by the file's extension (see :data:`READERS`).
 
     Parameters

@@ -2,42 +2,54 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable, Hashable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Hashable, Sequence
+from types import ModuleType
+from typing import Any, TypeAlias
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
-from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
+from ...errors import FileFormatError, InvalidInputError
 from ...optional import require
 from ..condensation import condense
 
 __all__ = ["KINDS", "existing_file", "about", "one_line", "backend", "node_major",
-           "freedom_indices", "index_list", "whole_numbers", "reduced_model"]
+           "freedom_indices", "index_list", "whole_numbers", "reduced_model", "StrPath",
+           "Matrix", "DofsPerNode"]
+
+#: A file name: what :class:`pathlib.Path` accepts.
+StrPath: TypeAlias = str | os.PathLike[str]
+#: A matrix as the readers give it: dense, or sparse as the file stores it.
+Matrix: TypeAlias = np.ndarray | sp.coo_matrix | sp.csc_matrix
+#: Freedoms of every node, or of each node (see :class:`~contactqp.core.model.ReducedModel`).
+DofsPerNode: TypeAlias = int | Sequence[int] | np.ndarray
 
 #: What a matrix read from a file may be.
 KINDS = ("stiffness", "flexibility")
 
 
-def one_line(text) -> str:
+def one_line(text: object) -> str:
     """``text`` with its lines joined by ``"; "``."""
     return "; ".join(part.strip() for part in str(text).splitlines() if part.strip())
 
 
-def existing_file(path) -> Path:
+def existing_file(path: StrPath) -> Path:
     """``path`` as a :class:`~pathlib.Path`; :class:`FileFormatError` unless it is a file."""
-    path = Path(path)
-    if not path.exists():
-        raise FileFormatError(f"{path}: file not found")
-    if not path.is_file():
-        raise FileFormatError(f"{path}: not a file")
-    return path
+    file = Path(path)
+    if not file.exists():
+        raise FileFormatError(f"{file}: file not found")
+    if not file.is_file():
+        raise FileFormatError(f"{file}: not a file")
+    return file
 
 
 @contextmanager
-def about(path: Path):
+def about(path: Path) -> Iterator[None]:
     """Raise :class:`InvalidInputError` (and subclasses) again with ``path`` first, class kept."""
     try:
         yield
@@ -47,13 +59,14 @@ def about(path: Path):
         raise type(exc)(one_line(f"{path}: {exc}")) from None
 
 
-def backend(module: str, distribution: str, what: str, extra: str):
+def backend(module: str, distribution: str, what: str, extra: str) -> ModuleType:
     """Import an optional backend; :class:`MissingDependencyError` names the fix when absent:
     ``pip install 'contactqp[extra]'``."""
     return require(module, f"reading {what}", extra, distribution)
 
 
-def node_major(nodes, components) -> list[tuple]:
+def node_major(nodes: Iterable[Hashable],
+               components: Iterable[Hashable]) -> list[tuple[Hashable, Hashable]]:
     """The ``(node, component)`` pairs of the chosen nodes and components, node by node.
 
     Raises
@@ -71,8 +84,9 @@ def node_major(nodes, components) -> list[tuple]:
     return [(node, component) for node in nodes for component in components]
 
 
-def freedom_indices(available: Sequence[tuple[Hashable, Hashable]], pairs, noun: str = "node",
-                    describe=None) -> np.ndarray:
+def freedom_indices(available: Sequence[tuple[Hashable, Hashable]],
+                    pairs: Iterable[Sequence[Hashable]], noun: str = "node",
+                    describe: Callable[[Hashable, Hashable], str] | None = None) -> np.ndarray:
     """Positions in ``available`` of the ``(node, component)`` ``pairs``.
 
     Parameters
@@ -93,7 +107,7 @@ def freedom_indices(available: Sequence[tuple[Hashable, Hashable]], pairs, noun:
     """
     describe = describe or (lambda node, component: f"{noun} {node} {component}")
     where = {label: i for i, label in enumerate(available)}
-    present: dict = {}
+    present: dict[Hashable, list[Hashable]] = {}
     for node, component in available:
         present.setdefault(node, []).append(component)
     indices = []
@@ -108,7 +122,7 @@ def freedom_indices(available: Sequence[tuple[Hashable, Hashable]], pairs, noun:
     return np.asarray(indices, dtype=int)
 
 
-def whole_numbers(values, name: str) -> list[int]:
+def whole_numbers(values: Iterable[Any], name: str) -> list[int]:
     """``values`` (node or component numbers) as a list of ints; InvalidInputError otherwise."""
     try:
         items = list(values)
@@ -116,12 +130,12 @@ def whole_numbers(values, name: str) -> list[int]:
     except (TypeError, ValueError):
         raise InvalidInputError(f"{name} must be a list of whole numbers, got {values!r}") from None
     if any(isinstance(item, (bool, np.bool_)) or number != item
-           for item, number in zip(items, numbers)):
+           for item, number in zip(items, numbers, strict=True)):
         raise InvalidInputError(f"{name} must be a list of whole numbers, got {values!r}")
     return numbers
 
 
-def index_list(values, n: int, name: str) -> np.ndarray:
+def index_list(values: ArrayLike, n: int, name: str) -> np.ndarray:
     """``values`` as unique 0-based indices below ``n``."""
     idx = np.asarray(values)
     if idx.ndim != 1 or not (idx.size == 0 or np.issubdtype(idx.dtype, np.integer)):
@@ -133,12 +147,14 @@ def index_list(values, n: int, name: str) -> np.ndarray:
     return idx.astype(int)
 
 
-def _dense(matrix) -> np.ndarray:
-    return matrix.toarray() if sp.issparse(matrix) else np.asarray(matrix)
+def _dense(matrix: Matrix) -> np.ndarray:
+    return matrix if isinstance(matrix, np.ndarray) else matrix.toarray()
 
 
-def reduced_model(matrix, kind: str, keep=None, fixed=None, labels=None, dofs_per_node=1,
-                  coordinates=None, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def reduced_model(matrix: Matrix, kind: str, keep: ArrayLike | None = None,
+                  fixed: ArrayLike | None = None, labels: Sequence[str] | None = None,
+                  dofs_per_node: DofsPerNode = 1, coordinates: ArrayLike | None = None,
+                  symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """The reduced model of the freedoms ``keep`` of a stiffness or flexibility matrix.
 
     A flexibility is cut to the rows and columns of ``keep``. A stiffness loses the rows and
@@ -171,26 +187,29 @@ def reduced_model(matrix, kind: str, keep=None, fixed=None, labels=None, dofs_pe
         raise InvalidInputError(f"the matrix must be square and non-empty, got shape "
                                 f"{matrix.shape}")
     n = matrix.shape[0]
-    fixed = index_list([] if fixed is None else fixed, n, "fixed")
-    if fixed.size and kind == "flexibility":
+    held = index_list([] if fixed is None else fixed, n, "fixed")
+    if held.size and kind == "flexibility":
         raise InvalidInputError("fixed freedoms apply to a stiffness matrix, not a flexibility")
-    free = np.setdiff1d(np.arange(n), fixed)
-    keep = free if keep is None else index_list(keep, n, "the chosen freedoms")
-    clash = np.intersect1d(keep, fixed)
+    free = np.setdiff1d(np.arange(n), held)
+    kept = free if keep is None else index_list(keep, n, "the chosen freedoms")
+    clash = np.intersect1d(kept, held)
     if clash.size:
         name = labels[clash[0]] if labels is not None else f"freedom {clash[0]}"
         raise InvalidInputError(f"{name} is chosen but fixed (a fixed freedom does not move)")
-    if keep.size == 0:
+    if kept.size == 0:
         raise InvalidInputError("no freedom is chosen")
-    options = dict(dofs_per_node=dofs_per_node, coordinates=coordinates,
-                   symmetry_rtol=symmetry_rtol)
     if kind == "flexibility":
-        return ReducedModel(flexibility=_dense(matrix)[np.ix_(keep, keep)], **options)
-    if keep.size == free.size:
-        return ReducedModel(stiffness=_dense(matrix)[np.ix_(keep, keep)], **options)
+        return ReducedModel(flexibility=_dense(matrix)[np.ix_(kept, kept)],
+                            dofs_per_node=dofs_per_node, coordinates=coordinates,
+                            symmetry_rtol=symmetry_rtol)
+    if kept.size == free.size:
+        return ReducedModel(stiffness=_dense(matrix)[np.ix_(kept, kept)],
+                            dofs_per_node=dofs_per_node, coordinates=coordinates,
+                            symmetry_rtol=symmetry_rtol)
     K = sp.csc_matrix(matrix, dtype=float)[free][:, free]
     position = np.full(n, -1)
     position[free] = np.arange(free.size)
     free_labels = None if labels is None else [labels[i] for i in free]
-    R = condense(K, position[keep], labels=free_labels, symmetry_rtol=symmetry_rtol)
-    return ReducedModel(flexibility=R, **options)
+    R = condense(K, position[kept], labels=free_labels, symmetry_rtol=symmetry_rtol)
+    return ReducedModel(flexibility=R, dofs_per_node=dofs_per_node, coordinates=coordinates,
+                        symmetry_rtol=symmetry_rtol)

@@ -8,15 +8,24 @@ the end of a truncated file.
 from __future__ import annotations
 
 import warnings
-from typing import Sequence
+from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
-from ...errors import ContactError, FileFormatError, UnsupportedProblemError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
-                      reduced_model)
+from ...errors import ContactError, FileFormatError, UnsupportedProblemError
+from ._common import (
+    StrPath,
+    about,
+    backend,
+    existing_file,
+    freedom_indices,
+    node_major,
+    one_line,
+    reduced_model,
+)
 
 __all__ = ["read_ansys_full", "DOF_LABELS"]
 
@@ -35,7 +44,7 @@ class _Layout:
     """The file as 32-bit words, to check records before the reader's compiled code reads them
     (it does not stop at the end of a truncated file)."""
 
-    def __init__(self, path):
+    def __init__(self, path: Path) -> None:
         self.path = path
         size = path.stat().st_size
         if size < 4 * (_STANDARD_HEADER_END + 2):
@@ -83,7 +92,8 @@ class _Layout:
                                f"{problem} ({self.words.size} words)")
 
 
-def _read(path):
+def _read(path: Path) -> tuple[sp.csc_matrix, list[tuple[int, str]], np.ndarray, dict[int, int],
+                              int]:
     """Stiffness (full symmetric, CSC), ``(node, label)`` of each equation, constrained mask,
     the number of DOFs of each node and the size of the file's DOF set."""
     full_module = backend("ansys.mapdl.reader.full", "ansys-mapdl-reader", "ANSYS full files",
@@ -131,12 +141,13 @@ def _read(path):
     labels = [(int(n), _label(references[j])) for n, j in dof_ref]
     constrained = np.array([(int(n), int(j)) in constrained_pairs for n, j in dof_ref])
     nodes, per_node = np.unique(dof_ref[:, 0], return_counts=True)
-    return stiffness, labels, constrained, dict(zip(nodes.tolist(), per_node.tolist())), \
-        references.size
+    per_node_count = dict(zip(nodes.tolist(), per_node.tolist(), strict=True))
+    return stiffness, labels, constrained, per_node_count, references.size
 
 
-def read_ansys_full(path, nodes: Sequence[int], components: Sequence[str] = ("UX", "UY", "UZ"),
-                    *, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_ansys_full(path: StrPath, nodes: Sequence[int],
+                    components: Sequence[str] = ("UX", "UY", "UZ"), *,
+                    symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """Flexibility of chosen nodes of an ANSYS model, from its full file (``Jobname.full``).
 
     The stiffness is read with ansys-mapdl-reader, the constrained freedoms (``D`` commands)

@@ -13,14 +13,24 @@ ordered node by node: the columns of one node are adjacent.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
-from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import (about, existing_file, freedom_indices, node_major, one_line, reduced_model,
-                      whole_numbers)
+from ...errors import FileFormatError, InvalidInputError
+from ._common import (
+    DofsPerNode,
+    StrPath,
+    about,
+    existing_file,
+    freedom_indices,
+    node_major,
+    one_line,
+    reduced_model,
+    whole_numbers,
+)
 
 __all__ = ["read_unit_load_csv"]
 
@@ -33,7 +43,7 @@ def _is_number(token: str) -> bool:
     return True
 
 
-def _label(path, token: str) -> tuple[int, str]:
+def _label(path: Path, token: str) -> tuple[int, str]:
     node, sep, component = token.strip().partition(":")
     if not sep or not component.strip() or not node.strip().isdigit():
         raise FileFormatError(f"{path}: header label {token.strip()!r} is not NODE:COMPONENT "
@@ -41,7 +51,7 @@ def _label(path, token: str) -> tuple[int, str]:
     return int(node), component.strip().upper()
 
 
-def _table(path) -> tuple[np.ndarray, list[tuple[int, str]] | None]:
+def _table(path: Path) -> tuple[np.ndarray, list[tuple[int, str]] | None]:
     """The numbers of the file (one row per line) and the header's labels, if any."""
     try:
         with open(path, encoding="utf-8-sig") as handle:
@@ -68,7 +78,8 @@ def _table(path) -> tuple[np.ndarray, list[tuple[int, str]] | None]:
 
 def _node_counts(labels: list[tuple[int, str]]) -> list[int]:
     """Freedoms of each node, checking that a node's columns are adjacent."""
-    counts, done = [], set()
+    counts: list[int] = []
+    done: set[int] = set()
     for position, (node, _) in enumerate(labels):
         if position and node == labels[position - 1][0]:
             counts[-1] += 1
@@ -80,9 +91,10 @@ def _node_counts(labels: list[tuple[int, str]]) -> list[int]:
     return counts
 
 
-def read_unit_load_csv(path, nodes: Sequence[int] | None = None,
+def read_unit_load_csv(path: StrPath, nodes: Sequence[int] | None = None,
                        components: Sequence[str] | None = None, *,
-                       dofs_per_node=None, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+                       dofs_per_node: DofsPerNode | None = None,
+                       symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """Flexibility from a table of unit-load responses (layout in the module docstring).
 
     Row ``j`` holds the displacements of all computational freedoms under a unit load on freedom

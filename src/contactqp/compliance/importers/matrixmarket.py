@@ -5,15 +5,17 @@ from __future__ import annotations
 import numpy as np
 import scipy.io
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
-from ...errors import FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import about, existing_file, one_line, reduced_model
+from ...errors import FileFormatError, InvalidInputError
+from ._common import DofsPerNode, Matrix, StrPath, about, existing_file, one_line, reduced_model
 
 __all__ = ["read_matrix_market", "mtx_matrix"]
 
 
-def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_node=1,
+def read_matrix_market(path: StrPath, *, kind: str, freedoms: ArrayLike | None = None,
+                       fixed: ArrayLike | None = None, dofs_per_node: DofsPerNode = 1,
                        symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """Reduced model from a MatrixMarket file (coordinate or array, ``symmetric`` included).
 
@@ -48,14 +50,13 @@ def read_matrix_market(path, *, kind: str, freedoms=None, fixed=None, dofs_per_n
         stiffness with rigid-body modes).
     """
     path = existing_file(path)
-    matrix = mtx_matrix(path)
-    matrix = sp.csc_matrix(matrix) if sp.issparse(matrix) else matrix
+    matrix: Matrix = mtx_matrix(path)
     with about(path):
         return reduced_model(matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node,
                              symmetry_rtol=symmetry_rtol)
 
 
-def mtx_matrix(path):
+def mtx_matrix(path: StrPath) -> Matrix:
     """The matrix of a MatrixMarket file (coordinate or array, ``symmetric`` storage included).
 
     Parameters
@@ -76,10 +77,10 @@ def mtx_matrix(path):
     """
     path = existing_file(path)
     try:
-        matrix = scipy.io.mmread(str(path))
+        read = scipy.io.mmread(str(path))
     except (OSError, ValueError, EOFError, UnicodeDecodeError, IndexError) as exc:
         raise FileFormatError(
             f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
-    if np.iscomplexobj(matrix.data if sp.issparse(matrix) else matrix):
+    if np.iscomplexobj(read.data if sp.issparse(read) else read):
         raise InvalidInputError(f"{path}: the matrix is complex; a real matrix is needed")
-    return matrix.astype(float)
+    return read.astype(float) if isinstance(read, np.ndarray) else sp.csc_matrix(read, dtype=float)

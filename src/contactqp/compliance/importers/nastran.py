@@ -5,16 +5,27 @@ from __future__ import annotations
 import contextlib
 import io
 import logging
+from collections.abc import Hashable, Iterable, Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
-from ...errors import ContactError, FileFormatError, InvalidInputError
 from ...core.model import SYMMETRY_RTOL, ReducedModel
-from ._common import (about, backend, existing_file, freedom_indices, node_major, one_line,
-                      reduced_model, whole_numbers)
+from ...errors import ContactError, FileFormatError, InvalidInputError
+from ._common import (
+    DofsPerNode,
+    StrPath,
+    about,
+    backend,
+    existing_file,
+    freedom_indices,
+    node_major,
+    one_line,
+    reduced_model,
+    whole_numbers,
+)
 
 __all__ = ["read_op4", "op4_matrix", "read_dmig", "dmig_matrix"]
 
@@ -33,7 +44,7 @@ def _which(path: Path, names: Sequence[str], name: str | None, what: str, plural
     return name
 
 
-def op4_matrix(path, name: str | None = None):
+def op4_matrix(path: StrPath, name: str | None = None) -> np.ndarray | sp.coo_matrix:
     """One matrix of a NASTRAN OUTPUT4 file, ASCII or binary, dense or sparse.
 
     Parameters
@@ -54,20 +65,20 @@ def op4_matrix(path, name: str | None = None):
     InvalidInputError
         No matrix of that name, several matrices and no name, or a complex matrix.
     """
-    path = existing_file(path)
+    file = existing_file(path)
     op4 = backend("pyNastran.op4.op4", "pyNastran", "NASTRAN OP4 files", "nastran")
     try:
         with contextlib.redirect_stdout(io.StringIO()):
-            matrices = op4.read_op4(str(path), precision="double", log=_log())
+            matrices = op4.read_op4(str(file), precision="double", log=_log())
     except ContactError:
         raise
     except Exception as exc:  # whatever pyNastran raises on a foreign or truncated file
-        raise FileFormatError(f"{path}: not a readable OP4 file "
+        raise FileFormatError(f"{file}: not a readable OP4 file "
                               f"({type(exc).__name__}: {one_line(exc)})") from None
-    name = _which(path, list(matrices), name, "matrix", "matrices")
+    name = _which(file, list(matrices), name, "matrix", "matrices")
     matrix = matrices[name].data
     if np.iscomplexobj(matrix):
-        raise InvalidInputError(f"{path}: matrix {name!r} is complex; a real matrix is needed")
+        raise InvalidInputError(f"{file}: matrix {name!r} is complex; a real matrix is needed")
     return matrix.astype(float)
 
 
@@ -79,8 +90,9 @@ def _log() -> logging.Logger:
     return log
 
 
-def read_op4(path, name: str | None = None, *, kind: str, freedoms=None, fixed=None,
-             dofs_per_node=1, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_op4(path: StrPath, name: str | None = None, *, kind: str,
+             freedoms: ArrayLike | None = None, fixed: ArrayLike | None = None,
+             dofs_per_node: DofsPerNode = 1, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """Reduced model from a stiffness (``KAA``, ``KGG``, ...) or flexibility matrix in an OP4 file.
 
     Parameters
@@ -116,11 +128,11 @@ def read_op4(path, name: str | None = None, *, kind: str, freedoms=None, fixed=N
     MissingDependencyError
         pyNastran is not installed.
     """
-    path = Path(path)
-    matrix = op4_matrix(path, name)
-    with about(path):
-        return reduced_model(sp.csc_matrix(matrix) if sp.issparse(matrix) else matrix, kind,
-                             freedoms, fixed, dofs_per_node=dofs_per_node,
+    file = Path(path)
+    matrix = op4_matrix(file, name)
+    with about(file):
+        return reduced_model(matrix if isinstance(matrix, np.ndarray) else sp.csc_matrix(matrix),
+                             kind, freedoms, fixed, dofs_per_node=dofs_per_node,
                              symmetry_rtol=symmetry_rtol)
 
 
@@ -190,7 +202,7 @@ def _assemble(path: Path, dmig) -> tuple[sp.csc_matrix, list[tuple[int, int]]]:
     return matrix, [(int(g), int(c)) for g, c in labels]
 
 
-def dmig_matrix(path, name: str):
+def dmig_matrix(path: StrPath, name: str) -> tuple[sp.csc_matrix, list[tuple[int, int]]]:
     """The matrix of a DMIG entry of a bulk-data file and the (grid, component) of its rows.
 
     Parameters
@@ -225,8 +237,9 @@ def _load_dmig(path: Path, name: str):
     return (model, *_assemble(path, model.dmig[name]))
 
 
-def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
-              components: Sequence[int] = (1, 2, 3), *, kind: str, fixed=None,
+def read_dmig(path: StrPath, name: str, nodes: Sequence[int] | None = None,
+              components: Sequence[int] = (1, 2, 3), *, kind: str,
+              fixed: Iterable[Sequence[int]] | None = None,
               symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
     """Reduced model of chosen grids from a DMIG matrix (``K2GG``, ``KAAX``, ...) in bulk data.
 
@@ -290,7 +303,7 @@ def read_dmig(path, name: str, nodes: Sequence[int] | None = None,
     coordinates = None
     if all(grid is not None and grid.cp == 0 for grid in grids):
         coordinates = np.array([grid.xyz for grid in grids], dtype=float)
-    def describe(grid, component):
+    def describe(grid: Hashable, component: Hashable) -> str:
         return f"grid {grid} component {component}"
 
     with about(path):

@@ -77,11 +77,12 @@ def route_options(where: Where, section_table: dict, section: str, route: str, n
 def _check_backend(where: Where, section: str, backend, settings: dict) -> None:
     """Raise, naming the key, when the qpsolvers ``backend`` is not installed or refuses one of
     ``settings`` (see :func:`~contactqp.methods.qp.refused_setting`)."""
-    from ...methods.qp import _qpsolvers, available_backends, refused_setting
+    from ...methods.qp import installed_backend, refused_setting
 
-    if backend not in _qpsolvers().available_solvers:
-        raise where.error(f"{section}.backend", f"qp backend {backend!r} is not installed "
-                                                f"(available: {', '.join(available_backends())})")
+    try:
+        installed_backend(backend)
+    except InvalidInputError as exc:
+        raise where.error(f"{section}.backend", str(exc)) from None
     for key, value in settings.items():
         reason = refused_setting(backend, key, value)
         if reason:

@@ -1,6 +1,9 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
 """Per-contact loops of the friction solvers, compiled by Cython when the package is built.
 
+:mod:`contactqp.kernels.pure_numpy` is the same in numpy: the fallback where this extension
+could not be built, and its test oracle; :mod:`contactqp.kernels` chooses between the two.
+
 The Newton and Gauss-Seidel solvers evaluate the same small maps of every contact at each
 iteration: the projection on a Coulomb cone, the natural map and the Alart-Curnier function
 with its generalised Jacobian. Written with numpy, each evaluation is some twenty array calls

@@ -1,0 +1,52 @@
+"""Per-contact loops of the friction solvers: compiled when the package was built with them.
+
+:mod:`contactqp.kernels.compiled` is the Cython extension that ``pip install`` builds where a C
+compiler is found; :mod:`contactqp.kernels.pure_numpy` computes the same maps with whole-array
+numpy expressions (slower on small problems, where the fixed cost of each numpy call dominates).
+This module offers the first that loads: the compiled one unless it is absent, in which case
+one :class:`~contactqp.errors.PureNumpyKernelsWarning` says so when the package is imported, or
+unless the environment variable ``CONTACTQP_PURE_NUMPY`` is set to anything but ``""`` or
+``"0"`` (then silently: the choice was the user's). :data:`IMPLEMENTATION` names the one in
+use. Callers: :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import warnings
+
+from ..errors import PureNumpyKernelsWarning
+
+__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix",
+           "IMPLEMENTATION", "FORCE_PURE_NUMPY", "pure_numpy_forced"]
+
+#: Environment variable that selects the pure-numpy kernels even where the compiled ones exist.
+FORCE_PURE_NUMPY = "CONTACTQP_PURE_NUMPY"
+
+
+def pure_numpy_forced(environ=os.environ) -> bool:
+    """Whether :data:`FORCE_PURE_NUMPY` asks for the pure-numpy kernels (set, not ``0``)."""
+    return environ.get(FORCE_PURE_NUMPY, "").strip() not in ("", "0")
+
+
+if pure_numpy_forced():
+    from . import pure_numpy as _implementation
+else:
+    try:
+        _implementation = importlib.import_module(".compiled", __name__)
+    except ImportError as _missing:
+        from . import pure_numpy as _implementation
+
+        warnings.warn(f"contactqp's compiled kernels are not available ({_missing}): the "
+                      f"pure-numpy kernels are used, slower on small problems; reinstall with a C "
+                      f"compiler to build them", PureNumpyKernelsWarning, stacklevel=2)
+        del _missing
+
+#: ``"compiled"`` or ``"pure_numpy"``: the module whose functions this one offers.
+IMPLEMENTATION: str = _implementation.__name__.rsplit(".", 1)[-1]
+
+project_rows = _implementation.project_rows
+natural_map_rows = _implementation.natural_map_rows
+alart_curnier_rows = _implementation.alart_curnier_rows
+sparse_newton_matrix = _implementation.sparse_newton_matrix

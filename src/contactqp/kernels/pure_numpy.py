@@ -1,0 +1,126 @@
+"""The per-contact kernels in vectorised numpy: the compiled loops' fallback and test oracle.
+
+Each function has the signature and the contract of its twin in :mod:`contactqp.kernels.compiled`
+(float64 rows of 2 or 3 components, normal first; int64 index arrays; results written into the
+arrays given; a ``ValueError`` for rows of another length) and computes the same numbers up to
+rounding: sums may be taken in another order, so results agree to a few ulps, not bit for bit.
+Whole-array expressions replace the loops over contacts; only the 2 or 3 components of a row are
+looped over where that keeps the compiled loop's order of operations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
+
+
+def _check_dimension(d: int) -> None:
+    """Rows of 2 or 3 components only, as the compiled loops accept."""
+    if d < 2 or d > 3:
+        raise ValueError(f"contact rows must have 2 or 3 components, got {d}")
+
+
+def _tangential_norms(X: np.ndarray) -> np.ndarray:
+    """``||X[i, 1:]||`` of each row."""
+    T = X[:, 1:]
+    return np.sqrt(np.einsum("ij,ij->i", T, T))
+
+
+def _projected(X: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """Projection of each row of ``X`` on the Coulomb cone ``||x_T|| <= mu x_N`` (a new array)."""
+    xn, t = X[:, 0], _tangential_norms(X)
+    inside = (t <= mu * xn) & (xn >= 0.0)
+    a = np.maximum(xn + mu * t, 0.0) / (1.0 + mu * mu)  # 0 in the polar cone
+    scale = np.divide(mu * a, t, out=np.zeros_like(t), where=t > 0.0)
+    P = np.empty_like(X)
+    P[:, 0] = np.where(inside, xn, a)
+    P[:, 1:] = np.where(inside[:, None], X[:, 1:], scale[:, None] * X[:, 1:])
+    return P
+
+
+def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None:
+    """``P[i]`` = projection of ``X[i]`` on the Coulomb cone of ``mu[i]``."""
+    _check_dimension(X.shape[1])
+    P[...] = _projected(np.asarray(X), np.asarray(mu))
+
+
+def natural_map_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray, squares: np.ndarray) -> float:
+    """Squared natural-map residual of each contact into ``squares``; returns their sum.
+
+    Contact ``i``: ``||R_i - P_K(R_i - U_i - mu_i ||U_iT|| e_N)||^2`` (De Saxce's modified
+    velocity; ``R`` measured from the cone apex).
+    """
+    _check_dimension(R.shape[1])
+    R, U, mu = np.asarray(R), np.asarray(U), np.asarray(mu)
+    X = R - U
+    X[:, 0] -= mu * _tangential_norms(U)
+    difference = R - _projected(X, mu)
+    squares[...] = np.einsum("ij,ij->i", difference, difference)
+    return float(np.sum(squares))
+
+
+def alart_curnier_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray, rho: np.ndarray,
+                       Phi: np.ndarray, A: np.ndarray, B: np.ndarray) -> None:
+    """Alart-Curnier function of each contact into ``Phi``; with ``A``, ``B`` its Jacobian.
+
+    ``X = R - rho U``; ``Phi_N = R_N - max(0, X_N)`` and
+    ``Phi_T = R_T - P_{B(0, mu max(0, X_N))}(X_T)``. When ``A`` and ``B`` have a row per
+    contact they receive ``dPhi/dr = I - C`` and ``dPhi/du = rho C``, ``C`` the derivative of
+    the projection (see :func:`contactqp.kernels.compiled.alart_curnier_rows`); zero-row ``A``
+    and ``B`` skip it.
+    """
+    d = R.shape[1]
+    _check_dimension(d)
+    R, U, mu, rho = np.asarray(R), np.asarray(U), np.asarray(mu), np.asarray(rho)
+    xn = R[:, 0] - rho * U[:, 0]
+    pressed = xn > 0.0
+    radius = np.where(pressed, mu * xn, 0.0)
+    y = R[:, 1:] - rho[:, None] * U[:, 1:]  # the trial point's tangential part
+    norm = np.sqrt(np.einsum("ij,ij->i", y, y))
+    outside = norm > radius
+    s = np.divide(radius, norm, out=np.ones_like(norm), where=outside)
+    Phi[:, 0] = R[:, 0] - np.where(pressed, xn, 0.0)
+    Phi[:, 1:] = R[:, 1:] - s[:, None] * y
+    if A.shape[0] == 0:
+        return
+    inverse = np.divide(1.0, norm, out=np.zeros_like(norm), where=outside)
+    C = np.zeros((R.shape[0], d, d))
+    C[:, 0, 0] = pressed
+    C[:, 1:, 0] = np.where(pressed, mu, 0.0)[:, None] * y * inverse[:, None]
+    outer = y[:, :, None] * y[:, None, :] * inverse[:, None, None] * inverse[:, None, None]
+    C[:, 1:, 1:] = s[:, None, None] * (np.eye(d - 1) - outer)
+    A[...] = np.eye(d) - C
+    B[...] = rho[:, None, None] * C
+
+
+def sparse_newton_matrix(A: np.ndarray, B: np.ndarray, W_blocks: np.ndarray,
+                         block_row: np.ndarray, block_col: np.ndarray, entries: np.ndarray,
+                         indptr: np.ndarray, indices: np.ndarray, renumber: np.ndarray,
+                         data: np.ndarray, new_indices: np.ndarray,
+                         new_indptr: np.ndarray) -> int:
+    """CSC storage of ``A + B W`` on the kept unknowns; returns its number of entries.
+
+    The arguments are those of :func:`contactqp.kernels.compiled.sparse_newton_matrix`: entry
+    ``p`` of the CSC pattern ``(indptr, indices)`` of ``W`` is element ``entries[p, 1:]`` of
+    block ``entries[p, 0]``; unknown ``i`` becomes row and column ``renumber[i]`` or is left out
+    where that is negative, and zeros are left out too.
+    """
+    d = A.shape[1]
+    n_columns = indptr.shape[0] - 1
+    column = np.repeat(np.arange(n_columns), np.diff(indptr))
+    row = renumber[indices]
+    kept = (row >= 0) & (renumber[:n_columns][column] >= 0)
+    block, a, b = entries[kept].T
+    i = block_row[block]
+    value = np.where(i == block_col[block], A[i, a, b], 0.0)
+    for c in range(d):  # the compiled loop's order of the products
+        value = value + B[i, a, c] * W_blocks[block, c, b]
+    nonzero = value != 0.0
+    count = int(np.count_nonzero(nonzero))
+    data[:count] = value[nonzero]
+    new_indices[:count] = row[kept][nonzero]
+    per_column = np.bincount(column[kept][nonzero], minlength=n_columns)
+    new_indptr[0] = 0
+    new_indptr[1:] = np.cumsum(per_column[renumber[:n_columns] >= 0])
+    return count
