@@ -23,10 +23,12 @@ from ..core.local_problem import (
     GlobalProblem,
     LocalProblem,
     accuracy_limits,
-    check_positive_semidefinite,
+    check_diagonal,
     contact_status,
     natural_map_error,
 )
+from ..core.operators import as_operator
+from ..errors import NotPositiveDefiniteError
 from .box_qp import solve_box_qp
 
 __all__ = ["LocalSolution", "solve_global", "solve_local"]
@@ -121,23 +123,33 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
     Raises
     ------
     NotPositiveDefiniteError
-        If ``W`` is not positive semidefinite
-        (:func:`~contactqp.core.local_problem.check_positive_semidefinite`).
+        With friction, if ``W`` is not positive semidefinite
+        (:func:`~contactqp.core.local_problem.check_positive_semidefinite`). Without, only the
+        normal block ``W_NN`` is solved on, and it is validated at no extra cost: its diagonal
+        (:func:`~contactqp.core.local_problem.check_diagonal`), and each free block the box-QP
+        solver factors (:meth:`~contactqp.core.operators.Operator.cholesky`). An indefinite part
+        of ``W_NN`` that no free block reaches (contacts that stay open) is not looked for: the
+        answer is then judged, like every answer, by the natural-map error on the whole ``W``.
     """
     if np.any(problem.mu > 0):
         from .coulomb import MAX_ITER, solve_coulomb
 
         return solve_coulomb(problem, tol=tol, max_iter=MAX_ITER if max_iter is None else max_iter)
     start = time.perf_counter()
-    check_positive_semidefinite(problem.W)
     normal = np.arange(problem.n_contacts) * problem.dim
-    W = problem.W
-    W_nn = W[normal][:, normal]
-    W_nn = np.asarray(W_nn.toarray() if hasattr(W_nn, "toarray") else W_nn, dtype=float)
+    W_nn = as_operator(problem.W).block(normal, normal)
+    symmetric = np.array_equal(W_nn, W_nn.T)
+    W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
+    check_diagonal(W_sym, "W's normal block")
     q_n = problem.q[normal]
-    solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0, tol=min(tol, 1e-10) * 1e-2,
-                            max_iter=500 if max_iter is None else max_iter)
-    reactions = _polish(problem, W_nn, q_n, normal, solution.x)
+    try:  # the box-QP's own factorisations of free blocks validate them
+        solution = solve_box_qp(W_sym, q_n, lower=0.0, tol=min(tol, 1e-10) * 1e-2,
+                                max_iter=500 if max_iter is None else max_iter,
+                                check_finite=False)  # W: validated by LocalProblem
+    except NotPositiveDefiniteError as exc:
+        raise NotPositiveDefiniteError(f"W's normal block: {exc}") from None
+    # a symmetric W_NN: the QP's minimiser solves the complementarity problem, nothing to polish
+    reactions = solution.x if symmetric else _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
     return finish(problem, r, tol, solution.iterations, start, solution.message)
