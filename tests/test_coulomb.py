@@ -343,7 +343,7 @@ def test_indefinite_w_is_refused(W, match):
     frictionless = sp.lil_matrix(sp.identity(9)) if sp.issparse(W) else np.eye(9)
     frictionless[np.ix_(normal, normal)] = W.toarray() if sp.issparse(W) else W
     q = np.zeros(9)
-    q[0] = -1.0
+    q[normal] = [-1.0, -1.0, -1.5]  # its solution (1, 2/3, 1/6) frees the indefinite block
     with pytest.raises(NotPositiveDefiniteError, match=f"W's normal block.*{match}"):
         solve_local(LocalProblem(frictionless, q, np.zeros(3), 3))
 

@@ -329,17 +329,20 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
     return out
 
 
-def accuracy_limits(problem: LocalProblem, r, u) -> AccuracyLimits:
+def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLimits:
     """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) on a local problem.
 
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
     ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
-    array's digits.
+    array's digits. ``columns = (index, W[:, index])`` (dense), when ``r`` is zero outside
+    ``index``, gives ``|W| |r|`` from those columns alone.
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
-    product = float(np.linalg.norm(_abs_product(problem.W, rv)))
+    magnitude = (_abs_product(problem.W, rv) if columns is None
+                 else _abs_product(columns[1], rv[columns[0]]))
+    product = float(np.linalg.norm(magnitude))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
     data = (relative_rounding(digits.get("W")) * product

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..core.local_problem import (
     AccuracyLimits,
@@ -29,6 +30,7 @@ from ..core.local_problem import (
 )
 from ..core.operators import as_operator
 from ..errors import NotPositiveDefiniteError
+from .active_set import cold_start
 from .box_qp import solve_box_qp
 
 __all__ = ["LocalSolution", "solve_global", "solve_local"]
@@ -105,6 +107,18 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     return best
 
 
+def _columns(W, index):
+    """``W[:, index]``, read once: dense from a dense ``W``, CSR (as stored) from a sparse one.
+
+    The frictionless route's reactions are zero off the normal components, so these columns
+    give all it needs of ``W``: the normal block, ``W r`` and ``|W| |r|``.
+    """
+    operator = as_operator(W)
+    if sp.issparse(W):
+        return operator.matrix[:, index]
+    return operator.block(None, index)
+
+
 def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
                 max_iter: int | None = None) -> LocalSolution:
     """Solve a local problem to natural-map error ``tol``.
@@ -137,13 +151,18 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
         return solve_coulomb(problem, tol=tol, max_iter=MAX_ITER if max_iter is None else max_iter)
     start = time.perf_counter()
     normal = np.arange(problem.n_contacts) * problem.dim
-    W_nn = as_operator(problem.W).block(normal, normal)
+    columns = (normal, _columns(problem.W, normal))  # W_NN, and W r, |W| |r| for finish
+    W_nn = columns[1][normal]
+    W_nn = W_nn.toarray() if sp.issparse(W_nn) else W_nn
     symmetric = np.array_equal(W_nn, W_nn.T)
     W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
     check_diagonal(W_sym, "W's normal block")
     q_n = problem.q[normal]
+    with np.errstate(divide="ignore", invalid="ignore"):  # a zero row of W_NN: start at 0
+        first = np.nan_to_num(cold_start(W_sym, -q_n), nan=0.0, posinf=0.0)
     try:  # the box-QP's own factorisations of free blocks validate them
-        solution = solve_box_qp(W_sym, q_n, lower=0.0, tol=min(tol, 1e-10) * 1e-2,
+        solution = solve_box_qp(W_sym, q_n, lower=0.0, x0=first,
+                                tol=min(tol, 1e-10) * 1e-2,
                                 max_iter=500 if max_iter is None else max_iter,
                                 check_finite=False)  # W: validated by LocalProblem
     except NotPositiveDefiniteError as exc:
@@ -152,23 +171,31 @@ def solve_local(problem: LocalProblem, *, tol: float = 1e-8,
     reactions = solution.x if symmetric else _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
-    return finish(problem, r, tol, solution.iterations, start, solution.message)
+    return finish(problem, r, tol, solution.iterations, start, solution.message, columns=columns)
 
 
 def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
-           detail: str, *, per_contact: bool = False) -> LocalSolution:
+           detail: str, *, per_contact: bool = False, columns=None) -> LocalSolution:
     """The :class:`LocalSolution` of reactions ``r``, checked by the natural-map error.
 
     ``u``, the error, ``converged`` and the contact status are computed here from ``r`` alone,
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
     ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
+    ``columns = (index, W[:, index])``, the problem's columns outside which ``r`` is zero, lets
+    ``W r`` and ``|W| |r|`` read only those (the same sums: the other terms are zero).
     """
-    u = np.asarray(problem.W @ r).reshape(-1) + problem.q
+    if columns is None:
+        u = np.asarray(problem.W @ r).reshape(-1) + problem.q
+        limits = None
+    else:
+        index, block = columns
+        u = block @ r[index] + problem.q
+        limits = accuracy_limits(problem, r, u, columns=columns)
     error = natural_map_error(problem, r, u, per_contact=per_contact)
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
-    limits = accuracy_limits(problem, r, u)
+    limits = limits or accuracy_limits(problem, r, u)
     return LocalSolution(
         r=r, u=u, error=error, converged=converged, iterations=iterations,
         seconds=time.perf_counter() - start,
