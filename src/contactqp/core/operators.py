@@ -77,13 +77,20 @@ class BlockFactor:
 
 
 def _indices(selection, n: int):
-    """``selection`` (None: all, a bool mask or integer indices) as a slice or an int array."""
+    """``selection`` (None: all, a slice, a bool mask or integer indices) as a slice or an int
+    array."""
     if selection is None:
         return slice(None)
+    if isinstance(selection, slice):
+        return selection
     index = np.asarray(selection)
     if index.dtype == bool:
         return np.flatnonzero(index)
     return index.astype(np.intp, copy=False)
+
+
+def _everything(selection) -> bool:
+    return isinstance(selection, slice) and selection == slice(None)
 
 
 def _cholesky(block: np.ndarray) -> np.ndarray:
@@ -115,7 +122,8 @@ class Operator(ABC):
 
     @abstractmethod
     def block(self, rows=None, cols=None) -> np.ndarray:
-        """Dense ``W[rows][:, cols]``; each selection is None (all), a bool mask or indices."""
+        """Dense ``W[rows][:, cols]``; each selection is None (all), a slice, a bool mask or
+        indices (then in their order)."""
 
     @property
     def matrix(self) -> np.ndarray | sp.csr_matrix:
@@ -237,9 +245,9 @@ class DenseOperator(Operator):
         rows, cols = _indices(rows, self.shape[0]), _indices(cols, self.shape[1])
         W = self._matrix
         if isinstance(rows, slice):
-            return W[:, cols] if isinstance(cols, slice) else W.take(cols, axis=1)
+            return W[rows, cols] if isinstance(cols, slice) else W[rows].take(cols, axis=1)
         if isinstance(cols, slice):
-            return W.take(rows, axis=0)
+            return W.take(rows, axis=0)[:, cols]
         if cols.size < rows.size:  # the smaller selection first
             return W.take(cols, axis=1).take(rows, axis=0)
         return W.take(rows, axis=0).take(cols, axis=1)
@@ -251,14 +259,14 @@ class DenseOperator(Operator):
 
 
 class SparseOperator(Operator):
-    """A scipy.sparse matrix, held in CSR form (not copied when it is CSR already)."""
+    """A scipy.sparse matrix or array, held in CSR form (not copied when it is CSR already)."""
 
     def __init__(self, matrix):
         super().__init__(matrix.shape)
-        self._matrix = matrix if sp.isspmatrix_csr(matrix) else sp.csr_matrix(matrix)
+        self._matrix = matrix if matrix.format == "csr" else matrix.tocsr()
 
     @property
-    def matrix(self) -> sp.csr_matrix:
+    def matrix(self) -> sp.csr_matrix | sp.csr_array:
         return self._matrix
 
     def __matmul__(self, x):
@@ -270,8 +278,8 @@ class SparseOperator(Operator):
     def block(self, rows=None, cols=None):
         rows, cols = _indices(rows, self.shape[0]), _indices(cols, self.shape[1])
         W = self._matrix
-        picked = W if isinstance(rows, slice) else W[rows]
-        return (picked if isinstance(cols, slice) else picked[:, cols]).toarray()
+        picked = W if _everything(rows) else W[rows]
+        return (picked if _everything(cols) else picked[:, cols]).toarray()
 
 
 def as_operator(W) -> Operator:
@@ -280,14 +288,19 @@ def as_operator(W) -> Operator:
     Raises
     ------
     InvalidInputError
-        If ``W`` is not a square 2-D matrix.
+        If ``W`` is not a square 2-D real matrix (a ``scipy.sparse.linalg.LinearOperator`` is
+        not: subclass :class:`Operator` to give its blocks).
     """
     if isinstance(W, Operator):
         return W
     if sp.issparse(W):
         operator = SparseOperator(W)
     else:
-        array = np.asarray(W, dtype=float)
+        try:
+            array = np.asarray(W, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"W must be a real matrix or an Operator, got {type(W).__name__}") from None
         if type(array) is not np.ndarray:  # e.g. numpy.matrix
             array = array.view(np.ndarray)
         if array.ndim != 2:
