@@ -341,7 +341,28 @@ def test_indefinite_w_is_refused(W, match):
     with pytest.raises(NotPositiveDefiniteError, match=match):
         solve_coulomb(problem)
     with pytest.raises(NotPositiveDefiniteError, match=match):
-        solve(LocalProblem(W, [-1.0, 0.0, 0.0], [0.0], 3))
+        solve(problem)
+    # without friction only the normal block is solved on, and validated: the same matrix as
+    # the normal block of three contacts (tangential blocks the identity) is refused alike
+    normal = np.arange(3) * 3
+    frictionless = sp.lil_matrix(sp.identity(9)) if sp.issparse(W) else np.eye(9)
+    frictionless[np.ix_(normal, normal)] = W.toarray() if sp.issparse(W) else W
+    q = np.zeros(9)
+    q[normal] = [-1.0, -1.0, -1.5]  # its solution (1, 2/3, 1/6) frees the indefinite block
+    with pytest.raises(NotPositiveDefiniteError, match=f"W's normal block.*{match}"):
+        solve(LocalProblem(frictionless, q, np.zeros(3), 3))
+
+
+def test_frictionless_route_needs_only_a_semidefinite_normal_block():
+    # W is indefinite in its tangential block only; with mu = 0 the tangential reactions
+    # vanish and the problem is the QP on W_NN = [[1]]: solved, and certified on the whole W
+    W = np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]])
+    for matrix in (W, sp.csr_matrix(W)):
+        problem = LocalProblem(matrix, [-1.0, 0.0, 0.0], [0.0], 3)
+        solution = solve(problem, tol=1e-12)
+        assert solution.success, solution.message
+        np.testing.assert_allclose(solution.forces, [1.0, 0.0, 0.0], atol=1e-14)
+        assert natural_map_error(problem, solution.forces) <= 1e-12
 
 
 def test_psd_check_accepts_singular_and_rounded_matrices():

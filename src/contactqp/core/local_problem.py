@@ -30,7 +30,8 @@ import scipy.sparse as sp
 
 from .. import kernels
 from ..errors import InvalidInputError, NotPositiveDefiniteError
-from contactqp.core.model import finite_array
+from .model import finite_array
+from .operators import PSD_SHIFT  # the shift accepted by check_positive_semidefinite
 
 if TYPE_CHECKING:
     from contactqp.core.friction import FrictionLaw
@@ -41,6 +42,7 @@ __all__ = [
     "GlobalProblem",
     "LocalProblem",
     "accuracy_limits",
+    "check_diagonal",
     "check_positive_semidefinite",
     "condense_global",
     "contact_status",
@@ -306,24 +308,51 @@ def _abs_product(A, x) -> np.ndarray:
     of a large ``W`` is made."""
     ax = np.abs(np.asarray(x, dtype=float)).ravel()
     if sp.issparse(A):
-        return np.asarray(abs(A) @ ax).ravel()
+        return _abs_sparse_product(sp.csr_matrix(A), ax)  # no copy of a CSR matrix
     A = np.asarray(A)
     rows = max(1, (1 << 22) // max(1, A.shape[1]))  # blocks of at most 32 MB
     return np.concatenate([np.abs(A[start:start + rows]) @ ax
                            for start in range(0, A.shape[0], rows)] or [np.zeros(0)])
 
 
-def accuracy_limits(problem: LocalProblem, r, u) -> AccuracyLimits:
+def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
+    """``|A| ax`` by blocks of rows of about 2**18 stored entries, sharing ``A``'s indices.
+
+    The absolute values of a block go into one reused buffer (2 MB, which stays in cache) rather
+    than into a copy of all of ``A``'s values.
+    """
+    indptr, entries = A.indptr, 1 << 18
+    out = np.empty(A.shape[0])
+    scratch = np.empty(min(entries, A.nnz))
+    first = 0
+    while first < A.shape[0]:
+        last = max(first + 1, int(np.searchsorted(indptr, indptr[first] + entries, "right")) - 1)
+        last = min(last, A.shape[0])
+        begin, end = indptr[first], indptr[last]
+        values = A.data[begin:end]
+        values = (np.abs(values, out=scratch[:end - begin]) if end - begin <= scratch.size
+                  else np.abs(values))  # one row longer than a block
+        rows = sp.csr_matrix((values, A.indices[begin:end], indptr[first:last + 1] - begin),
+                             shape=(last - first, A.shape[1]))
+        out[first:last] = rows @ ax
+        first = last
+    return out
+
+
+def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLimits:
     """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) on a local problem.
 
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
     ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
-    array's digits.
+    array's digits. ``columns = (index, W[:, index])`` (dense), when ``r`` is zero outside
+    ``index``, gives ``|W| |r|`` from those columns alone.
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
-    product = float(np.linalg.norm(_abs_product(problem.W, rv)))
+    magnitude = (_abs_product(problem.W, rv) if columns is None
+                 else _abs_product(columns[1], rv[columns[0]]))
+    product = float(np.linalg.norm(magnitude))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
     data = (relative_rounding(digits.get("W")) * product
@@ -777,11 +806,35 @@ def better_dense(W) -> bool:
     return m <= DENSE_SIZE or W.nnz >= DENSE_FILL * m * m
 
 
-#: Diagonal shift, relative to the unit diagonal of the Jacobi-scaled matrix, accepted by
-#: :func:`check_positive_semidefinite`. Matrices written with 6 significant digits (Siconos text
-#: files) are perturbed by ~5e-7 per entry; the scaled granular-flow file has eigenvalues down to
-#: -2.7e-6.
-PSD_SHIFT = 1e-5
+
+
+def check_diagonal(S, name: str = "W") -> np.ndarray:
+    """The diagonal of a symmetric ``S`` (dense or sparse), checked as a semidefinite one's.
+
+    The two tests of :func:`check_positive_semidefinite` that need no factorisation, at the cost
+    of reading the diagonal and the rows whose diagonal entry is zero: no diagonal entry is
+    negative, and a row with a zero diagonal entry is zero.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        Naming ``name`` and the failed test.
+    """
+    diag = np.asarray(S.diagonal(), dtype=float)
+    if np.any(diag < 0):
+        i = int(np.argmin(diag))
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive semidefinite: diagonal entry {i} is {diag[i]:.3g} < 0"
+        )
+    zero_rows = np.flatnonzero(diag == 0)
+    if zero_rows.size:
+        rows = S[zero_rows]
+        if (rows.count_nonzero() if sp.issparse(rows) else np.count_nonzero(rows)):
+            raise NotPositiveDefiniteError(
+                f"{name} is not positive semidefinite: a row with a zero diagonal entry "
+                f"has nonzero off-diagonal entries"
+            )
+    return diag
 
 
 def check_positive_semidefinite(W, name: str = "W") -> None:
@@ -807,21 +860,8 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
     S = 0.5 * (W + W.T)
     if sp.issparse(S) and better_dense(S):
         S = S.toarray()
-    diag = np.asarray(S.diagonal(), dtype=float)
-    if np.any(diag < 0):
-        i = int(np.argmin(diag))
-        raise NotPositiveDefiniteError(
-            f"{name} is not positive semidefinite: diagonal entry {i} is {diag[i]:.3g} < 0"
-        )
+    diag = check_diagonal(S, name)
     keep = np.flatnonzero(diag > 0)
-    zero_rows = np.flatnonzero(diag == 0)
-    if zero_rows.size:
-        rows = S[zero_rows]
-        if (rows.count_nonzero() if sp.issparse(rows) else np.count_nonzero(rows)):
-            raise NotPositiveDefiniteError(
-                f"{name} is not positive semidefinite: a row with a zero diagonal entry "
-                f"has nonzero off-diagonal entries"
-            )
     if keep.size == 0:
         return
     s = 1.0 / np.sqrt(diag[keep])

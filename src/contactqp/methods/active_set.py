@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..core.fastened import FastenedProblem
 from ..core.model import iteration_cap, positive_tolerance
+from ..core.operators import as_operator
 from .box_qp import solve_box_qp
 from .fastened import solve_fastened_box_qp
 
@@ -20,12 +21,15 @@ _ROW_CHUNK = 256
 def cold_start(W, b):
     """A first guess of the contact forces whose support is close to the contact zone.
 
-    Each interpenetration ``b_i > 0`` is shared over the row of ``W``, so that the first free
-    block is smaller than the whole overlap; only the first active set depends on it.
+    Each interpenetration ``b_i > 0`` is shared over the row of ``W`` (a matrix or an
+    :class:`~contactqp.core.operators.Operator`), so that the first free block is smaller than
+    the whole overlap; only the first active set depends on it.
     """
+    W = as_operator(W)
     row_sums = np.empty(len(b))
     for start in range(0, len(b), _ROW_CHUNK):  # |W| by row blocks: no full-size temporary
-        row_sums[start:start + _ROW_CHUNK] = np.abs(W[start:start + _ROW_CHUNK]).sum(axis=1)
+        rows = slice(start, start + _ROW_CHUNK)
+        row_sums[rows] = np.abs(W.block(rows, None)).sum(axis=1)
     return np.maximum(b, 0.0) / row_sums
 
 
@@ -65,10 +69,11 @@ def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 50
         )
     start = time.perf_counter()
     dual = problem.dual()
+    W = as_operator(dual.W)
     if r0 is None:
-        r0 = cold_start(dual.W, dual.b)
+        r0 = cold_start(W, dual.b)
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite x
-        solution = solve_box_qp(dual.W, -dual.b, lower=0.0, x0=r0, tol=tol,
+        solution = solve_box_qp(W, -dual.b, lower=0.0, x0=r0, tol=tol,
                                 max_iter=max_iter, check_finite=False)  # W: validated model
     forces = solution.x
     displacements = dual.displacements(forces)

@@ -32,8 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidInputError
 from ..core.model import iteration_cap, positive_tolerance
+from ..core.operators import DenseOperator, as_operator
+from ..errors import InvalidInputError
 from .free_block import FreeBlockSolver
 
 __all__ = ["BoxQPSolution", "solve_box_qp"]
@@ -79,12 +80,13 @@ class BoxQPSolution:
 
 
 def _validated(W, c, lower, upper, x0, check_finite):
-    W = np.asarray(W, dtype=float)
+    W = as_operator(W)
     c = np.asarray(c, dtype=float).reshape(-1)
     n = c.size
     if W.shape != (n, n):
         raise InvalidInputError(f"W must have shape ({n}, {n}) to match c, got {W.shape}")
-    if not (np.all(np.isfinite(c)) and (not check_finite or np.all(np.isfinite(W)))):
+    entries = W.matrix if isinstance(W, DenseOperator) else W.diagonal()
+    if not (np.all(np.isfinite(c)) and (not check_finite or np.all(np.isfinite(entries)))):
         raise InvalidInputError("W or c contains NaN or inf")
     lower = np.full(n, -np.inf) if lower is None else np.broadcast_to(
         np.asarray(lower, dtype=float), (n,)).copy()
@@ -104,7 +106,7 @@ class _BoxQP:
 
     def __init__(self, W, c, lower, upper, tol):
         self.W, self.c, self.lower, self.upper = W, c, lower, upper
-        diagonal = np.diag(W)
+        diagonal = W.diagonal()
         positive = diagonal[diagonal > 0]
         self.sigma = 1.0 / float(np.mean(positive)) if positive.size else 1.0
         self.tol = tol
@@ -142,7 +144,7 @@ class _BoxQP:
             rhs = -self.c[free]
             loaded = np.flatnonzero(x)  # bounded variables away from zero couple into the block
             if loaded.size:
-                rhs -= self.W[np.ix_(free, loaded)] @ x[loaded]
+                rhs -= self.W.block(free, loaded) @ x[loaded]
             x[free] = self.blocks.solve(free, rhs)
         return x
 
@@ -221,8 +223,10 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
 
     Parameters
     ----------
-    W : array_like, shape (n, n)
-        Symmetric positive (semi)definite.
+    W : array_like, shape (n, n), or Operator
+        Symmetric positive (semi)definite. Reached through
+        :func:`~contactqp.core.operators.as_operator` (products, diagonal, blocks and Cholesky
+        factors of free blocks), so any :class:`~contactqp.core.operators.Operator` will do.
     c : array_like, shape (n,)
     lower, upper : array_like, shape (n,) or scalar, optional
         Bounds; ``-inf``/``+inf`` (the defaults) for none.
@@ -234,13 +238,21 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
     max_iter : int
         Newton iterations allowed in both phases together.
     check_finite : bool
-        Check ``W`` for NaN and inf (a full pass over it); callers whose ``W`` is built from a
-        validated model may skip it.
+        Check ``W`` for NaN and inf (a full pass over a dense ``W``, the diagonal of any other
+        operator); callers whose ``W`` is built from a validated model may skip it.
 
     Returns
     -------
     BoxQPSolution
         ``converged`` is False, with the reason in ``message``, when neither phase reached ``tol``.
+
+    Raises
+    ------
+    InvalidInputError
+        On inconsistent shapes, non-finite data or bounds ``lower > upper``.
+    NotPositiveDefiniteError
+        If a free block the method factors is not positive semidefinite (to rounding,
+        :meth:`~contactqp.core.operators.Operator.cholesky`).
     """
     tol, max_iter = positive_tolerance(tol), iteration_cap(max_iter)
     W, c, lower, upper, x0 = _validated(W, c, lower, upper, x0, check_finite)

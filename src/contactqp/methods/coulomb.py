@@ -61,6 +61,7 @@ from ..errors import InvalidInputError
 from ..core.local_problem import (LocalProblem, better_dense, check_positive_semidefinite,
                      natural_map_residual)
 from ..core.model import finite_array, iteration_cap, positive_tolerance
+from ..core.operators import as_operator
 from .local_global import finish
 from .pgs import GaussSeidel
 
@@ -362,7 +363,7 @@ def solve_coulomb(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
-    W, d, mu = problem.W, problem.dim, problem.mu
+    W, d, mu = as_operator(problem.W).matrix, problem.dim, problem.mu  # Newton works on entries
     if sp.issparse(W) and better_dense(W):
         W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
     if check_psd:

@@ -12,8 +12,10 @@ block ``W_BB = L L^T`` is factored and a nearby ``F = (B \\ D) ∪ A`` is solved
 
 That costs about ``|B|^2 (|A| + |D|) + |B| (|A|^2 + |D|^2) + (|A|^3 + |D|^3) / 3``. Once the updates made since the base was factored would
 cost more in all than factoring ``W_FF`` (``|F|^3 / 3``), ``W_FF`` is factored and becomes the
-base: a free set that drifts far from the base cannot make every step expensive. A block that is not numerically positive
-definite (``W`` only semidefinite) is factored with a tiny diagonal shift.
+base: a free set that drifts far from the base cannot make every step expensive. Base blocks are
+factored by the operator (:meth:`~contactqp.core.operators.Operator.cholesky`, which also
+validates them): a block that is not numerically positive definite (``W`` only semidefinite) is
+factored with a diagonal shift, and the same shift is added to the indices that border it.
 """
 
 from __future__ import annotations
@@ -23,9 +25,10 @@ from collections import OrderedDict
 import numpy as np
 import scipy.linalg
 
+from ..core.operators import BlockFactor, Operator, as_operator
+
 __all__ = ["FreeBlockSolver"]
 
-_REGULARISATION = 1e-11  # relative to the largest diagonal entry, for singular blocks
 _PLANS_KEPT = 6
 
 
@@ -73,8 +76,15 @@ class FreeBlockSolver:
 
     Parameters
     ----------
-    matrix : ndarray, shape (n, n)
-        Symmetric positive (semi)definite ``W``; not copied, not modified.
+    matrix : ndarray, shape (n, n), or Operator
+        Symmetric positive (semi)definite ``W`` (:func:`~contactqp.core.operators.as_operator`);
+        not copied, not modified.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        From :meth:`solve`, if a free block is not positive semidefinite
+        (:meth:`~contactqp.core.operators.Operator.cholesky`).
 
     Attributes
     ----------
@@ -84,14 +94,12 @@ class FreeBlockSolver:
         Free sets solved through the base factor by bordering and dropping rows.
     """
 
-    def __init__(self, matrix: np.ndarray):
-        self.matrix = matrix
-        self.shift = _REGULARISATION * max(float(np.max(np.diag(matrix), initial=0.0)),
-                                           np.finfo(float).tiny)
+    def __init__(self, matrix: np.ndarray | Operator):
+        self.matrix = as_operator(matrix)
+        self.diagonal = self.matrix.diagonal()
         self.base: np.ndarray | None = None
         self.base_index = np.empty(0, dtype=np.intp)
-        self.base_factor: np.ndarray | None = None
-        self.base_shifted = False
+        self.base_factor: BlockFactor | None = None
         self.plans: OrderedDict[bytes, _Plan] = OrderedDict()
         self.update_cost = 0  # flops spent on updates since the base was factored
         self.factorizations = 0
@@ -126,29 +134,25 @@ class FreeBlockSolver:
 
     def _refactored_plan(self, free: np.ndarray) -> _Plan:
         index = np.flatnonzero(free)
-        block = self.matrix.take(index, axis=0).take(index, axis=1)
-        try:
-            factor, shifted = _cholesky(block.copy()), False
-        except np.linalg.LinAlgError:
-            block[np.diag_indices_from(block)] += self.shift
-            factor, shifted = _cholesky(block), True
+        factor = self.matrix.cholesky(index)
         self.factorizations += 1
-        self.base, self.base_index = free.copy(), index
-        self.base_factor, self.base_shifted = factor, shifted
+        self.base, self.base_index, self.base_factor = free.copy(), index, factor
         self.update_cost = 0
         self.plans.clear()
-        return _Plan(factor, np.arange(index.size))
+        return _Plan(factor.lower, np.arange(index.size))
 
     def _updated_plan(self, free, added, dropped) -> _Plan | None:
         """The plan through the base factor, or None when a bordered block is not definite."""
-        L, base_index = self.base_factor, self.base_index
+        factor, base_index = self.base_factor, self.base_index
+        L = factor.lower
         C = L_S = V = L_G = None
         try:
             if added.size:
-                C = _forward(L, self.matrix.take(added, axis=1)[base_index])
-                schur = self.matrix[np.ix_(added, added)] - C.T @ C
-                if self.base_shifted:
-                    schur[np.diag_indices_from(schur)] += self.shift
+                C = _forward(L, self.matrix.block(base_index, added))
+                schur = self.matrix.block(added, added) - C.T @ C
+                if factor.shifted:
+                    schur[np.diag_indices_from(schur)] += (factor.uniform
+                                                           + factor.relative * self.diagonal[added])
                 L_S = _cholesky(schur)
             if dropped.size:
                 unit = np.zeros((base_index.size, dropped.size))

@@ -19,6 +19,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..core.certificate import LocalCertificate
 from ..core.local_problem import (
@@ -26,13 +27,15 @@ from ..core.local_problem import (
     GlobalProblem,
     LocalProblem,
     accuracy_limits,
-    check_positive_semidefinite,
+    check_diagonal,
     contact_status,
     natural_map_error,
 )
 from ..core.model import finite_array
+from ..core.operators import as_operator
 from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, NotPositiveDefiniteError
+from .active_set import cold_start
 from .box_qp import solve_box_qp
 
 __all__ = ["certify_global", "finish", "local_result", "solve_frictionless"]
@@ -92,6 +95,18 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     return best
 
 
+def _columns(W, index):
+    """``W[:, index]``, read once: dense from a dense ``W``, CSR (as stored) from a sparse one.
+
+    The frictionless route's reactions are zero off the normal components, so these columns
+    give all it needs of ``W``: the normal block, ``W r`` and ``|W| |r|``.
+    """
+    operator = as_operator(W)
+    if sp.issparse(W):
+        return operator.matrix[:, index]
+    return operator.block(None, index)
+
+
 def solve_frictionless(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
                        max_iter: int | None = None, check_psd: bool = True,
                        per_contact: bool = False) -> LocalResult:
@@ -114,7 +129,8 @@ def solve_frictionless(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
     max_iter : int, optional
         Cap on the box-QP iterations (default 500).
     check_psd : bool
-        Check that ``W`` is positive semidefinite.
+        Check the diagonal of ``W``'s normal block; every free block the box-QP solver factors
+        is validated whatever this says.
     per_contact : bool
         Measure the natural map on every contact's own scale too.
 
@@ -123,38 +139,51 @@ def solve_frictionless(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
     InvalidInputError
         Some ``mu`` positive, or ``r0`` of the wrong shape.
     NotPositiveDefiniteError
-        If ``W`` is not positive semidefinite
-        (:func:`~contactqp.core.local_problem.check_positive_semidefinite`).
+        Only the normal block ``W_NN`` is solved on, and it is validated at no extra cost: its diagonal
+        (:func:`~contactqp.core.local_problem.check_diagonal`), and each free block the box-QP
+        solver factors (:meth:`~contactqp.core.operators.Operator.cholesky`). An indefinite part
+        of ``W_NN`` that no free block reaches (contacts that stay open) is not looked for: the
+        answer is then judged, like every answer, by the natural-map error on the whole ``W``.
     """
     if np.any(problem.mu > 0):
         raise InvalidInputError("the frictionless route needs mu = 0 on every contact")
     start = time.perf_counter()
-    if check_psd:
-        check_positive_semidefinite(problem.W)
     normal = np.arange(problem.n_contacts) * problem.dim
-    W = problem.W
-    W_nn = W[normal][:, normal]
-    W_nn = np.asarray(W_nn.toarray() if hasattr(W_nn, "toarray") else W_nn, dtype=float)
+    columns = (normal, _columns(problem.W, normal))  # W_NN, and W r, |W| |r| for finish
+    W_nn = columns[1][normal]
+    W_nn = W_nn.toarray() if sp.issparse(W_nn) else W_nn
+    symmetric = np.array_equal(W_nn, W_nn.T)
+    W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
+    if check_psd:
+        check_diagonal(W_sym, "W's normal block")
     q_n = problem.q[normal]
-    x0 = None
-    if r0 is not None:
-        x0 = finite_array(r0, "r0", 1)
-        if x0.shape != (problem.W.shape[0],):
+    if r0 is None:
+        with np.errstate(divide="ignore", invalid="ignore"):  # a zero row of W_NN: start at 0
+            first = np.nan_to_num(cold_start(W_sym, -q_n), nan=0.0, posinf=0.0)
+    else:
+        first = finite_array(r0, "r0", 1)
+        if first.shape != (problem.W.shape[0],):
             raise InvalidInputError(f"r0 must have shape ({problem.W.shape[0]},), got "
-                                    f"{x0.shape}")
-        x0 = np.maximum(x0[normal], 0.0)
-    solution = solve_box_qp(0.5 * (W_nn + W_nn.T), q_n, lower=0.0, x0=x0,
-                            tol=min(tol, 1e-10) * 1e-2,
-                            max_iter=500 if max_iter is None else max_iter)
-    reactions = _polish(problem, W_nn, q_n, normal, solution.x)
+                                    f"{first.shape}")
+        first = np.maximum(first[normal], 0.0)
+    try:  # the box-QP's own factorisations of free blocks validate them
+        solution = solve_box_qp(W_sym, q_n, lower=0.0, x0=first,
+                                tol=min(tol, 1e-10) * 1e-2,
+                                max_iter=500 if max_iter is None else max_iter,
+                                check_finite=False)  # W: validated by LocalProblem
+    except NotPositiveDefiniteError as exc:
+        raise NotPositiveDefiniteError(f"W's normal block: {exc}") from None
+    # a symmetric W_NN: the QP's minimiser solves the complementarity problem, nothing to polish
+    reactions = solution.x if symmetric else _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
     return finish(problem, r, tol, solution.iterations, start, solution.message,
-                  method="normal-qp", per_contact=per_contact)
+                  method="normal-qp", per_contact=per_contact, columns=columns)
 
 
 def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
-           detail: str, *, method: str, per_contact: bool = False) -> LocalResult:
+           detail: str, *, method: str, per_contact: bool = False,
+           columns=None) -> LocalResult:
     """The :class:`~contactqp.core.result.LocalResult` of reactions ``r``, checked by the
     natural-map error.
 
@@ -162,12 +191,20 @@ def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
     ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
+    ``columns = (index, W[:, index])``, the problem's columns outside which ``r`` is zero, lets
+    ``W r`` and ``|W| |r|`` read only those (the same sums: the other terms are zero).
     """
-    u = np.asarray(problem.W @ r).reshape(-1) + problem.q
+    if columns is None:
+        u = np.asarray(problem.W @ r).reshape(-1) + problem.q
+        limits = None
+    else:
+        index, block = columns
+        u = block @ r[index] + problem.q
+        limits = accuracy_limits(problem, r, u, columns=columns)
     error = natural_map_error(problem, r, u, per_contact=per_contact)
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
-    limits = accuracy_limits(problem, r, u)
+    limits = limits or accuracy_limits(problem, r, u)
     return local_result(
         problem, r, u, converged=converged, error=error, tol=tol, iterations=iterations,
         seconds=time.perf_counter() - start, method=method, limits=limits,

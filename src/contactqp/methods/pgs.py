@@ -20,6 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core.local_problem import project_rows
+from ..core.operators import as_operator
 
 __all__ = ["GaussSeidel"]
 
@@ -56,7 +57,8 @@ class GaussSeidel:
 
     Parameters
     ----------
-    W : csr_matrix or ndarray, shape (m, m)
+    W : csr_matrix or ndarray, shape (m, m), or an Operator that forms its matrix
+        (:attr:`~contactqp.core.operators.Operator.matrix`).
     q : ndarray, shape (m,)
     mu : ndarray, shape (n_contacts,)
     dim : int
@@ -66,6 +68,8 @@ class GaussSeidel:
     """
 
     def __init__(self, W, q, mu, dim, local_iterations: int = 50):
+        operator = as_operator(W)
+        W = operator.matrix  # the colouring and the row blocks are built on the stored entries
         nc = mu.shape[0]
         d = dim
         self.dim, self.mu, self.local_iterations = d, mu, local_iterations
@@ -84,7 +88,7 @@ class GaussSeidel:
             on_diag = bsr.indices == br
             self.diag_blocks[br[on_diag]] = bsr.data[on_diag]
         else:
-            self.diag_blocks = W.reshape(nc, d, nc, d)[idx, :, idx, :].copy()
+            self.diag_blocks = operator.diagonal_blocks(d)
         norms = np.sqrt(np.sum(self.diag_blocks ** 2, axis=(1, 2)))
         self.rho = 1.0 / np.where(norms > 0, norms, 1.0)
 

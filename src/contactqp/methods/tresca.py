@@ -44,6 +44,7 @@ from scipy.sparse.linalg import MatrixRankWarning, spsolve
 from ..errors import InvalidInputError, SolverError
 from ..core.local_problem import LocalProblem, natural_map_error
 from ..core.model import iteration_cap, positive_tolerance
+from ..core.operators import as_operator
 from ..optional import require
 from ..core.result import LocalResult
 from .local_global import local_result
@@ -104,7 +105,7 @@ class FixedPointData:
     """
 
     def __init__(self, problem: LocalProblem):
-        W = problem.W
+        W = as_operator(problem.W).matrix  # the cone programs are built on the stored entries
         skew = 0.5 * (W - W.T)
         if (skew.count_nonzero() if sp.issparse(skew) else np.count_nonzero(skew)) == 0:
             self.W_sym, self.skew = W, None
