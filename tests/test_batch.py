@@ -188,7 +188,7 @@ def test_statistics_from_file_samples_match_direct_solves(riveted, source, tmp_p
     np.testing.assert_allclose(stats.quantiles[1], np.quantile([r.gaps for r in final], 0.9,
                                                                axis=0), rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(stats.contact_probability,
-                               np.mean([r.contact_status != ContactStatus.OPEN for r in final],
+                               np.mean([r.contact_status == ContactStatus.CLOSED for r in final],
                                        axis=0))
     assert 0 < stats.contact_probability.max() <= 1
     png = plot_statistics(stats, riveted.points, tmp_path / "stats.png")

@@ -219,7 +219,7 @@ def _write_nominal(out: Path, model: RivetingModel, sequence: FasteningSequence,
     files["nominal_sequence.csv"] = write_csv(out / "nominal_sequence.csv", {
         "step": np.arange(1, len(pairs) + 1), "pair": pairs, "x": xy[pairs, 0],
         "y": xy[pairs, 1], "tension": [step.fastener_forces[-1] for step in sequence.steps],
-        "closed": [int(np.count_nonzero(step.contact_status != ContactStatus.OPEN))
+        "closed": [int(np.count_nonzero(step.contact_status == ContactStatus.CLOSED))
                    for step in sequence.steps],
         "max_gap": [float(step.gaps.max()) for step in sequence.steps]})
     return files

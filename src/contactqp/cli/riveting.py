@@ -117,7 +117,7 @@ def _tables(model, sequence, summary, stats):
         pair = step.fasteners[-1]
         table.add_row(str(n), f"{model.points[pair, 0] * 1e3:.4g}",
                       f"{model.points[pair, 1] * 1e3:.4g}", f"{step.fastener_forces[-1]:.4g}",
-                      str(int(np.count_nonzero(step.contact_status != ContactStatus.OPEN))),
+                      str(int(np.count_nonzero(step.contact_status == ContactStatus.CLOSED))),
                       f"{step.gaps.max() * 1e3:.4g}")
     out.print(table)
     final = sequence.final

@@ -17,7 +17,7 @@ class GapVariation:
     """A frictionless :class:`~contactqp.ContactProblem` whose initial gaps vary by sample.
 
     Records (one row per sample in the store): ``gap`` final gaps (m), ``force`` contact forces
-    (N), ``closed`` (the contact is not open: closed, or fastened), ``success``,
+    (N), ``closed`` (status closed: in contact; a fastened pair is not counted), ``success``,
     ``iterations``. The warm start of a sample is the
     previous sample's ``force``.
 
@@ -51,7 +51,7 @@ class GapVariation:
     @staticmethod
     def _record(result) -> dict:
         return {"gap": result.gaps, "force": result.forces,
-                "closed": result.contact_status != ContactStatus.OPEN,
+                "closed": result.contact_status == ContactStatus.CLOSED,
                 "success": result.success, "iterations": result.iterations}
 
     def solve_sample(self, gaps, warm):
