@@ -50,14 +50,14 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
-from ..studies.cases import GapVariation
 from ..core.fastened import STATUS_LABELS, FastenedProblem, FastenedResult
-from ..errors import InvalidInputError
-from ..io.export import PointMesh
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
+from ..errors import InvalidInputError
+from ..io.export import PointMesh
 from ..methods import solve
 from ..methods.registry import get_method
+from ..studies.cases import GapVariation
 from .assembly import Part, StackedModel, StackedParts
 
 __all__ = ["Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
@@ -85,11 +85,11 @@ def plate_flexibility(plate: Part, points, cells, supports=("left", "right")) ->
     ndarray, shape (k, k)
         ``R[i, j]``: deflection (m) of point ``i`` under a unit force (N) at point ``j``.
     """
-    from ..compliance.fem import plate as plate_mesh  # raises MissingDependencyError without skfem
-
     import skfem
     from scipy.spatial import cKDTree
     from skfem.helpers import dd, ddot, eye, trace
+
+    from ..compliance.fem import plate as plate_mesh  # raises MissingDependencyError without skfem
 
     bad = [s for s in supports if s not in _EDGES]
     if bad or not supports:
@@ -188,7 +188,7 @@ class Assembly(StackedParts):
             block.setflags(write=False)
         return lower, upper
 
-    def build(self) -> "RivetingModel":
+    def build(self) -> RivetingModel:
         """The reduced model of both plates (their flexibilities: :attr:`flexibilities`)."""
         points, _ = self._layout
         blocks = self.flexibilities
@@ -236,7 +236,7 @@ class RivetingModel(StackedModel):
         return self.base_problem.variant(gaps=gaps)
 
     def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
-               tol: float = 1e-10) -> "FasteningSequence":
+               tol: float = 1e-10) -> FasteningSequence:
         """Install the fasteners one after another on the gap field ``gaps`` (m, shape (k,)).
 
         Parameters
@@ -295,7 +295,8 @@ class FasteningSequence:
 
 
 class FasteningCase(GapVariation):
-    """A riveted assembly, every fastener installed: a case of :func:`~contactqp.studies.batch.run_batch`.
+    """A riveted assembly, every fastener installed: a case of
+    :func:`~contactqp.studies.batch.run_batch`.
 
     Each sample is a :class:`~contactqp.core.fastened.FastenedProblem` (its Schur complement
     reduced once for all samples) solved by :func:`~contactqp.solve` (``method``, ``tol``) with
@@ -340,7 +341,7 @@ def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> Po
     node, along ``z``), ``initial_gap`` and ``gap`` (m), ``status`` (codes of
     :data:`STATUS_LABELS`), ``fastener_force`` (N, zero away from fasteners).
     """
-    nx, ny = model.assembly.grid
+    nx, ny = model.grid
     k = model.n_pairs
     ids = np.arange(k).reshape(ny, nx)
     quads = np.column_stack([ids[:-1, :-1].ravel(), ids[:-1, 1:].ravel(), ids[1:, 1:].ravel(),

@@ -1,7 +1,7 @@
 r"""Fastening two thin parts with friction on their interface, the state carried over.
 
-:mod:`contactqp.applications.riveting` models the parts as Kirchhoff plates, out-of-plane only, so their
-interface cannot slip. Here each part is a coarse 3-D elastic block
+:mod:`contactqp.applications.riveting` models the parts as Kirchhoff plates, out-of-plane only,
+so their interface cannot slip. Here each part is a coarse 3-D elastic block
 (:class:`~contactqp.compliance.fem.ElasticModel`), so the facing surfaces move in-plane when the
 parts bend: a fastener pulling the parts together makes the interface slip where friction lets
 it, and what the next fastener finds depends on what the previous ones did.
@@ -10,12 +10,12 @@ Model
 -----
 The ``lower`` part occupies ``[0, L] x [0, B] x [0, t_l]``, the ``upper`` one lies on it,
 ``t_l <= z <= t_l + t_u``. Both are **clamped at their short end faces** (``x = 0`` and
-``x = L``, every component), the assembly jig of :mod:`contactqp.applications.riveting`: this removes every
-rigid-body mode of each part with the fixations ``ElasticModel.fix`` offers, and an in-plane
-load on the upper part can then be carried by its own clamps and, through friction, by the lower
-part, which is the load sharing the fastening sequence decides. (Soft springs holding the upper
-part would need springs added to its condensed stiffness, which the finite-element models do
-not offer.)
+``x = L``, every component), the assembly jig of :mod:`contactqp.applications.riveting`: this
+removes every rigid-body mode of each part with the fixations ``ElasticModel.fix`` offers, and an
+in-plane load on the upper part can then be carried by its own clamps and, through friction, by
+the lower part, which is the load sharing the fastening sequence decides. (Soft springs holding
+the upper part would need springs added to its condensed stiffness, which the finite-element
+models do not offer.)
 
 Each part is meshed with one layer of hexahedral cells, each split into quadratic (10-node)
 tetrahedra (``block(..., cell="tet")``, ``order=2``). Quadratic hexahedra would do as well but
@@ -54,12 +54,12 @@ import numpy as np
 import scipy.linalg
 
 from ..core.contact import NodePairs
-from ..errors import InvalidInputError
 from ..core.friction import STATUS_LABELS
 from ..core.history import linear_path
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..core.result import FrictionalResult
+from ..errors import InvalidInputError
 from ..methods import solve_history
 from .assembly import Part, StackedModel, StackedParts
 
@@ -90,7 +90,7 @@ class FrictionAssembly(StackedParts):
     upper: Part = Part(length=0.100, width=0.040, thickness=0.0012)
     cells: tuple = (10, 4)
 
-    def build(self) -> "FrictionRivetingModel":
+    def build(self) -> FrictionRivetingModel:
         """Mesh, clamp and condense both parts (about a second for the default cells)."""
         from ..compliance.fem import ElasticModel, block  # needs scikit-fem
 
@@ -112,6 +112,7 @@ class FrictionAssembly(StackedParts):
             nodes = body.select_nodes(np.column_stack([points, np.full(len(points), height)]),
                                       where=face).nodes
             reduced = body.reduced_model(nodes)
+            assert reduced.coordinates is not None  # a mesh's reduced model has its nodes'
             parts.append((body, nodes))
             blocks.append(reduced.flexibility)
             coordinates.append(reduced.coordinates + [0.0, 0.0, base])
@@ -154,7 +155,7 @@ class FasteningStep:
     result: FrictionalResult
 
     @classmethod
-    def from_result(cls, label: str, result: FrictionalResult) -> "FasteningStep":
+    def from_result(cls, label: str, result: FrictionalResult) -> FasteningStep:
         """The step's fields read from a :class:`FrictionalResult` of the assembly."""
         return cls(label, result.gaps, result.normal_forces, result.tangential_forces,
                    result.contact_status, result.slip, result.dissipation, result)
@@ -255,4 +256,5 @@ class FrictionRivetingModel(StackedModel):
         problem = FrictionalProblem(self.model, history[0], self.obstacles(gaps), mu,
                                     facets=facets)
         steps = solve_history(problem, np.array(history), **options).steps
-        return [FasteningStep.from_result(label, step) for label, step in zip(labels, steps)]
+        return [FasteningStep.from_result(label, step)
+                for label, step in zip(labels, steps, strict=True)]

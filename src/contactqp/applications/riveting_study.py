@@ -141,6 +141,7 @@ def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, worker
         return (names or {}).get(parameter, parameter)
 
     model = (Assembly() if assembly is None else assembly).build()
+    source: GapSamples | GaussianGapField
     if gaps is not None:
         source = load_gap_samples(gaps) if isinstance(gaps, (str, PathLike)) else GapSamples(gaps)
         nominal_gaps = source.samples.mean(axis=0)
@@ -180,7 +181,7 @@ def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, worker
     files["statistics.csv"] = write_csv(out / "statistics.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "mean_gap": statistics.mean,
         **{f"gap_q{level * 100:g}": q for level, q in zip(statistics.levels,
-                                                          statistics.quantiles)},
+                                                          statistics.quantiles, strict=True)},
         "contact_probability": statistics.contact_probability})
     if plot:
         from ..io.plot import plot_statistics
@@ -211,7 +212,8 @@ def _write_nominal(out: Path, model: RivetingModel, sequence: FasteningSequence,
     """Write the nominal state's files; ``{name: path}``."""
     final = sequence.final
     xy = model.points
-    files = {"nominal.vtu": write_vtu(out / "nominal.vtu", *result_mesh(model, final, nominal_gaps))}
+    nominal_mesh = result_mesh(model, final, nominal_gaps)
+    files = {"nominal.vtu": write_vtu(out / "nominal.vtu", *nominal_mesh)}
     files["nominal_contacts.csv"] = write_csv(out / "nominal_contacts.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.contact.gaps,
         "force": final.contact.forces, "status": [STATUS_LABELS[s] for s in final.status]})

@@ -63,7 +63,7 @@ def plot_spring_chain(forces, displacements, path) -> Path:
         Output file; its suffix chooses the format.
     """
     figure, axes = subplots(figsize=(7, 4.5))
-    for force, x in zip(forces, displacements):
+    for force, x in zip(forces, displacements, strict=False):  # as many as both give
         bodies = range(1, len(x) + 1)
         axes.plot(bodies, x, marker="o" if len(x) <= 50 else None, label=f"F = {force:g} N")
     axes.xaxis.get_major_locator().set_params(integer=True)
@@ -93,7 +93,7 @@ def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = ""
     xy = np.asarray(points, dtype=float) * 1e3
     figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True, squeeze=False)
     axes = axes[:, 0]
-    for ax, (values, title, cmap) in zip(axes, panels):
+    for ax, (values, title, cmap) in zip(axes, panels, strict=True):
         shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
         figure.colorbar(shown, ax=ax)
         if marked is not None:
@@ -196,7 +196,7 @@ def plot_deflections(x, obstacle, cases: Sequence[DeflectionCase], path, *, clam
     figure, panels = subplots(len(cases), 1, figsize=(8, 3.2 * len(cases)), sharex=True,
                               squeeze=False)
     arrow = clamp * 1e3
-    for axes, case in zip(panels[:, 0], cases):
+    for axes, case in zip(panels[:, 0], cases, strict=True):
         largest = max((np.hypot(*force) for _, force in case.loads), default=0.0)
         scale = arrow / max(largest, 1e-300)  # mm per N: the largest load is `arrow` long
         axes.fill_between(x, obstacle, obstacle.min() - 1.0, color="0.85", label="obstacle")

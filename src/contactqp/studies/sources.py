@@ -61,7 +61,7 @@ class GaussianGapField:
         if isinstance(seed, bool) or int(seed) != seed or seed < 0:
             raise InvalidInputError(f"seed must be an integer >= 0, got {seed!r}")
         self.seed = int(seed)
-        self._factor = None
+        self._factor: np.ndarray | None = None
 
     @property
     def n_available(self):
@@ -103,7 +103,7 @@ class GaussianGapField:
         factor = self._square_root()
         indices = list(indices)
         fields = np.empty((len(indices), len(self.mean)))
-        for row, k in zip(fields, indices):
+        for row, k in zip(fields, indices, strict=True):
             stream = np.random.SeedSequence(self.seed, spawn_key=(int(k),))
             row[:] = self.mean + _fixed_order_product(
                 factor, np.random.default_rng(stream).standard_normal(len(self.mean)))

@@ -39,7 +39,7 @@ class BatchStore:
         self._file = file
 
     @classmethod
-    def open(cls, path: Path, case, source, n_samples: int, chunk: int) -> "BatchStore":
+    def open(cls, path: Path, case, source, n_samples: int, chunk: int) -> BatchStore:
         """Open (or create) the store at ``path``, check it belongs to this study (``case`` and
         ``source`` describe it), grow it to ``n_samples`` rows; ``chunk`` for a new store.
 
@@ -89,7 +89,7 @@ class BatchStore:
             raise
         return cls(store)
 
-    def __enter__(self) -> "BatchStore":
+    def __enter__(self) -> BatchStore:
         return self
 
     def __exit__(self, *exc) -> None:
