@@ -40,7 +40,8 @@ SCIPY_SPARSE_NPZ = frozenset({"format", "shape", "data"})
 _UNREADABLE = (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError)
 
 
-def read_array(path, key: str | None = None, format: str | None = None) -> np.ndarray:
+def read_array(path: str | os.PathLike[str], key: str | None = None,
+               format: str | None = None) -> np.ndarray:
     """Read a numeric array from a CSV, NPY, NPZ, MatrixMarket or OP4 file.
 
     Parameters

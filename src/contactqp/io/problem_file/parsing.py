@@ -7,6 +7,7 @@ range; each error is one line naming the file and the key (:mod:`.messages`).
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 import warnings
 from pathlib import Path
@@ -381,7 +382,7 @@ def _loading(where: Where, table, loads: np.ndarray | None,
     return path, None
 
 
-def load_problem_file(path) -> ProblemSpec:
+def load_problem_file(path: str | os.PathLike[str]) -> ProblemSpec:
     """Read a TOML problem file and assemble its problem (schema: ``docs/problem-files.md``).
 
     Parameters
