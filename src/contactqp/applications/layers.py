@@ -31,8 +31,10 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -169,7 +171,7 @@ class Layers:
                     self.actuator_stiffness * share)
         return model, pairs, actuator, loads, self.cohesion * tributary * self.depth
 
-    def solve(self, d_max: float | None = None, **options) -> LayersResult:
+    def solve(self, d_max: float | None = None, **options: Any) -> LayersResult:
         """Apply gravity, then move the actuator from 0 to ``d_max`` in :attr:`steps` steps.
 
         ``d_max`` (m) defaults to twice the travel that brings the load to the analytic limit
@@ -259,7 +261,7 @@ class LayersResult:
                 "curve": np.column_stack([self.load, self.relative]).tolist()}
 
 
-def plot_layers(result: LayersResult, path) -> Path:
+def plot_layers(result: LayersResult, path: str | os.PathLike[str]) -> Path:
     """Lateral load against relative displacement, with the analytic limit (drawn by
     :func:`contactqp.io.plot.plot_sliding_curve`)."""
     from ..io.plot import plot_sliding_curve

@@ -43,12 +43,15 @@ on the order (a test checks it), the intermediate states do.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from ..core.fastened import STATUS_LABELS, FastenedProblem, FastenedResult
 from ..core.model import ReducedModel, finite_array
@@ -66,7 +69,8 @@ __all__ = ["Assembly", "RivetingModel", "FastenedResult", "FasteningSequence",
 _EDGES = ("left", "right", "bottom", "top")
 
 
-def plate_flexibility(plate: Part, points, cells, supports=("left", "right")) -> np.ndarray:
+def plate_flexibility(plate: Part, points: ArrayLike, cells: tuple[int, int],
+                      supports: Sequence[str] = ("left", "right")) -> np.ndarray:
     """Out-of-plane flexibility of points of a Kirchhoff plate (Morley elements, condensed).
 
     Parameters
@@ -231,11 +235,12 @@ class RivetingModel(StackedModel):
         problem.dual()
         return problem
 
-    def problem(self, gaps) -> ContactProblem:
+    def problem(self, gaps: ArrayLike) -> ContactProblem:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return self.base_problem.variant(gaps=gaps)
 
-    def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
+    def fasten(self, gaps: ArrayLike, order: Sequence[int] | None = None, *,
+               method: str = "lawson-hanson",
                tol: float = 1e-10) -> FasteningSequence:
         """Install the fasteners one after another on the gap field ``gaps`` (m, shape (k,)).
 
@@ -257,17 +262,18 @@ class RivetingModel(StackedModel):
         FasteningSequence
             One result per fastener installed.
         """
-        order = np.arange(len(self.fasteners)) if order is None else np.asarray(order, dtype=int)
-        if sorted(order.tolist()) != list(range(len(self.fasteners))):
+        n_fasteners = len(self.fasteners)
+        sequence = np.arange(n_fasteners) if order is None else np.asarray(order, dtype=int)
+        if sorted(sequence.tolist()) != list(range(n_fasteners)):
             raise InvalidInputError(f"order must be a permutation of 0..{len(self.fasteners) - 1}")
         problem = self.problem(self.check_gaps(gaps))
         steps, forces = [], None
-        for count in range(1, len(order) + 1):
-            fastened = FastenedProblem(problem, self.fasteners[order[:count]])
+        for count in range(1, len(sequence) + 1):
+            fastened = FastenedProblem(problem, self.fasteners[sequence[:count]])
             step = solve(fastened, method, **_fastening_options(method, tol, forces))
             forces = step.multipliers
             steps.append(step)
-        return FasteningSequence(steps, order)
+        return FasteningSequence(steps, sequence)
 
 
 def _fastening_options(method: str, tol: float, r0) -> dict:
@@ -332,7 +338,8 @@ class FasteningCase(GapVariation):
         return {**super().describe(), "fasteners": self.fasteners.tolist()}
 
 
-def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> PointMesh:
+def result_mesh(model: RivetingModel, state: FastenedResult,
+                initial_gaps: ArrayLike) -> PointMesh:
     """Both contact grids as quadrilateral surfaces with the fastened state, for
     :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *result_mesh(...))``).
 
@@ -367,7 +374,8 @@ def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> Po
     return PointMesh(points, [("quad", np.vstack([quads, quads + k]))], data)
 
 
-def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
+def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps: ArrayLike,
+                path: str | os.PathLike[str]) -> Path:
     """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
     (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
     from ..io.plot import plot_point_maps

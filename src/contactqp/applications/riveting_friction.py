@@ -48,10 +48,13 @@ law acts on each step's slip increment.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from ..core.contact import NodePairs
 from ..core.friction import STATUS_LABELS
@@ -186,19 +189,19 @@ class FrictionRivetingModel(StackedModel):
         super().__init__(assembly, model, points, (int(nx) - 1, int(ny) + 1))
         self.parts = parts
 
-    def obstacles(self, gaps) -> list[NodePairs]:
+    def obstacles(self, gaps: ArrayLike) -> list[NodePairs]:
         """The interface as :class:`NodePairs` for initial gaps ``gaps`` (m, shape (k,))."""
         return [self.node_pairs(gaps)]
 
-    def clamp_loads(self, pairs, force: float) -> np.ndarray:
+    def clamp_loads(self, pairs: Sequence[int], force: float) -> np.ndarray:
         """Loads (N, shape (n_freedoms,)) of fasteners clamping ``pairs`` with ``force`` (N).
 
         ``+force`` along ``z`` on each pair's lower node, ``-force`` on its upper node.
         """
         loads = np.zeros(self.model.n_freedoms)
-        pairs = np.asarray(pairs, dtype=int)
-        loads[_DOFS * pairs + 2] += force
-        loads[_DOFS * (self.n_pairs + pairs) + 2] -= force
+        lower = np.asarray(pairs, dtype=int)
+        loads[_DOFS * lower + 2] += force
+        loads[_DOFS * (self.n_pairs + lower) + 2] -= force
         return loads
 
     def shear_loads(self, force: float) -> np.ndarray:
@@ -207,8 +210,9 @@ class FrictionRivetingModel(StackedModel):
         loads[_DOFS * np.arange(self.n_pairs, 2 * self.n_pairs)] = force / self.n_pairs
         return loads
 
-    def fasten(self, gaps, fasteners, mu, *, clamp: float = 500.0, shear: float = 0.0,
-               shear_steps: int = 2, facets=None, **options) -> list[FasteningStep]:
+    def fasten(self, gaps: ArrayLike, fasteners: Sequence[tuple[int, int]], mu: ArrayLike, *,
+               clamp: float = 500.0, shear: float = 0.0, shear_steps: int = 2,
+               facets: int | None = None, **options: Any) -> list[FasteningStep]:
         """Install ``fasteners`` in order, then apply and remove ``shear``; every step's state.
 
         Parameters
@@ -238,14 +242,14 @@ class FrictionRivetingModel(StackedModel):
             One per fastener, then ``2 shear_steps`` when ``shear`` is not zero. Check each
             ``step.result.success``.
         """
-        fasteners = [tuple(int(v) for v in f) for f in fasteners]
-        pairs = [self.pair(i, j) for i, j in fasteners]
+        positions = [tuple(int(v) for v in f) for f in fasteners]
+        pairs = [self.pair(i, j) for i, j in positions]
         if not pairs or len(set(pairs)) != len(pairs):
             raise InvalidInputError("fasteners must name at least one pair, each at most once")
         if not (np.isfinite(clamp) and clamp > 0):
             raise InvalidInputError(f"clamp must be a positive force (N), got {clamp!r}")
         history = [self.clamp_loads(pairs[:n], clamp) for n in range(1, len(pairs) + 1)]
-        labels = [f"fastener {f}" for f in fasteners]
+        labels = [f"fastener {f}" for f in positions]
         if shear:
             fastened = history[-1]
             history.extend(linear_path([fastened, fastened + self.shear_loads(shear), fastened],

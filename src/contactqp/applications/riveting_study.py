@@ -15,11 +15,13 @@ and writes, in the output directory:
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ContactWarning, InvalidInputError
 from ..io.export import write_csv, write_vtu
@@ -81,12 +83,14 @@ class RivetingStudy:
         return self.sequence.success and self.summary.failed == 0 and self.statistics is not None
 
 
-def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, workers: int = 1,
-                       scheduler: str | None = None, gaps=None, mean_gap: float = 2e-4,
+def run_riveting_study(out: str | PathLike[str], *, samples: int | None = None, seed: int = 0,
+                       workers: int = 1, scheduler: str | None = None,
+                       gaps: str | PathLike[str] | ArrayLike | None = None, mean_gap: float = 2e-4,
                        amplitude: float = 1e-4, correlation_length: float = 0.04,
                        method: str = "lawson-hanson", plot: bool = False,
-                       assembly: Assembly | None = None, progress=None,
-                       names: dict | None = None) -> RivetingStudy:
+                       assembly: Assembly | None = None,
+                       progress: Callable[[int, int], None] | None = None,
+                       names: dict[str, str] | None = None) -> RivetingStudy:
     """Run (or resume) the riveting variation study into the directory ``out``.
 
     Parameters

@@ -36,8 +36,10 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 import time
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -45,6 +47,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike
 
 from ..compliance.beam import Frame2D
 from ..core.contact import GapObstacle
@@ -185,11 +188,11 @@ class Rod:
         """Unit normal of the obstacle pointing from the rod into it, shape (2,)."""
         return np.array([-self.slope, -1.0]) / np.hypot(1.0, self.slope)
 
-    def gap(self, x) -> np.ndarray:
+    def gap(self, x: ArrayLike) -> np.ndarray:
         """Initial gap along ``y`` under the points ``x`` (m)."""
         return self.gap_free + self.slope * np.asarray(x, dtype=float)
 
-    def normal_gap(self, x) -> np.ndarray:
+    def normal_gap(self, x: ArrayLike) -> np.ndarray:
         """Initial distance from the points ``x`` to the obstacle, along :attr:`normal` (m)."""
         return self.gap(x) / np.hypot(1.0, self.slope)
 
@@ -370,7 +373,8 @@ def _active_set_polish(K, G, f, h, active, name):
     return free - influence @ z, z
 
 
-def deviations(values, reference, floor: float) -> tuple[np.ndarray, np.ndarray]:
+def deviations(values: ArrayLike, reference: ArrayLike,
+               floor: float) -> tuple[np.ndarray, np.ndarray]:
     """Relative deviations in percent, or absolute ones (same unit) where ``|reference| <= floor``.
 
     Returns
@@ -467,7 +471,8 @@ def _compare_case(rod: Rod, case: RodLoadCase, solver: str, repeat: int) -> Case
         max_penetration=float(max(np.max(crossing), 0.0)), recovered=recovered)
 
 
-def compare(rod: Rod | None = None, cases=DEFAULT_CASES, solver: str = "active-set",
+def compare(rod: Rod | None = None, cases: Sequence[RodLoadCase] = DEFAULT_CASES,
+            solver: str = "active-set",
             repeat: int = 3) -> list[CaseComparison]:
     """The method's table: reduced solutions against full finite-element contact solutions.
 
@@ -491,7 +496,7 @@ def compare(rod: Rod | None = None, cases=DEFAULT_CASES, solver: str = "active-s
     return [_compare_case(rod, case, solver, int(repeat)) for case in cases]
 
 
-def as_record(rod: Rod, comparisons) -> dict:
+def as_record(rod: Rod, comparisons: Sequence[CaseComparison]) -> dict:
     """The comparison as plain JSON-ready data, in SI units (m, N, s).
 
     ``gap`` is the initial gap along ``y``; ``eps_x`` and ``eps_y`` are percentages, except where
@@ -527,7 +532,7 @@ def as_record(rod: Rod, comparisons) -> dict:
             "cases": cases}
 
 
-def result_mesh(rod: Rod, comparisons) -> export.PointMesh:
+def result_mesh(rod: Rod, comparisons: Sequence[CaseComparison]) -> export.PointMesh:
     """The mesh and every case's solutions, for :func:`~contactqp.io.export.write_vtu`
     (``write_vtu(path, *result_mesh(rod, comparisons))``).
 
@@ -555,7 +560,7 @@ def result_mesh(rod: Rod, comparisons) -> export.PointMesh:
     return export.PointMesh(frame.coordinates, [("line", frame.elements)], data)
 
 
-def plot_rod(rod: Rod, comparisons, path) -> Path:
+def plot_rod(rod: Rod, comparisons: Sequence[CaseComparison], path: str | os.PathLike[str]) -> Path:
     """The rod deformed over its obstacle, one panel per load case (drawn by
     :func:`contactqp.io.plot.plot_deflections`, true scale, mm).
 
