@@ -190,12 +190,13 @@ class FrictionLaw:
         s = np.asarray(slips, dtype=float)
         return self.bound(r[:, 0]) * self.support(-s) + np.sum(r[:, 1:] * s, axis=1)
 
-    def status(self, forces: ArrayLike, slips: ArrayLike, force_tol: float,
-               slip_tol: float) -> np.ndarray:
+    def status(self, forces: ArrayLike, slips: ArrayLike, force_tol: ArrayLike,
+               slip_tol: ArrayLike) -> np.ndarray:
         """Status code per contact (index into :data:`STATUS_LABELS`).
 
         Open: the force measured from the apex is zero (``||r~|| <= force_tol``, N). Slip:
-        closed and ``||s_T|| > slip_tol`` (m). Stick otherwise.
+        closed and ``||s_T|| > slip_tol`` (m). Stick otherwise. Each tolerance is a scalar or
+        holds one value per contact.
         """
         carries = np.linalg.norm(self.apex_forces(forces), axis=1) > force_tol
         slipping = np.linalg.norm(np.asarray(slips, dtype=float), axis=1) > slip_tol
