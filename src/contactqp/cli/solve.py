@@ -27,6 +27,7 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
                    "(and steps.csv for a load history).")
 def solve(problem_file, as_json, out):
     """Solve the contact problem (with friction, or a load history) in a TOML file."""
+    from ..core.history import HistoryResult
     from ..io.problem_file import load_problem_file, write_results
 
     spec = load_problem_file(problem_file)
@@ -41,7 +42,7 @@ def solve(problem_file, as_json, out):
     else:
         _result_table(spec, result, spec.name)
         _print_written(written)
-    if spec.history is not None:
+    if isinstance(result, HistoryResult):  # spec.history was given
         failed = summary["failed_steps"]
         if failed:
             first = result.steps[failed[0]]
