@@ -143,8 +143,8 @@ def main(argv=None) -> int:
     closed = int(np.count_nonzero(solution.forces[normal] > 0))
     print(f"{problem.n_contacts} contacts (W {W.shape[0]}x{W.shape[1]}, "
           f"{type(W).__name__}, {getattr(W, 'nnz', W.size)} entries), {closed} closed, "
-          f"{solution.iterations} iterations, natural-map error {solution.certificate.natural_map:.1e}, "
-          f"converged {solution.success}")
+          f"{solution.iterations} iterations, natural-map error "
+          f"{solution.certificate.natural_map:.1e}, converged {solution.success}")
     print(f"file written in {built:.2f} s, read in {read:.3f} s")
     rows = [
         ("solve (contactqp.solve)", solve_first, solve_best),

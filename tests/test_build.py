@@ -88,6 +88,9 @@ def test_pip_install_without_a_compiler_gives_a_working_package(tmp_path):
     assert build.returncode == 0, log[-3000:]
     assert "WARNING: contactqp.kernels.compiled not built" in log
     assert not list((installed / "contactqp" / "kernels").glob("compiled*.so"))
+    # the annotations ship for users' type checkers, the compiled kernels' stub among them
+    assert (installed / "contactqp" / "py.typed").is_file()
+    assert (installed / "contactqp" / "kernels" / "compiled.pyi").is_file()
     check = subprocess.run(
         [sys.executable, "-W", "always", "-c",
          "import numpy as np, contactqp.kernels as k\n"

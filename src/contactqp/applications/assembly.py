@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.contact import NodePairs
 from ..core.model import ReducedModel, finite_array
@@ -101,7 +102,7 @@ class StackedModel:
         """The thinner part's thickness (m): the scale of a plausible gap or overlap."""
         return self.assembly.thickness
 
-    def check_gaps(self, gaps, what: str = "gaps") -> np.ndarray:
+    def check_gaps(self, gaps: ArrayLike, what: str = "gaps") -> np.ndarray:
         """``gaps`` (m) as a finite array of shape (k,); an overlap (negative gap) deeper than
         the thinner part is physically absurd and refused.
 
@@ -121,7 +122,7 @@ class StackedModel:
                 f"{self.thickness * 1e3:.4g} mm plates (a negative gap is interference)")
         return gaps
 
-    def node_pairs(self, gaps) -> NodePairs:
+    def node_pairs(self, gaps: ArrayLike) -> NodePairs:
         """The interface as :class:`NodePairs` for initial gaps ``gaps`` (m, shape (k,))."""
         k = self.n_pairs
         direction = np.eye(int(self.model.dofs_per_node[0]))[-1]  # u_z, the node's last

@@ -29,20 +29,23 @@ force, here the weight of the upper layer. Sliding starts when the load reaches 
 
 from __future__ import annotations
 
+import math
 import numbers
+import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import scipy.linalg
 import scipy.sparse
 
 from ..core.contact import NodePairs
-from ..errors import InvalidInputError, LayersError
 from ..core.history import MAX_STEPS
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..core.status import ContactStatus
+from ..errors import InvalidInputError, LayersError
 from ..methods import solve_history
 
 __all__ = ["Layers", "LayersResult", "plot_layers"]
@@ -78,7 +81,7 @@ class Layers:
             value = getattr(self, name)
             low_open = name in positive
             if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                    or not np.isfinite(value) or value < 0 or (low_open and value == 0):
+                    or not math.isfinite(value) or value < 0 or (low_open and value == 0):
                 raise InvalidInputError(f"{name} must be finite and {'>' if low_open else '>='} "
                                         f"0, got {value!r}")
         if not self.poisson < 0.5:
@@ -169,7 +172,7 @@ class Layers:
                     self.actuator_stiffness * share)
         return model, pairs, actuator, loads, self.cohesion * tributary * self.depth
 
-    def solve(self, d_max: float | None = None, **options) -> "LayersResult":
+    def solve(self, d_max: float | None = None, **options: Any) -> LayersResult:
         """Apply gravity, then move the actuator from 0 to ``d_max`` in :attr:`steps` steps.
 
         ``d_max`` (m) defaults to twice the travel that brings the load to the analytic limit
@@ -260,7 +263,7 @@ class LayersResult:
                 "curve": np.column_stack([self.load, self.relative]).tolist()}
 
 
-def plot_layers(result: LayersResult, path) -> Path:
+def plot_layers(result: LayersResult, path: str | os.PathLike[str]) -> Path:
     """Lateral load against relative displacement, with the analytic limit (drawn by
     :func:`contactqp.io.plot.plot_sliding_curve`)."""
     from ..io.plot import plot_sliding_curve

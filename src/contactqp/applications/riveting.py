@@ -43,23 +43,26 @@ on the order (a test checks it), the intermediate states do.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
-from ..studies.cases import GapVariation
 from ..core.fastened import FastenedProblem
-from ..errors import InvalidInputError
-from ..io.export import PointMesh
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
 from ..core.result import FastenedResult
 from ..core.status import STATUS_LABELS
+from ..errors import InvalidInputError
+from ..io.export import PointMesh
 from ..methods import solve
 from ..methods.registry import get_method
+from ..studies.cases import GapVariation
 from .assembly import Part, StackedModel, StackedParts
 
 __all__ = ["Assembly", "RivetingModel", "FasteningSequence", "FasteningCase",
@@ -68,7 +71,8 @@ __all__ = ["Assembly", "RivetingModel", "FasteningSequence", "FasteningCase",
 _EDGES = ("left", "right", "bottom", "top")
 
 
-def plate_flexibility(plate: Part, points, cells, supports=("left", "right")) -> np.ndarray:
+def plate_flexibility(plate: Part, points: ArrayLike, cells: tuple[int, int],
+                      supports: Sequence[str] = ("left", "right")) -> np.ndarray:
     """Out-of-plane flexibility of points of a Kirchhoff plate (Morley elements, condensed).
 
     Parameters
@@ -87,11 +91,11 @@ def plate_flexibility(plate: Part, points, cells, supports=("left", "right")) ->
     ndarray, shape (k, k)
         ``R[i, j]``: deflection (m) of point ``i`` under a unit force (N) at point ``j``.
     """
-    from ..compliance.fem import plate as plate_mesh  # raises MissingDependencyError without skfem
-
     import skfem
     from scipy.spatial import cKDTree
     from skfem.helpers import dd, ddot, eye, trace
+
+    from ..compliance.fem import plate as plate_mesh  # raises MissingDependencyError without skfem
 
     bad = [s for s in supports if s not in _EDGES]
     if bad or not supports:
@@ -190,7 +194,7 @@ class Assembly(StackedParts):
             block.setflags(write=False)
         return lower, upper
 
-    def build(self) -> "RivetingModel":
+    def build(self) -> RivetingModel:
         """The reduced model of both plates (their flexibilities: :attr:`flexibilities`)."""
         points, _ = self._layout
         blocks = self.flexibilities
@@ -233,12 +237,13 @@ class RivetingModel(StackedModel):
         problem.dual()
         return problem
 
-    def problem(self, gaps) -> ContactProblem:
+    def problem(self, gaps: ArrayLike) -> ContactProblem:
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return self.base_problem.variant(gaps=gaps)
 
-    def fasten(self, gaps, order=None, *, method: str = "lawson-hanson",
-               tol: float = 1e-10) -> "FasteningSequence":
+    def fasten(self, gaps: ArrayLike, order: Sequence[int] | None = None, *,
+               method: str = "lawson-hanson",
+               tol: float = 1e-10) -> FasteningSequence:
         """Install the fasteners one after another on the gap field ``gaps`` (m, shape (k,)).
 
         Parameters
@@ -259,17 +264,18 @@ class RivetingModel(StackedModel):
         FasteningSequence
             One result per fastener installed.
         """
-        order = np.arange(len(self.fasteners)) if order is None else np.asarray(order, dtype=int)
-        if sorted(order.tolist()) != list(range(len(self.fasteners))):
+        n_fasteners = len(self.fasteners)
+        sequence = np.arange(n_fasteners) if order is None else np.asarray(order, dtype=int)
+        if sorted(sequence.tolist()) != list(range(n_fasteners)):
             raise InvalidInputError(f"order must be a permutation of 0..{len(self.fasteners) - 1}")
         problem = self.problem(self.check_gaps(gaps))
         steps, forces = [], None
-        for count in range(1, len(order) + 1):
-            fastened = FastenedProblem(problem, self.fasteners[order[:count]])
+        for count in range(1, len(sequence) + 1):
+            fastened = FastenedProblem(problem, self.fasteners[sequence[:count]])
             step = solve(fastened, method, **_fastening_options(method, tol, forces))
             forces = step.multipliers
             steps.append(step)
-        return FasteningSequence(steps, order)
+        return FasteningSequence(steps, sequence)
 
 
 def _fastening_options(method: str, tol: float, r0) -> dict:
@@ -297,7 +303,8 @@ class FasteningSequence:
 
 
 class FasteningCase(GapVariation):
-    """A riveted assembly, every fastener installed: a case of :func:`~contactqp.studies.batch.run_batch`.
+    """A riveted assembly, every fastener installed: a case of
+    :func:`~contactqp.studies.batch.run_batch`.
 
     Each sample is a :class:`~contactqp.core.fastened.FastenedProblem` (its Schur complement
     reduced once for all samples) solved by :func:`~contactqp.solve` (``method``, ``tol``) with
@@ -333,7 +340,8 @@ class FasteningCase(GapVariation):
         return {**super().describe(), "fasteners": self.fasteners.tolist()}
 
 
-def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> PointMesh:
+def result_mesh(model: RivetingModel, state: FastenedResult,
+                initial_gaps: ArrayLike) -> PointMesh:
     """Both contact grids as quadrilateral surfaces with the fastened state, for
     :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *result_mesh(...))``).
 
@@ -343,7 +351,7 @@ def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> Po
     :data:`~contactqp.core.status.STATUS_LABELS`: open, closed, fastened), ``fastener_force``
     (N, zero away from fasteners).
     """
-    nx, ny = model.assembly.grid
+    nx, ny = model.grid
     k = model.n_pairs
     ids = np.arange(k).reshape(ny, nx)
     quads = np.column_stack([ids[:-1, :-1].ravel(), ids[:-1, 1:].ravel(), ids[1:, 1:].ravel(),
@@ -369,7 +377,8 @@ def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps) -> Po
     return PointMesh(points, [("quad", np.vstack([quads, quads + k]))], data)
 
 
-def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps, path) -> Path:
+def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps: ArrayLike,
+                path: str | os.PathLike[str]) -> Path:
     """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
     (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
     from ..io.plot import plot_point_maps

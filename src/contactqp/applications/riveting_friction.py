@@ -1,7 +1,7 @@
 r"""Fastening two thin parts with friction on their interface, the state carried over.
 
-:mod:`contactqp.applications.riveting` models the parts as Kirchhoff plates, out-of-plane only, so their
-interface cannot slip. Here each part is a coarse 3-D elastic block
+:mod:`contactqp.applications.riveting` models the parts as Kirchhoff plates, out-of-plane only,
+so their interface cannot slip. Here each part is a coarse 3-D elastic block
 (:class:`~contactqp.compliance.fem.ElasticModel`), so the facing surfaces move in-plane when the
 parts bend: a fastener pulling the parts together makes the interface slip where friction lets
 it, and what the next fastener finds depends on what the previous ones did.
@@ -10,12 +10,12 @@ Model
 -----
 The ``lower`` part occupies ``[0, L] x [0, B] x [0, t_l]``, the ``upper`` one lies on it,
 ``t_l <= z <= t_l + t_u``. Both are **clamped at their short end faces** (``x = 0`` and
-``x = L``, every component), the assembly jig of :mod:`contactqp.applications.riveting`: this removes every
-rigid-body mode of each part with the fixations ``ElasticModel.fix`` offers, and an in-plane
-load on the upper part can then be carried by its own clamps and, through friction, by the lower
-part, which is the load sharing the fastening sequence decides. (Soft springs holding the upper
-part would need springs added to its condensed stiffness, which the finite-element models do
-not offer.)
+``x = L``, every component), the assembly jig of :mod:`contactqp.applications.riveting`: this
+removes every rigid-body mode of each part with the fixations ``ElasticModel.fix`` offers, and an
+in-plane load on the upper part can then be carried by its own clamps and, through friction, by
+the lower part, which is the load sharing the fastening sequence decides. (Soft springs holding
+the upper part would need springs added to its condensed stiffness, which the finite-element
+models do not offer.)
 
 Each part is meshed with one layer of hexahedral cells, each split into quadratic (10-node)
 tetrahedra (``block(..., cell="tet")``, ``order=2``). Quadratic hexahedra would do as well but
@@ -48,17 +48,20 @@ law acts on each step's slip increment.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from ..core.contact import NodePairs
-from ..errors import InvalidInputError
 from ..core.history import linear_path
 from ..core.model import ReducedModel
 from ..core.problem import FrictionalProblem
 from ..core.result import FrictionalResult
+from ..errors import InvalidInputError
 from ..methods import solve_history
 from .assembly import Part, StackedModel, StackedParts
 
@@ -88,7 +91,7 @@ class FrictionAssembly(StackedParts):
     upper: Part = Part(length=0.100, width=0.040, thickness=0.0012)
     cells: tuple = (10, 4)
 
-    def build(self) -> "FrictionRivetingModel":
+    def build(self) -> FrictionRivetingModel:
         """Mesh, clamp and condense both parts (about a second for the default cells)."""
         from ..compliance.fem import ElasticModel, block  # needs scikit-fem
 
@@ -110,6 +113,7 @@ class FrictionAssembly(StackedParts):
             nodes = body.select_nodes(np.column_stack([points, np.full(len(points), height)]),
                                       where=face).nodes
             reduced = body.reduced_model(nodes)
+            assert reduced.coordinates is not None  # a mesh's reduced model has its nodes'
             parts.append((body, nodes))
             blocks.append(reduced.flexibility)
             coordinates.append(reduced.coordinates + [0.0, 0.0, base])
@@ -157,19 +161,19 @@ class FrictionRivetingModel(StackedModel):
         super().__init__(assembly, model, points, (int(nx) - 1, int(ny) + 1))
         self.parts = parts
 
-    def obstacles(self, gaps) -> list[NodePairs]:
+    def obstacles(self, gaps: ArrayLike) -> list[NodePairs]:
         """The interface as :class:`NodePairs` for initial gaps ``gaps`` (m, shape (k,))."""
         return [self.node_pairs(gaps)]
 
-    def clamp_loads(self, pairs, force: float) -> np.ndarray:
+    def clamp_loads(self, pairs: Sequence[int], force: float) -> np.ndarray:
         """Loads (N, shape (n_freedoms,)) of fasteners clamping ``pairs`` with ``force`` (N).
 
         ``+force`` along ``z`` on each pair's lower node, ``-force`` on its upper node.
         """
         loads = np.zeros(self.model.n_freedoms)
-        pairs = np.asarray(pairs, dtype=int)
-        loads[_DOFS * pairs + 2] += force
-        loads[_DOFS * (self.n_pairs + pairs) + 2] -= force
+        lower = np.asarray(pairs, dtype=int)
+        loads[_DOFS * lower + 2] += force
+        loads[_DOFS * (self.n_pairs + lower) + 2] -= force
         return loads
 
     def shear_loads(self, force: float) -> np.ndarray:
@@ -178,8 +182,9 @@ class FrictionRivetingModel(StackedModel):
         loads[_DOFS * np.arange(self.n_pairs, 2 * self.n_pairs)] = force / self.n_pairs
         return loads
 
-    def fasten(self, gaps, fasteners, mu, *, clamp: float = 500.0, shear: float = 0.0,
-               shear_steps: int = 2, facets=None, **options) -> list[FasteningStep]:
+    def fasten(self, gaps: ArrayLike, fasteners: Sequence[tuple[int, int]], mu: ArrayLike, *,
+               clamp: float = 500.0, shear: float = 0.0, shear_steps: int = 2,
+               facets: int | None = None, **options: Any) -> list[FasteningStep]:
         """Install ``fasteners`` in order, then apply and remove ``shear``; every step's state.
 
         Parameters
@@ -209,14 +214,14 @@ class FrictionRivetingModel(StackedModel):
             One per fastener, then ``2 shear_steps`` when ``shear`` is not zero. Check each
             ``step.result.success``.
         """
-        fasteners = [tuple(int(v) for v in f) for f in fasteners]
-        pairs = [self.pair(i, j) for i, j in fasteners]
+        positions = [tuple(int(v) for v in f) for f in fasteners]
+        pairs = [self.pair(i, j) for i, j in positions]
         if not pairs or len(set(pairs)) != len(pairs):
             raise InvalidInputError("fasteners must name at least one pair, each at most once")
         if not (np.isfinite(clamp) and clamp > 0):
             raise InvalidInputError(f"clamp must be a positive force (N), got {clamp!r}")
         history = [self.clamp_loads(pairs[:n], clamp) for n in range(1, len(pairs) + 1)]
-        labels = [f"fastener {f}" for f in fasteners]
+        labels = [f"fastener {f}" for f in positions]
         if shear:
             fastened = history[-1]
             history.extend(linear_path([fastened, fastened + self.shear_loads(shear), fastened],
@@ -227,4 +232,4 @@ class FrictionRivetingModel(StackedModel):
         problem = FrictionalProblem(self.model, history[0], self.obstacles(gaps), mu,
                                     facets=facets)
         steps = solve_history(problem, np.array(history), **options).steps
-        return [FasteningStep(label, step) for label, step in zip(labels, steps)]
+        return [FasteningStep(label, step) for label, step in zip(labels, steps, strict=True)]

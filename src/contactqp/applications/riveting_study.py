@@ -15,11 +15,13 @@ and writes, in the output directory:
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.status import ContactStatus
 from ..errors import ContactWarning, InvalidInputError
@@ -81,12 +83,14 @@ class RivetingStudy:
         return self.sequence.success and self.summary.failed == 0 and self.statistics is not None
 
 
-def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, workers: int = 1,
-                       scheduler: str | None = None, gaps=None, mean_gap: float = 2e-4,
+def run_riveting_study(out: str | PathLike[str], *, samples: int | None = None, seed: int = 0,
+                       workers: int = 1, scheduler: str | None = None,
+                       gaps: str | PathLike[str] | ArrayLike | None = None, mean_gap: float = 2e-4,
                        amplitude: float = 1e-4, correlation_length: float = 0.04,
                        method: str = "lawson-hanson", plot: bool = False,
-                       assembly: Assembly | None = None, progress=None,
-                       names: dict | None = None) -> RivetingStudy:
+                       assembly: Assembly | None = None,
+                       progress: Callable[[int, int], None] | None = None,
+                       names: dict[str, str] | None = None) -> RivetingStudy:
     """Run (or resume) the riveting variation study into the directory ``out``.
 
     Parameters
@@ -141,6 +145,7 @@ def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, worker
         return (names or {}).get(parameter, parameter)
 
     model = (Assembly() if assembly is None else assembly).build()
+    source: GapSamples | GaussianGapField
     if gaps is not None:
         source = load_gap_samples(gaps) if isinstance(gaps, (str, PathLike)) else GapSamples(gaps)
         nominal_gaps = source.samples.mean(axis=0)
@@ -180,7 +185,7 @@ def run_riveting_study(out, *, samples: int | None = None, seed: int = 0, worker
     files["statistics.csv"] = write_csv(out / "statistics.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "mean_gap": statistics.mean,
         **{f"gap_q{level * 100:g}": q for level, q in zip(statistics.levels,
-                                                          statistics.quantiles)},
+                                                          statistics.quantiles, strict=True)},
         "contact_probability": statistics.contact_probability})
     if plot:
         from ..io.plot import plot_statistics
@@ -211,7 +216,8 @@ def _write_nominal(out: Path, model: RivetingModel, sequence: FasteningSequence,
     """Write the nominal state's files; ``{name: path}``."""
     final = sequence.final
     xy = model.points
-    files = {"nominal.vtu": write_vtu(out / "nominal.vtu", *result_mesh(model, final, nominal_gaps))}
+    nominal_mesh = result_mesh(model, final, nominal_gaps)
+    files = {"nominal.vtu": write_vtu(out / "nominal.vtu", *nominal_mesh)}
     files["nominal_contacts.csv"] = write_csv(out / "nominal_contacts.csv", {
         "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.gaps,
         "force": final.forces, "status": final.status_labels})

@@ -35,9 +35,12 @@ loads. The default loads close the free end and leave every other node open;
 from __future__ import annotations
 
 import dataclasses
+import math
 import numbers
+import os
 import time
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -45,17 +48,18 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike
 
 from ..compliance.beam import Frame2D
 from ..core.contact import GapObstacle
-from ..errors import InvalidInputError, ReferenceSolveError
-from ..io import export
 from ..core.model import ReducedModel
-from ..optional import require
 from ..core.problem import ContactProblem
 from ..core.result import ContactResult
 from ..core.status import ContactStatus
+from ..errors import InvalidInputError, ReferenceSolveError
+from ..io import export
 from ..methods import solve
+from ..optional import require
 
 __all__ = ["Rod", "RodLoad", "RodLoadCase", "FullSolution", "CaseComparison", "DEFAULT_CASES",
            "ReferenceSolveError", "solve_reduced", "solve_full", "compare", "deviations",
@@ -130,7 +134,7 @@ class Rod:
         for name in ("length", "young", "area", "gap_free", "gap_clamped"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                    or not (np.isfinite(value) and value > 0):
+                    or not math.isfinite(value) or value <= 0:
                 raise InvalidInputError(f"{name} must be finite and > 0, got {value}")
         self.node_indices  # noqa: B018  (validates nodes and n_elements)
 
@@ -170,8 +174,8 @@ class Rod:
         if np.any(off) or np.any(index < 0) or np.any(index >= self.n_elements):
             bad = x[off | (index < 0) | (index >= self.n_elements)][0]
             raise InvalidInputError(
-                f"computational node x = {bad:g} m is not a free mesh node of the {self.n_elements} "
-                f"elements on [0, {self.length:g}) m")
+                f"computational node x = {bad:g} m is not a free mesh node of the "
+                f"{self.n_elements} elements on [0, {self.length:g}) m")
         if np.unique(index).size != index.size:
             raise InvalidInputError("nodes contains repeated positions")
         return index
@@ -186,16 +190,16 @@ class Rod:
         """Unit normal of the obstacle pointing from the rod into it, shape (2,)."""
         return np.array([-self.slope, -1.0]) / np.hypot(1.0, self.slope)
 
-    def gap(self, x) -> np.ndarray:
+    def gap(self, x: ArrayLike) -> np.ndarray:
         """Initial gap along ``y`` under the points ``x`` (m)."""
         return self.gap_free + self.slope * np.asarray(x, dtype=float)
 
-    def normal_gap(self, x) -> np.ndarray:
+    def normal_gap(self, x: ArrayLike) -> np.ndarray:
         """Initial distance from the points ``x`` to the obstacle, along :attr:`normal` (m)."""
         return self.gap(x) / np.hypot(1.0, self.slope)
 
     def mesh_loads(self, case: RodLoadCase) -> np.ndarray:
-        """Load vector of the free freedoms of :attr:`frame`; forces must sit on computational nodes."""
+        """Load vector of the free freedoms of :attr:`frame`; forces sit on computational nodes."""
         rows = []
         for load in case.loads:
             hit = np.flatnonzero(np.isclose(self.nodes, load.x, rtol=0, atol=1e-9 * self.length))
@@ -370,7 +374,8 @@ def _active_set_polish(K, G, f, h, active, name):
     return free - influence @ z, z
 
 
-def deviations(values, reference, floor: float) -> tuple[np.ndarray, np.ndarray]:
+def deviations(values: ArrayLike, reference: ArrayLike,
+               floor: float) -> tuple[np.ndarray, np.ndarray]:
     """Relative deviations in percent, or absolute ones (same unit) where ``|reference| <= floor``.
 
     Returns
@@ -402,7 +407,8 @@ class CaseComparison:
     reference : FullSolution
         Reference with contacts at every mesh node (variant b), the one the table compares with.
     eps_x, eps_y : ndarray, shape (n_nodes,)
-        Deviations from ``reference`` in percent, or in metres where ``absolute_x`` / ``absolute_y``.
+        Deviations from ``reference`` in percent, or in metres where ``absolute_x`` /
+        ``absolute_y``.
     absolute_x, absolute_y : ndarray of bool
         Reference values below ``ABSOLUTE_BELOW`` times the case's largest displacement.
     max_eps : float
@@ -452,8 +458,8 @@ def _compare_case(rod: Rod, case: RodLoadCase, solver: str, repeat: int) -> Case
     max_eps_same_nodes = _node_deviations(U, same_nodes.displacements[rod.node_indices, :2])[2]
     frame = rod.frame
     contact = np.zeros(frame.free.size)
-    for k, force in zip(rod.node_indices, reduced.forces):
-        for component, n in zip(("ux", "uy"), rod.normal):
+    for k, force in zip(rod.node_indices, reduced.forces, strict=True):
+        for component, n in zip(("ux", "uy"), rod.normal, strict=True):
             contact[frame.index(int(k), component)] -= force * n
     recovered = frame.displacements(rod.mesh_loads(case) + contact)
     mesh = rod.mesh_contact_nodes
@@ -466,7 +472,8 @@ def _compare_case(rod: Rod, case: RodLoadCase, solver: str, repeat: int) -> Case
         max_penetration=float(max(np.max(crossing), 0.0)), recovered=recovered)
 
 
-def compare(rod: Rod | None = None, cases=DEFAULT_CASES, solver: str = "active-set",
+def compare(rod: Rod | None = None, cases: Sequence[RodLoadCase] = DEFAULT_CASES,
+            solver: str = "active-set",
             repeat: int = 3) -> list[CaseComparison]:
     """The method's table: reduced solutions against full finite-element contact solutions.
 
@@ -490,7 +497,7 @@ def compare(rod: Rod | None = None, cases=DEFAULT_CASES, solver: str = "active-s
     return [_compare_case(rod, case, solver, int(repeat)) for case in cases]
 
 
-def as_record(rod: Rod, comparisons) -> dict:
+def as_record(rod: Rod, comparisons: Sequence[CaseComparison]) -> dict:
     """The comparison as plain JSON-ready data, in SI units (m, N, s).
 
     ``gap`` is the initial gap along ``y``; ``eps_x`` and ``eps_y`` are percentages, except where
@@ -516,7 +523,8 @@ def as_record(rod: Rod, comparisons) -> dict:
             "t_reduced": c.t_reduced, "t_full": c.t_full, "max_penetration": c.max_penetration,
             "reference_contacts": [{"x": float(rod.frame.coordinates[k, 0]), "force": float(f)}
                                    for k, f in zip(c.reference.contact_nodes[touching],
-                                                   c.reference.forces[touching])],
+                                                   c.reference.forces[touching],
+                                                   strict=True)],
             "success": c.reduced.success, "status": c.reduced.status,
             "message": c.reduced.message})
     return {"clamped_end": "right",
@@ -526,7 +534,7 @@ def as_record(rod: Rod, comparisons) -> dict:
             "cases": cases}
 
 
-def result_mesh(rod: Rod, comparisons) -> export.PointMesh:
+def result_mesh(rod: Rod, comparisons: Sequence[CaseComparison]) -> export.PointMesh:
     """The mesh and every case's solutions, for :func:`~contactqp.io.export.write_vtu`
     (``write_vtu(path, *result_mesh(rod, comparisons))``).
 
@@ -554,7 +562,7 @@ def result_mesh(rod: Rod, comparisons) -> export.PointMesh:
     return export.PointMesh(frame.coordinates, [("line", frame.elements)], data)
 
 
-def plot_rod(rod: Rod, comparisons, path) -> Path:
+def plot_rod(rod: Rod, comparisons: Sequence[CaseComparison], path: str | os.PathLike[str]) -> Path:
     """The rod deformed over its obstacle, one panel per load case (drawn by
     :func:`contactqp.io.plot.plot_deflections`, true scale, mm).
 

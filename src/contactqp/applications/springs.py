@@ -138,12 +138,12 @@ class SpringChain:
         limit = self.friction_limit
         pull = np.zeros(n)
         pull[-1] = force
-        tension = [0.0] * n  # tension[i]: spring i + 1, between body i and the one before
+        carried = [0.0] * n  # carried[i]: spring i + 1, between body i and the one before
         after = 0.0
-        for i, load in zip(range(n - 1, -1, -1), pull[::-1].tolist()):
+        for i, load in zip(range(n - 1, -1, -1), pull[::-1].tolist(), strict=True):
             free = after + load  # what spring i + 1 carries if body i has no friction
-            after = tension[i] = math.copysign(max(abs(free) - limit, 0.0), free)
-        tension = np.array(tension)
+            after = carried[i] = math.copysign(max(abs(free) - limit, 0.0), free)
+        tension = np.array(carried)
         friction = np.empty(n)
         friction[:-1] = tension[1:] - tension[:-1]
         friction[-1] = force - tension[-1]

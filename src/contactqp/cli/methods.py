@@ -42,7 +42,7 @@ def _table(described, kinds):
     table = Table(title="contactqp methods")
     for column in ("method", "kinds", "role", "extra", "installed", "options"):
         table.add_column(column)
-    defaults = {k.default: set() for k in kinds.values()}
+    defaults: dict[str, set[str]] = {k.default: set() for k in kinds.values()}
     for k in kinds.values():
         defaults[k.default].add(k.name)
     for m in described:

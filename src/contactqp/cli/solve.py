@@ -31,6 +31,7 @@ _HISTORY_STATUSES = (ContactStatus.STICK, ContactStatus.SLIP, ContactStatus.OPEN
                    "(and steps.csv for a load history).")
 def solve(problem_file, as_json, out):
     """Solve the contact problem (with friction, or a load history) in a TOML file."""
+    from ..core.history import HistoryResult
     from ..io.problem_file import load_problem_file, write_results
 
     spec = load_problem_file(problem_file)
@@ -45,7 +46,7 @@ def solve(problem_file, as_json, out):
     else:
         _result_table(spec, result, spec.name)
         _print_written(written)
-    if spec.history is not None:
+    if isinstance(result, HistoryResult):  # spec.history was given
         failed = summary["failed_steps"]
         if failed:
             first = result.steps[failed[0]]

@@ -9,8 +9,8 @@ the (Mohr-)Coulomb cone
     C_i = \{ \|r_T\| \le \mu_i r_N + c_i \}, \qquad r_N \ge -c_i / \mu_i ,
 
 Coulomb's for cohesion :math:`c_i = 0`. With cohesion the cone is Coulomb's translated to its
-apex :math:`r_N = -c_i/\mu_i` (the law of :class:`~contactqp.core.local_problem.LocalProblem`): a closed
-contact carries shear up to :math:`c_i` without normal force and tension up to
+apex :math:`r_N = -c_i/\mu_i` (the law of :class:`~contactqp.core.local_problem.LocalProblem`):
+a closed contact carries shear up to :math:`c_i` without normal force and tension up to
 :math:`c_i/\mu_i`, and the gap opens when that tension is reached (perfectly plastic, no
 softening: an open cohesive contact keeps transmitting :math:`c_i/\mu_i`). The normal law acts on
 the force measured from the apex, :math:`\tilde r = r + (c/\mu) e_N`: :math:`\tilde r_N \ge 0`,
@@ -34,6 +34,7 @@ import numbers
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .model import finite_array
@@ -61,10 +62,10 @@ def polygon_normals(facets: int) -> np.ndarray:
     return np.column_stack([np.cos(angles), np.sin(angles)])
 
 
-def _per_contact(value, name: str, count: int) -> np.ndarray:
+def _per_contact(value: ArrayLike, name: str, count: int) -> np.ndarray:
     """A scalar or a ``(count,)`` array of finite values ``>= 0``, as a ``(count,)`` array."""
     scalar = np.ndim(value) == 0
-    array = finite_array([value] if scalar else value, name, 1)
+    array = finite_array(np.atleast_1d(value) if scalar else value, name, 1)
     if scalar:
         array = np.full(count, array[0])
     elif array.shape != (count,):
@@ -112,7 +113,8 @@ class FrictionLaw:
     cohesion: np.ndarray
     facets: int | None
 
-    def __init__(self, mu, cohesion=0.0, facets=None, *, n_contacts: int):
+    def __init__(self, mu: ArrayLike, cohesion: ArrayLike = 0.0, facets: int | None = None, *,
+                 n_contacts: int) -> None:
         object.__setattr__(self, "mu", _per_contact(mu, "mu", n_contacts))
         object.__setattr__(self, "cohesion", _per_contact(cohesion, "cohesion", n_contacts))
         bad = np.flatnonzero((self.cohesion > 0) & (self.mu == 0))
@@ -130,26 +132,27 @@ class FrictionLaw:
         """Number of contacts ``k``."""
         return int(self.mu.size)
 
-    def apex_forces(self, forces) -> np.ndarray:
+    def apex_forces(self, forces: ArrayLike) -> np.ndarray:
         """Local forces measured from the cone's apex, ``r + (c / mu) e_N``, shape (k, d)."""
         shifted = np.array(forces, dtype=float)
         shifted[:, 0] += apex_distance(self.mu, self.cohesion)
         return shifted
 
-    def bound(self, normal_forces) -> np.ndarray:
+    def bound(self, normal_forces: ArrayLike) -> np.ndarray:
         """Radius ``mu r_N + c`` of each friction disc (N), for normal forces ``(k,)``."""
         return self.mu * np.asarray(normal_forces, dtype=float) + self.cohesion
 
-    def _vertices(self) -> np.ndarray:
-        """Unit vertices of the polygon in the tangent plane, shape (facets, 2).
+    @staticmethod
+    def _vertices(facets: int) -> np.ndarray:
+        """Unit vertices of the polygon of ``facets`` sides in the tangent plane, (facets, 2).
 
         Vertex ``k`` joins sides ``k`` and ``k + 1``: it is along the sum of their normals.
         """
-        normals = polygon_normals(self.facets)
+        normals = polygon_normals(facets)
         vertices = normals + np.roll(normals, -1, axis=0)
         return vertices / np.linalg.norm(vertices, axis=1)[:, None]
 
-    def support(self, vectors) -> np.ndarray:
+    def support(self, vectors: ArrayLike) -> np.ndarray:
         """Support function of the unit disc (or polygon) at tangential vectors ``(k, d - 1)``.
 
         ``max_{f in D_1} f . x``: the norm for the exact cone (and in 2-D), the largest vertex
@@ -158,16 +161,16 @@ class FrictionLaw:
         x = np.asarray(vectors, dtype=float)
         if self.facets is None or x.shape[1] != 2:
             return np.linalg.norm(x, axis=1)
-        return np.max(x @ self._vertices().T, axis=1)
+        return np.max(x @ self._vertices(self.facets).T, axis=1)
 
-    def gauge(self, vectors) -> np.ndarray:
+    def gauge(self, vectors: ArrayLike) -> np.ndarray:
         """Gauge of the unit disc (or polygon): ``x`` is in ``t D_1`` iff ``gauge(x) <= t``."""
         x = np.asarray(vectors, dtype=float)
         if self.facets is None or x.shape[1] != 2:
             return np.linalg.norm(x, axis=1)
         return np.max(x @ polygon_normals(self.facets).T, axis=1) / np.cos(np.pi / self.facets)
 
-    def cone_excess(self, forces) -> np.ndarray:
+    def cone_excess(self, forces: ArrayLike) -> np.ndarray:
         """``gauge(r_T) - (mu r_N + c)`` per contact (N): positive outside the friction set.
 
         ``forces``: local forces, shape (k, d), normal first.
@@ -175,7 +178,7 @@ class FrictionLaw:
         r = np.asarray(forces, dtype=float)
         return self.gauge(r[:, 1:]) - self.bound(r[:, 0])
 
-    def dissipation_gap(self, forces, slips) -> np.ndarray:
+    def dissipation_gap(self, forces: ArrayLike, slips: ArrayLike) -> np.ndarray:
         """``(mu r_N + c) support(-s_T) + r_T . s_T`` per contact (J), zero under the law.
 
         It is >= 0 for admissible forces, and zero exactly when the friction force does the
@@ -185,11 +188,13 @@ class FrictionLaw:
         s = np.asarray(slips, dtype=float)
         return self.bound(r[:, 0]) * self.support(-s) + np.sum(r[:, 1:] * s, axis=1)
 
-    def status(self, forces, slips, force_tol: float, slip_tol: float) -> np.ndarray:
+    def status(self, forces: ArrayLike, slips: ArrayLike, force_tol: ArrayLike,
+               slip_tol: ArrayLike) -> np.ndarray:
         """:class:`~contactqp.core.status.ContactStatus` code per contact: open, stick or slip.
 
         Open: the force measured from the apex is zero (``||r~|| <= force_tol``, N). Slip:
-        closed and ``||s_T|| > slip_tol`` (m). Stick otherwise.
+        closed and ``||s_T|| > slip_tol`` (m). Stick otherwise. Each tolerance is a scalar or
+        holds one value per contact.
         """
         carries = np.linalg.norm(self.apex_forces(forces), axis=1) > force_tol
         slipping = np.linalg.norm(np.asarray(slips, dtype=float), axis=1) > slip_tol

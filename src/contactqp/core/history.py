@@ -14,8 +14,8 @@ local forces :math:`r_k = r_{k-1} + \Delta r` with, in the local frames of
 so that :math:`u_N = \Delta + (H U_k)_N` is the total gap and
 :math:`u_T = (H U_k)_T - (H U_{k-1})_T` the *slip increment* of the step. The laws hold on the
 totals of the forces and the increments of the slip: :math:`r_k` in the friction set
-(:class:`~contactqp.core.friction.FrictionLaw`), :math:`u_N \ge 0` complementary to the normal force,
-and :math:`-r_{T,k} \cdot u_T` the largest friction work (maximum dissipation). In the total
+(:class:`~contactqp.core.friction.FrictionLaw`), :math:`u_N \ge 0` complementary to the normal
+force, and :math:`-r_{T,k} \cdot u_T` the largest friction work (maximum dissipation). In the total
 unknown :math:`r_k` this is the FCLIB problem :math:`u = W r_k + q_k` with
 :math:`q_k = \bar q_k - W r_{k-1}`, solved by :func:`~contactqp.solve` warm started from
 :math:`r_{k-1}` (:func:`~contactqp.methods.history.solve_history` chains the steps). The energy
@@ -27,8 +27,10 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .model import finite_array
@@ -42,7 +44,7 @@ __all__ = ["MAX_STEPS", "HistoryResult", "linear_path"]
 MAX_STEPS = 100_000
 
 
-def linear_path(points, steps: int, max_steps: int | None = MAX_STEPS) -> np.ndarray:
+def linear_path(points: ArrayLike, steps: int, max_steps: int | None = MAX_STEPS) -> np.ndarray:
     """Loads along straight segments between turning points.
 
     Parameters
@@ -73,7 +75,7 @@ def linear_path(points, steps: int, max_steps: int | None = MAX_STEPS) -> np.nda
             f"steps = {steps} gives {total} load steps for {P.shape[0]} turning points, more "
             f"than the {max_steps} allowed (each step is a full solve, and its result is kept)")
     fractions = np.arange(1, int(steps) + 1) / int(steps)
-    segments = [P[:1]] + [a + fractions[:, None] * (b - a) for a, b in zip(P[:-1], P[1:])]
+    segments = [P[:1]] + [a + fractions[:, None] * (b - a) for a, b in pairwise(P)]
     return np.vstack(segments)
 
 
@@ -87,12 +89,12 @@ class HistoryResult:
         One certified result per load step, in order.
     """
 
-    steps: list
+    steps: list[FrictionalResult]
 
     def __len__(self) -> int:
         return len(self.steps)
 
-    def __getitem__(self, index) -> FrictionalResult:
+    def __getitem__(self, index: int) -> FrictionalResult:
         return self.steps[index]
 
     @property

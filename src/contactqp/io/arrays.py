@@ -19,6 +19,7 @@ import zlib
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import FileFormatError, InvalidInputError
 
@@ -39,7 +40,8 @@ SCIPY_SPARSE_NPZ = frozenset({"format", "shape", "data"})
 _UNREADABLE = (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError)
 
 
-def read_array(path, key: str | None = None, format: str | None = None) -> np.ndarray:
+def read_array(path: str | os.PathLike[str], key: str | None = None,
+               format: str | None = None) -> np.ndarray:
     """Read a numeric array from a CSV, NPY, NPZ, MatrixMarket or OP4 file.
 
     Parameters
@@ -82,8 +84,8 @@ def read_array(path, key: str | None = None, format: str | None = None) -> np.nd
     else:
         from ..compliance.importers import mtx_matrix, op4_matrix
 
-        array = op4_matrix(path, key) if fmt == "op4" else mtx_matrix(path)
-        array = array.toarray() if hasattr(array, "toarray") else array
+        matrix = op4_matrix(path, key) if fmt == "op4" else mtx_matrix(path)
+        array = matrix.toarray() if sp.issparse(matrix) else np.asarray(matrix)
     array = np.asarray(array)
     if np.iscomplexobj(array):
         raise FileFormatError("the file holds complex numbers; a real array is needed")

@@ -31,12 +31,12 @@ from ..core.local_problem import GlobalProblem, LocalProblem
 from ..errors import (
     ContactError,
     FileFormatError,
+    FileLayoutError,
     InvalidInputError,
     UnsupportedProblemError,
 )
-from ..errors import FileLayoutError
-from .siconos import read_dat
 from ..optional import require
+from .siconos import read_dat
 
 __all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
            "is_hdf5", "is_own_solution", "solution_source", "file_key", "SOLUTION_OF"]
@@ -83,7 +83,8 @@ def _dataset(group, name):
 def _int(group, name):
     arr = np.asarray(_dataset(group, name)[()])
     if arr.size != 1 or arr.dtype.kind not in "iu":
-        raise FileLayoutError(f"{group.name}/{name} must hold one integer, got {arr.dtype} {arr.shape}")
+        raise FileLayoutError(f"{group.name}/{name} must hold one integer, got {arr.dtype} "
+                              f"{arr.shape}")
     return int(arr.reshape(-1)[0])
 
 
@@ -93,7 +94,8 @@ def _vector(group, name, length=None, dtype=float):
         raise FileLayoutError(f"{group.name}/{name} is not numeric ({arr.dtype})")
     arr = arr.reshape(-1).astype(dtype, copy=False)
     if length is not None and arr.shape[0] < length:
-        raise FileLayoutError(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} expected")
+        raise FileLayoutError(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} "
+                              f"expected")
     return arr if length is None else arr[:length]
 
 
@@ -128,7 +130,8 @@ def _read_matrix(group):
         cls = sp.csr_matrix if nz == -2 else sp.csc_matrix
         return sp.csr_matrix(cls((x, idx, p), shape=(m, n)))
     if nz < -2:
-        raise FileLayoutError(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, >= 0 triplets)")
+        raise FileLayoutError(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, "
+                              f">= 0 triplets)")
     rows = _vector(group, "i", nz, np.int64)
     cols = _vector(group, "p", nz, np.int64)
     x = _vector(group, "x", nz)

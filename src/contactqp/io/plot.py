@@ -8,11 +8,13 @@ takes plain arrays in SI units (an application picks them from its own objects, 
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from ..optional import require
@@ -21,7 +23,8 @@ __all__ = ["plot_spring_chain", "plot_deflections", "DeflectionCase", "plot_poin
            "plot_statistics", "plot_sliding_curve", "save_figure", "subplots"]
 
 
-def subplots(nrows: int = 1, ncols: int = 1, *, figsize=(7, 4.5), **options):
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] = (7, 4.5),
+             **options: Any) -> tuple[Any, Any]:
     """``(figure, axes)`` as :func:`matplotlib.pyplot.subplots` gives, without pyplot.
 
     The :class:`matplotlib.figure.Figure` is written by :func:`save_figure` (Agg for raster
@@ -32,7 +35,7 @@ def subplots(nrows: int = 1, ncols: int = 1, *, figsize=(7, 4.5), **options):
     return figure, figure.subplots(nrows, ncols, **options)
 
 
-def save_figure(figure, path) -> Path:
+def save_figure(figure: Any, path: str | os.PathLike[str]) -> Path:
     """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders.
 
     Raises
@@ -50,7 +53,9 @@ def save_figure(figure, path) -> Path:
     return path
 
 
-def plot_spring_chain(forces, displacements, path) -> Path:
+def plot_spring_chain(forces: Sequence[float],
+                      displacements: Sequence[np.ndarray | Sequence[float]],
+                      path: str | os.PathLike[str]) -> Path:
     """Displacement of each body for each pulling force.
 
     Parameters
@@ -63,7 +68,7 @@ def plot_spring_chain(forces, displacements, path) -> Path:
         Output file; its suffix chooses the format.
     """
     figure, axes = subplots(figsize=(7, 4.5))
-    for force, x in zip(forces, displacements):
+    for force, x in zip(forces, displacements, strict=False):  # as many as both give
         bodies = range(1, len(x) + 1)
         axes.plot(bodies, x, marker="o" if len(x) <= 50 else None, label=f"F = {force:g} N")
     axes.xaxis.get_major_locator().set_params(integer=True)
@@ -76,7 +81,9 @@ def plot_spring_chain(forces, displacements, path) -> Path:
     return save_figure(figure, path)
 
 
-def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = "") -> Path:
+def plot_point_maps(points: ArrayLike, panels: Sequence[tuple[ArrayLike, str, str]],
+                    path: str | os.PathLike[str], *, marked: ArrayLike | None = None,
+                    marked_label: str = "") -> Path:
     """Maps of values at points in a plane, one panel above the other, sharing the x axis.
 
     Parameters
@@ -93,7 +100,7 @@ def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = ""
     xy = np.asarray(points, dtype=float) * 1e3
     figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True, squeeze=False)
     axes = axes[:, 0]
-    for ax, (values, title, cmap) in zip(axes, panels):
+    for ax, (values, title, cmap) in zip(axes, panels, strict=True):
         shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
         figure.colorbar(shown, ax=ax)
         if marked is not None:
@@ -109,7 +116,7 @@ def plot_point_maps(points, panels, path, *, marked=None, marked_label: str = ""
     return save_figure(figure, path)
 
 
-def plot_statistics(statistics, coordinates, path) -> Path:
+def plot_statistics(statistics: Any, coordinates: ArrayLike, path: str | os.PathLike[str]) -> Path:
     """Maps of the mean final gap, its highest quantile and the probability of contact.
 
     Parameters
@@ -129,7 +136,8 @@ def plot_statistics(statistics, coordinates, path) -> Path:
     return plot_point_maps(coordinates, panels, path)
 
 
-def plot_sliding_curve(relative, load, limit: float, path, *, onset: int | None = None,
+def plot_sliding_curve(relative: ArrayLike, load: ArrayLike, limit: float,
+                       path: str | os.PathLike[str], *, onset: int | None = None,
                        title: str = "") -> Path:
     """Lateral load against the relative displacement of two layers, with the analytic limit.
 
@@ -174,7 +182,8 @@ class DeflectionCase(NamedTuple):
     contacts: Sequence[tuple[np.ndarray, np.ndarray]]
 
 
-def plot_deflections(x, obstacle, cases: Sequence[DeflectionCase], path, *, clamp: float,
+def plot_deflections(x: ArrayLike, obstacle: ArrayLike, cases: Sequence[DeflectionCase],
+                     path: str | os.PathLike[str], *, clamp: float,
                      xlabel: str = "x (mm)") -> Path:
     """A beam deformed over its obstacle, one panel per load case, at true scale in mm.
 
@@ -196,7 +205,7 @@ def plot_deflections(x, obstacle, cases: Sequence[DeflectionCase], path, *, clam
     figure, panels = subplots(len(cases), 1, figsize=(8, 3.2 * len(cases)), sharex=True,
                               squeeze=False)
     arrow = clamp * 1e3
-    for axes, case in zip(panels[:, 0], cases):
+    for axes, case in zip(panels[:, 0], cases, strict=True):
         largest = max((np.hypot(*force) for _, force in case.loads), default=0.0)
         scale = arrow / max(largest, 1e-300)  # mm per N: the largest load is `arrow` long
         axes.fill_between(x, obstacle, obstacle.min() - 1.0, color="0.85", label="obstacle")

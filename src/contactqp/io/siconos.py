@@ -43,9 +43,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import ContactError, FileFormatError
-from ..errors import FileLayoutError
 from ..core.local_problem import GlobalProblem, LocalProblem
+from ..errors import ContactError, FileFormatError, FileLayoutError
 
 __all__ = ["read_dat", "parse_dat"]
 
@@ -263,7 +262,8 @@ def _read_cs_dump(tk, rows, cols, what):
         raise FileLayoutError(f"{what}: cannot read the CSparse header {line.strip()!r}")
     m, n, _, nnz = (int(g) for g in head.groups())
     if (m, n) != (rows, cols):
-        raise FileLayoutError(f"{what}: CSparse size {m}x{n} differs from the block size {rows}x{cols}")
+        raise FileLayoutError(f"{what}: CSparse size {m}x{n} differs from the block size "
+                              f"{rows}x{cols}")
     rr, cc, X = [], [], []
     outer = -1
     while True:
@@ -339,7 +339,8 @@ def _parse_local(tk: _Tokens, d: int, nc: int, title: str) -> LocalProblem:
     digits: dict[str, int] = {}
     W = _read(tk, digits, "W", lambda: _read_matrix(tk, "W"))
     if W.shape != (m, m):
-        raise FileLayoutError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, nc={nc}")
+        raise FileLayoutError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, "
+                              f"nc={nc}")
     q = _read(tk, digits, "q", lambda: tk.floats(m, "q"))
     mu = tk.floats(nc, "mu")
     _check_end(tk)

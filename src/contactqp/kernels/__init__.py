@@ -12,9 +12,9 @@ use. Callers: :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.co
 
 from __future__ import annotations
 
-import importlib
 import os
 import warnings
+from collections.abc import Mapping
 
 from ..errors import PureNumpyKernelsWarning
 
@@ -25,28 +25,38 @@ __all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_new
 FORCE_PURE_NUMPY = "CONTACTQP_PURE_NUMPY"
 
 
-def pure_numpy_forced(environ=os.environ) -> bool:
+def pure_numpy_forced(environ: Mapping[str, str] = os.environ) -> bool:
     """Whether :data:`FORCE_PURE_NUMPY` asks for the pure-numpy kernels (set, not ``0``)."""
     return environ.get(FORCE_PURE_NUMPY, "").strip() not in ("", "0")
 
 
+#: ``"compiled"`` or ``"pure_numpy"``: the module whose functions this one offers.
+IMPLEMENTATION: str
+
 if pure_numpy_forced():
-    from . import pure_numpy as _implementation
+    from .pure_numpy import alart_curnier_rows, natural_map_rows, project_rows, sparse_newton_matrix
+
+    IMPLEMENTATION = "pure_numpy"
 else:
     try:
-        _implementation = importlib.import_module(".compiled", __name__)
-    except ImportError as _missing:
-        from . import pure_numpy as _implementation
+        from .compiled import (
+            alart_curnier_rows,
+            natural_map_rows,
+            project_rows,
+            sparse_newton_matrix,
+        )
 
+        IMPLEMENTATION = "compiled"
+    except ImportError as _missing:
+        from .pure_numpy import (
+            alart_curnier_rows,
+            natural_map_rows,
+            project_rows,
+            sparse_newton_matrix,
+        )
+
+        IMPLEMENTATION = "pure_numpy"
         warnings.warn(f"contactqp's compiled kernels are not available ({_missing}): the "
                       f"pure-numpy kernels are used, slower on small problems; reinstall with a C "
                       f"compiler to build them", PureNumpyKernelsWarning, stacklevel=2)
         del _missing
-
-#: ``"compiled"`` or ``"pure_numpy"``: the module whose functions this one offers.
-IMPLEMENTATION: str = _implementation.__name__.rsplit(".", 1)[-1]
-
-project_rows = _implementation.project_rows
-natural_map_rows = _implementation.natural_map_rows
-alart_curnier_rows = _implementation.alart_curnier_rows
-sparse_newton_matrix = _implementation.sparse_newton_matrix

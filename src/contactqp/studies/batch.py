@@ -12,7 +12,9 @@ on the executor (in-process, local process pool, Dask cluster).
 
 from __future__ import annotations
 
+import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,6 +22,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from .executors import check_scheduler, executor
+from .protocols import GapSource, StudyCase
 from .store import BatchStore
 
 __all__ = ["BatchSummary", "DEFAULT_CHUNK", "MAX_SAMPLES", "run_batch"]
@@ -94,9 +97,10 @@ def _store_all(results, store_chunk):
         results.close()
 
 
-def run_batch(case, source, n_samples: int, path, *, workers: int = 1, scheduler=None,
+def run_batch(case: StudyCase, source: GapSource, n_samples: int, path: str | os.PathLike[str],
+              *, workers: int = 1, scheduler: str | None = None,
               chunk_size: int = DEFAULT_CHUNK, limit: int | None = None,
-              progress=None) -> BatchSummary:
+              progress: Callable[[int, int], None] | None = None) -> BatchSummary:
     """Solve samples ``0 .. n_samples-1`` of ``source`` with ``case``; store and resume.
 
     Parameters

@@ -15,18 +15,23 @@ it stored already): work a worker started is stored, not thrown away.
 from __future__ import annotations
 
 import signal
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 
 import numpy as np
 
 from ..errors import InvalidInputError
 from ..optional import require
+from .protocols import Chunk, GapSource, StudyCase, Task
 from .threads import single_threaded_blas
 
 __all__ = ["check_scheduler", "dask_cluster", "executor", "process_pool", "serial", "solve_chunk"]
 
+#: What every chunk of a study shares: its case and its gap source.
+State = tuple[StudyCase, GapSource]
 
-def solve_chunk(state, indices, warm):
+
+def solve_chunk(state: State, indices: np.ndarray, warm: np.ndarray | None) -> Chunk:
     """Solve consecutive samples, each warm started from the previous: ``(indices, records)``.
 
     ``records`` maps each field (the case's, plus ``initial_gap``) to one row per sample.
@@ -41,13 +46,14 @@ def solve_chunk(state, indices, warm):
     return indices, {name: np.array([row[name] for row in rows]) for name in rows[0]}
 
 
-def serial(state, tasks):
+def serial(state: State, tasks: Sequence[Task]) -> Iterator[Chunk]:
     """The chunks solved one after another in this process."""
     for indices, warm in tasks:
         yield solve_chunk(state, indices, warm)
 
 
-def executor(state, tasks, *, workers: int = 1, scheduler: str | None = None):
+def executor(state: State, tasks: Sequence[Task], *, workers: int = 1,
+             scheduler: str | None = None) -> Iterator[Chunk]:
     """The executor for ``tasks``: the Dask cluster at ``scheduler`` if given, else a pool of
     ``workers`` processes when there are several workers and chunks, else :func:`serial`."""
     if tasks and scheduler is not None:
@@ -61,16 +67,17 @@ def executor(state, tasks, *, workers: int = 1, scheduler: str | None = None):
 # state, a case holding its Delassus operator, is pickled once per worker, not once per chunk).
 # A module global is the only place a ProcessPoolExecutor initializer can leave something for
 # the tasks that follow it in the same process; it stays None in the parent process.
-_worker_state = None
+_worker_state: State | None = None
 
 
-def _init_worker(state):
+def _init_worker(state: State) -> None:
     global _worker_state
     _worker_state = state
     _sigint_unblocked()  # a worker forked while the pool was starting inherits the block
 
 
-def _pool_chunk(indices, warm):
+def _pool_chunk(indices: np.ndarray, warm: np.ndarray | None) -> Chunk:
+    assert _worker_state is not None, "a pool task runs in a worker its initializer prepared"
     return solve_chunk(_worker_state, indices, warm)
 
 
@@ -96,7 +103,7 @@ def _sigint_unblocked():
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
-def process_pool(state, tasks, workers: int):
+def process_pool(state: State, tasks: Sequence[Task], workers: int) -> Iterator[Chunk]:
     """Chunks solved by ``workers`` local processes, as they finish (interrupts: see the
     module notes)."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -172,7 +179,7 @@ def check_scheduler(scheduler: str) -> str:
     return scheduler
 
 
-def dask_cluster(state, tasks, scheduler: str):
+def dask_cluster(state: State, tasks: Sequence[Task], scheduler: str) -> Iterator[Chunk]:
     """Chunks solved on the Dask cluster at ``scheduler``, as they finish (interrupts: see the
     module notes)."""
     distributed = _distributed()

@@ -5,11 +5,12 @@ from __future__ import annotations
 import hashlib
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["digest"]
 
 
-def digest(*arrays) -> str:
+def digest(*arrays: ArrayLike) -> str:
     """SHA-1 of the arrays' values as float64, in order (hex string)."""
     sha = hashlib.sha1()
     for array in arrays:

@@ -17,9 +17,12 @@ A source has ``n_available`` (None: unbounded), ``realisations(indices)`` (shape
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.model import MAX_MAGNITUDE, finite_array
 from ..errors import FileFormatError, InvalidInputError
@@ -46,8 +49,8 @@ class GaussianGapField:
         Root of the per-sample seed sequences.
     """
 
-    def __init__(self, coordinates, amplitude: float, correlation_length: float, mean=0.0,
-                 seed: int = 0):
+    def __init__(self, coordinates: ArrayLike, amplitude: float, correlation_length: float,
+                 mean: ArrayLike = 0.0, seed: int = 0) -> None:
         self.coordinates = finite_array(coordinates, "coordinates", 2)
         m = len(self.coordinates)
         if not (np.isfinite(amplitude) and 0 <= amplitude <= MAX_MAGNITUDE):
@@ -61,10 +64,10 @@ class GaussianGapField:
         if isinstance(seed, bool) or int(seed) != seed or seed < 0:
             raise InvalidInputError(f"seed must be an integer >= 0, got {seed!r}")
         self.seed = int(seed)
-        self._factor = None
+        self._factor: np.ndarray | None = None
 
     @property
-    def n_available(self):
+    def n_available(self) -> None:
         """None: any number of samples."""
         return None
 
@@ -92,7 +95,7 @@ class GaussianGapField:
         self._square_root()
         return self.__dict__
 
-    def realisations(self, indices) -> np.ndarray:
+    def realisations(self, indices: Iterable[int]) -> np.ndarray:
         """Gap fields of the samples ``indices`` (m), shape (len(indices), m).
 
         Each sample is drawn and transformed on its own, so sample ``k`` is bitwise the same in
@@ -103,7 +106,7 @@ class GaussianGapField:
         factor = self._square_root()
         indices = list(indices)
         fields = np.empty((len(indices), len(self.mean)))
-        for row, k in zip(fields, indices):
+        for row, k in zip(fields, indices, strict=True):
             stream = np.random.SeedSequence(self.seed, spawn_key=(int(k),))
             row[:] = self.mean + _fixed_order_product(
                 factor, np.random.default_rng(stream).standard_normal(len(self.mean)))
@@ -131,7 +134,7 @@ def _fixed_order_product(matrix: np.ndarray, vector: np.ndarray, rows: int = 256
 class GapSamples:
     """Gap fields given as an array, one realisation per row (m), shape (N, m)."""
 
-    def __init__(self, samples):
+    def __init__(self, samples: ArrayLike) -> None:
         self.samples = finite_array(samples, "gap samples", 2)
 
     @property
@@ -139,7 +142,7 @@ class GapSamples:
         """Number of realisations ``N``."""
         return len(self.samples)
 
-    def realisations(self, indices) -> np.ndarray:
+    def realisations(self, indices: Iterable[int]) -> np.ndarray:
         """Rows ``indices``, shape (len(indices), m)."""
         return self.samples[np.asarray(indices, dtype=int)]
 
@@ -148,7 +151,7 @@ class GapSamples:
                 "digest": digest(self.samples)}
 
 
-def load_gap_samples(path) -> GapSamples:
+def load_gap_samples(path: str | os.PathLike[str]) -> GapSamples:
     """Realisations from a file: ``.npy``, ``.npz`` (its only array), or ``.csv`` / ``.txt``
     (comma-separated, one row per sample).
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,7 +37,8 @@ class GapStatistics:
     contact_probability: np.ndarray
 
 
-def gap_statistics(fields: dict, levels=(0.05, 0.5, 0.95)) -> GapStatistics:
+def gap_statistics(fields: Mapping[str, np.ndarray],
+                   levels: Sequence[float] = (0.05, 0.5, 0.95)) -> GapStatistics:
     """:class:`GapStatistics` of the records ``fields`` (one row per sample).
 
     Parameters
@@ -56,6 +58,6 @@ def gap_statistics(fields: dict, levels=(0.05, 0.5, 0.95)) -> GapStatistics:
     if not ok.any():
         raise InvalidInputError("no successful sample to compute statistics from")
     gaps, closed = fields["gap"][ok], fields["closed"][ok]
-    levels = np.asarray(levels, dtype=float)
-    return GapStatistics(int(ok.sum()), gaps.mean(axis=0), levels,
-                         np.quantile(gaps, levels, axis=0), closed.mean(axis=0))
+    probabilities = np.asarray(levels, dtype=float)
+    return GapStatistics(int(ok.sum()), gaps.mean(axis=0), probabilities,
+                         np.quantile(gaps, probabilities, axis=0), closed.mean(axis=0))

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import errno
 import json
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +41,7 @@ class BatchStore:
         self._file = file
 
     @classmethod
-    def open(cls, path: Path, case, source, n_samples: int, chunk: int) -> "BatchStore":
+    def open(cls, path: Path, case, source, n_samples: int, chunk: int) -> BatchStore:
         """Open (or create) the store at ``path``, check it belongs to this study (``case`` and
         ``source`` describe it), grow it to ``n_samples`` rows; ``chunk`` for a new store.
 
@@ -89,7 +91,7 @@ class BatchStore:
             raise
         return cls(store)
 
-    def __enter__(self) -> "BatchStore":
+    def __enter__(self) -> BatchStore:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -173,12 +175,12 @@ class BatchData:
     indices: np.ndarray
     fields: dict
 
-    def statistics(self, levels=(0.05, 0.5, 0.95)) -> GapStatistics:
+    def statistics(self, levels: Sequence[float] = (0.05, 0.5, 0.95)) -> GapStatistics:
         """:class:`GapStatistics` of the ``gap`` and ``closed`` fields (successful samples)."""
         return gap_statistics(self.fields, levels)
 
 
-def load_batch(path, n_samples: int | None = None) -> BatchData:
+def load_batch(path: str | os.PathLike[str], n_samples: int | None = None) -> BatchData:
     """Read the done samples of a store written by :func:`~contactqp.studies.batch.run_batch`.
 
     ``n_samples``: read only samples ``0 .. n_samples-1`` (a store may hold more, from an

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from contextlib import AbstractContextManager
+
 __all__ = ["single_threaded_blas"]
 
 
-def single_threaded_blas():
+def single_threaded_blas() -> AbstractContextManager[object]:
     """Limit BLAS to one thread (a context manager).
 
     Per-sample products are too small to gain from threads, and threads of several workers (or

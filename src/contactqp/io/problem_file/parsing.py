@@ -7,13 +7,14 @@ range; each error is one line naming the file and the key (:mod:`.messages`).
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-from ...core.contact import GapObstacle, NodePairs, PlaneObstacle, assemble_constraints
+from ...core.contact import GapObstacle, NodePairs, Obstacle, PlaneObstacle, assemble_constraints
 from ...core.friction import FrictionLaw
 from ...core.history import linear_path
 from ...core.model import ReducedModel
@@ -100,7 +101,9 @@ def _build_model(where: Where, doc: dict) -> ReducedModel:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            built = ReducedModel(**{which: matrix}, dofs_per_node=dofs, coordinates=coordinates)
+            flexibility, stiffness = (matrix, None) if which == "flexibility" else (None, matrix)
+            built = ReducedModel(flexibility, stiffness, dofs_per_node=dofs,
+                                 coordinates=coordinates)
         except InvalidInputError as exc:
             raise where.rewrap(label, exc) from None
     for warning in caught:
@@ -242,7 +245,7 @@ def _obstacle(where: Where, table, number: int, model: ReducedModel):
         nodes = _nodes(where, table["nodes"], f"{key}.nodes", model)
         gaps = _gaps(where, table["gaps"], f"{key}.gaps", nodes.size, "node")
         dirs = _directions(where, table, key, nodes.size)
-        obstacle = GapObstacle(nodes.tolist(), gaps, dirs)
+        obstacle: Obstacle = GapObstacle(nodes.tolist(), gaps, dirs)
     elif kind == "plane":
         _require(where, table, ("point", "normal"), key, kind)
         if model.coordinates is None:
@@ -349,7 +352,8 @@ def _points(where: Where, value, n: int) -> np.ndarray:
     return points
 
 
-def _loading(where: Where, table, loads: np.ndarray | None, n: int):
+def _loading(where: Where, table, loads: np.ndarray | None,
+             n: int) -> tuple[np.ndarray, np.ndarray | None]:
     """``(history, factors)`` of ``[loading]``: loads of each step (K, n) and, for
     ``factors``, each step's multiple of ``loads`` (K,), else None."""
     table = as_table(where, table, "[loading]")
@@ -378,7 +382,7 @@ def _loading(where: Where, table, loads: np.ndarray | None, n: int):
     return path, None
 
 
-def load_problem_file(path) -> ProblemSpec:
+def load_problem_file(path: str | os.PathLike[str]) -> ProblemSpec:
     """Read a TOML problem file and assemble its problem (schema: ``docs/problem-files.md``).
 
     Parameters
@@ -424,13 +428,19 @@ def load_problem_file(path) -> ProblemSpec:
     solver, options, certificate_tol = solver_section(where, doc, frictional)
     model = _build_model(where, doc)
     loading = as_table(where, doc.get("loading", {}), "[loading]")
-    loads = None if "points" in loading and "loads" not in doc else _loads(where, doc, model)
-    obstacles = _obstacles(where, doc, model)
-    history = factors = None
-    if "loading" in doc:
-        history, factors = _loading(where, loading, loads, model.n_freedoms)
-        if loads is None:
-            loads = history[0]
+    history: np.ndarray | None
+    factors: np.ndarray | None
+    if "points" in loading and "loads" not in doc:  # the history's first step is the load
+        obstacles = _obstacles(where, doc, model)
+        history, factors = _loading(where, loading, None, model.n_freedoms)
+        loads = history[0]
+    else:
+        loads = _loads(where, doc, model)
+        obstacles = _obstacles(where, doc, model)
+        history, factors = None, None
+        if "loading" in doc:
+            history, factors = _loading(where, loading, loads, model.n_freedoms)
+    problem: ContactProblem | FrictionalProblem
     if frictional:
         problem, solver, options = _friction(where, doc["friction"], model, loads, obstacles,
                                              certificate_tol)

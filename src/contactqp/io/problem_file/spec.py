@@ -6,15 +6,20 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ...core.history import HistoryResult
 from ...core.problem import ContactProblem, FrictionalProblem
 from ...core.result import ContactResult, FrictionalResult
+from ...errors import InvalidInputError
 from ...methods import solve, solve_history
 
 __all__ = ["ProblemSpec", "json_ready"]
+
+#: What :meth:`ProblemSpec.solve` answers: frictionless, with friction, or a load history.
+SpecResult = ContactResult | FrictionalResult | HistoryResult
 
 
 @dataclass
@@ -28,8 +33,8 @@ class ProblemSpec:
         :class:`~contactqp.FrictionalProblem` when the file has ``[friction]``, whose loads are
         the first of ``[loading].points`` when these replace ``[loads]``.
     solver : str or None
-        None for the problem kind's default method, or a method name (``contactqp methods``): frictionless, or the friction route (``"coulomb"``,
-        ``"tresca"`` or ``"polygonal"``).
+        None for the problem kind's default method, or a method name (``contactqp methods``):
+        frictionless, or the friction route (``"coulomb"``, ``"tresca"`` or ``"polygonal"``).
     options : dict
         Keyword options for the solver (``[solver]``'s, or ``[friction]``'s for friction).
     name : str
@@ -44,7 +49,7 @@ class ProblemSpec:
 
     problem: ContactProblem | FrictionalProblem
     solver: str | None = None
-    options: dict = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)
     name: str = ""
     path: Path | None = None
     history: np.ndarray | None = None
@@ -55,8 +60,7 @@ class ProblemSpec:
         """True when the problem has friction."""
         return isinstance(self.problem, FrictionalProblem)
 
-    def solve(self, progress: Callable[[int, int], None] | None = None
-              ) -> ContactResult | FrictionalResult | HistoryResult:
+    def solve(self, progress: Callable[[int, int], None] | None = None) -> SpecResult:
         """Solve :attr:`problem` (along :attr:`history` when given) with :attr:`solver`.
 
         Parameters
@@ -70,6 +74,9 @@ class ProblemSpec:
             Frictionless, with friction, or one certified result per step of the history.
         """
         if self.history is not None:
+            if not isinstance(self.problem, FrictionalProblem):  # files give [loading] no other
+                raise InvalidInputError(f"a load history needs a FrictionalProblem, got "
+                                        f"{type(self.problem).__name__}")
             return solve_history(self.problem, self.history, self.solver, progress=progress,
                                  **self.options)
         return solve(self.problem, self.solver, **self.options)
@@ -78,7 +85,7 @@ class ProblemSpec:
         """Multiple of ``[loads]`` at ``step`` of a ``factors`` history, else None."""
         return None if self.factors is None else float(self.factors[step])
 
-    def summary(self, result) -> dict:
+    def summary(self, result: SpecResult) -> dict[str, Any]:
         """A JSON-ready summary (no arrays) of ``result``, an answer of :meth:`solve`.
 
         A single result gives its own ``summary()``. A history gives ``success``, ``solver``,
@@ -105,7 +112,7 @@ class ProblemSpec:
 
 
 
-def json_ready(value):
+def json_ready(value: Any) -> Any:
     """``value`` with numpy types as Python ones and NaN or inf as None (valid JSON)."""
     if isinstance(value, dict):
         return {str(k): json_ready(v) for k, v in value.items()}

@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 
 from ...core.history import HistoryResult
+from ...core.problem import FrictionalProblem
 from ...core.result import ContactResult, FrictionalResult
 from ...core.status import status_counts
 from ...errors import FileFormatError, InvalidInputError
 from ..export import write_rows
 from .messages import one_line
-from .spec import ProblemSpec, json_ready
+from .spec import ProblemSpec, SpecResult, json_ready
 
 __all__ = ["write_results", "RESULT_FILES", "HISTORY_FILES"]
 
@@ -34,9 +35,10 @@ def _float_text(value) -> str:
 
 
 
-def _expected_steps(spec: ProblemSpec, result) -> list:
+def _expected_steps(spec: ProblemSpec, result: SpecResult) -> list:
     """The results of each step of ``result``, after checking its kind and shapes."""
     problem = spec.problem
+    kind: type[HistoryResult | FrictionalResult | ContactResult]
     if spec.history is not None:
         kind, steps = HistoryResult, getattr(result, "steps", [])
     else:
@@ -61,7 +63,8 @@ def _tangential_header(name: str, dim: int) -> list[str]:
     return [name] if dim == 2 else [f"{name}_{j}" for j in range(1, dim)]
 
 
-def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
+def write_results(spec: ProblemSpec, result: SpecResult,
+                  out_dir: str | os.PathLike[str]) -> list[Path]:
     """Write a solved problem's results to a directory (files, columns: docs/problem-files.md).
 
     Parameters
@@ -104,7 +107,8 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
     base = ["row", "node", "label", "gap0", "gap"]
     fixed = [[row, int(constraints.nodes[row]), constraints.labels[row],
               _float_text(constraints.gaps[row])] for row in range(constraints.n_constraints)]
-    if spec.frictional:
+    fields: tuple[str, ...]
+    if isinstance(problem, FrictionalProblem):
         dim = problem.dim
         header = base + ["normal_force"] + [
             column for name in ("tangential_force", "slip", "tangential_displacement")
@@ -138,18 +142,19 @@ def write_results(spec: ProblemSpec, result, out_dir) -> list[Path]:
         "options": spec.options,
         "result": spec.summary(result),
     }
-    if spec.frictional:
+    if isinstance(problem, FrictionalProblem):
         law = problem.law
         summary["friction"] = {"mu": law.mu, "cohesion": law.cohesion, "facets": law.facets}
     try:
         out.mkdir(parents=True, exist_ok=True)
         write_rows(paths[0], lead + ["node", "freedom", "u"], displacements)
         write_rows(paths[1], lead + header, contacts)
-        with open(paths[2], "wb") as handle:
-            np.savez(handle, **arrays)
-        with open(paths[3], "w", encoding="utf-8") as handle:
-            json.dump(json_ready(summary), handle, indent=2, allow_nan=False)
-            handle.write("\n")
+        with open(paths[2], "wb") as archive:
+            # allow_pickle: numpy's default, named so that **arrays cannot be read as setting it
+            np.savez(archive, allow_pickle=True, **arrays)
+        with open(paths[3], "w", encoding="utf-8") as text:
+            json.dump(json_ready(summary), text, indent=2, allow_nan=False)
+            text.write("\n")
         if history:
             cumulative = np.cumsum([step.dissipated for step in steps])
             labels = [status.label for status in FrictionalResult.STATUSES]
