@@ -47,8 +47,11 @@ class OptionalBuildExt(build_ext):
     @staticmethod
     def skipped(name: str, exc: Exception) -> None:
         """Say on stderr which extension is left out and why."""
-        print(f"WARNING: {name} not built ({type(exc).__name__}: {exc}); contactqp will use "
-              f"its pure-numpy kernels (slower on small problems)", file=sys.stderr)
+        print(
+            f"WARNING: {name} not built ({type(exc).__name__}: {exc}); contactqp will use "
+            f"its pure-numpy kernels (slower on small problems)",
+            file=sys.stderr,
+        )
 
 
 if __name__ == "__main__":

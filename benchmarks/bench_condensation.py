@@ -106,11 +106,19 @@ def run_case(cells: int, n: int, cell: str, sample: int, full: bool, rng) -> dic
     unit, t_unit = _timed(_unit_load_columns, model, nodes, loads, False)
     reuse, t_reuse = _timed(_unit_load_columns, model, nodes, loads, True)
     scale = k / loads.size
-    error = max(np.abs(unit - R[:, loads]).max(),
-                np.abs(reuse - R[:, loads]).max()) / np.abs(R).max()
-    return {"N": model.basis.N - model.fixed.size, "k": k, "condense": t_condense,
-            "unit": t_unit * scale, "reuse": t_reuse * scale, "sampled": not full,
-            "loads": loads.size, "error": error}
+    error = (
+        max(np.abs(unit - R[:, loads]).max(), np.abs(reuse - R[:, loads]).max()) / np.abs(R).max()
+    )
+    return {
+        "N": model.basis.N - model.fixed.size,
+        "k": k,
+        "condense": t_condense,
+        "unit": t_unit * scale,
+        "reuse": t_reuse * scale,
+        "sampled": not full,
+        "loads": loads.size,
+        "error": error,
+    }
 
 
 def _seconds(value: float, sampled: bool) -> str:
@@ -119,23 +127,36 @@ def _seconds(value: float, sampled: bool) -> str:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--cases", default="12x100,16x100,24x225,32x400",
-                        help="comma-separated CELLSxNODES: cells along a side x top nodes "
-                             "(perfect squares); default %(default)s")
+    parser.add_argument(
+        "--cases",
+        default="12x100,16x100,24x225,32x400",
+        help="comma-separated CELLSxNODES: cells along a side x top nodes "
+        "(perfect squares); default %(default)s",
+    )
     parser.add_argument("--cell", choices=("hex", "tet"), default="hex")
-    parser.add_argument("--sample", type=int, default=24,
-                        help="unit loads actually applied per case (default %(default)s)")
+    parser.add_argument(
+        "--sample",
+        type=int,
+        default=24,
+        help="unit loads actually applied per case (default %(default)s)",
+    )
     parser.add_argument("--full", action="store_true", help="apply all 3n unit loads")
     args = parser.parse_args(argv)
     rng = np.random.default_rng(0)
-    print(f"# static condensation vs unit loads: steel block {SIDE} x {SIDE} x {DEPTH} m, "
-          f"{args.cell} elements, clamped bottom, n top nodes")
-    print(f"# numpy {np.__version__}, scipy {scipy.__version__}, python "
-          f"{platform.python_version()}, {os.cpu_count()} cores, "
-          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
+    print(
+        f"# static condensation vs unit loads: steel block {SIDE} x {SIDE} x {DEPTH} m, "
+        f"{args.cell} elements, clamped bottom, n top nodes"
+    )
+    print(
+        f"# numpy {np.__version__}, scipy {scipy.__version__}, python "
+        f"{platform.python_version()}, {os.cpu_count()} cores, "
+        f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}"
+    )
     print()
-    print("| FE freedoms | 3n | condense (s) | unit loads (s) | reuse (s) | unit/condense "
-          "| reuse/condense | max col. error |")
+    print(
+        "| FE freedoms | 3n | condense (s) | unit loads (s) | reuse (s) | unit/condense "
+        "| reuse/condense | max col. error |"
+    )
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     ratios, sampled = [], False
     for case in args.cases.split(","):
@@ -143,16 +164,23 @@ def main(argv=None) -> None:
         row = run_case(cells, n, args.cell, args.sample, args.full, rng)
         sampled |= row["sampled"]
         ratios.append(row["unit"] / row["condense"])
-        print(f"| {row['N']} | {row['k']} | {row['condense']:.2f} | "
-              f"{_seconds(row['unit'], row['sampled'])} | {_seconds(row['reuse'], row['sampled'])} "
-              f"| {ratios[-1]:.0f}x | {row['reuse'] / row['condense']:.1f}x | "
-              f"{row['error']:.1e} |", flush=True)
+        print(
+            f"| {row['N']} | {row['k']} | {row['condense']:.2f} | "
+            f"{_seconds(row['unit'], row['sampled'])} | {_seconds(row['reuse'], row['sampled'])} "
+            f"| {ratios[-1]:.0f}x | {row['reuse'] / row['condense']:.1f}x | "
+            f"{row['error']:.1e} |",
+            flush=True,
+        )
     if sampled:
-        print(f"\n`*` measured on {args.sample} random unit loads, times 3n / {args.sample} "
-              "(each load costs the same: one factorisation and one solve).")
+        print(
+            f"\n`*` measured on {args.sample} random unit loads, times 3n / {args.sample} "
+            "(each load costs the same: one factorisation and one solve)."
+        )
     verdict = "met" if min(ratios) >= 20 else "NOT met"
-    print(f"\nTarget: condensation at least 20x faster than the unit-load procedure: {verdict} "
-          f"(smallest ratio {min(ratios):.0f}x).")
+    print(
+        f"\nTarget: condensation at least 20x faster than the unit-load procedure: {verdict} "
+        f"(smallest ratio {min(ratios):.0f}x)."
+    )
 
 
 if __name__ == "__main__":

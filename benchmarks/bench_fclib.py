@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from contactqp.io.fclib import read_any
 from contactqp.core.local_problem import GlobalProblem, natural_map_error
+from contactqp.io.fclib import read_any
 from contactqp.methods.coulomb import solve_coulomb
 
 __all__ = ["PUBLISHED", "family", "time_file", "main"]
@@ -93,30 +93,44 @@ def time_file(path: Path, tol: float, perturbed: int = 0) -> dict:
             break
     size = 1e-10 * np.abs(solution.forces).max(initial=0.0)
     robust = sum(
-        solve_coulomb(problem, r0=size * np.abs(np.random.default_rng(seed).standard_normal(
-            problem.q.size)), tol=tol).success
+        solve_coulomb(
+            problem,
+            r0=size * np.abs(np.random.default_rng(seed).standard_normal(problem.q.size)),
+            tol=tol,
+        ).success
         for seed in range(perturbed)
     )
-    error = (given.certify(solution.forces).error if isinstance(given, GlobalProblem)
-             else natural_map_error(problem, solution.forces))
+    error = (
+        given.certify(solution.forces).error
+        if isinstance(given, GlobalProblem)
+        else natural_map_error(problem, solution.forces)
+    )
     return {
-        "file": path.name, "dim": problem.dim, "contacts": problem.n_contacts,
-        "error": error, "converged": solution.success and error <= tol,
-        "iterations": solution.iterations, "seconds": best,
-        "gauss_seidel": "gauss-seidel" in solution.message, "perturbed": (robust, perturbed),
+        "file": path.name,
+        "dim": problem.dim,
+        "contacts": problem.n_contacts,
+        "error": error,
+        "converged": solution.success and error <= tol,
+        "iterations": solution.iterations,
+        "seconds": best,
+        "gauss_seidel": "gauss-seidel" in solution.message,
+        "perturbed": (robust, perturbed),
     }
 
 
 def _table(rows, tol):
-    header = (f"{'file':44s} {'d':>1s} {'nc':>5s} {'error':>8s} {'it':>4s} {'own s':>9s} "
-              f"{'family':>15s} {'acc.':>6s} {'publ. s':>8s} {'ratio':>7s}")
+    header = (
+        f"{'file':44s} {'d':>1s} {'nc':>5s} {'error':>8s} {'it':>4s} {'own s':>9s} "
+        f"{'family':>15s} {'acc.':>6s} {'publ. s':>8s} {'ratio':>7s}"
+    )
     lines = [header, "-" * len(header)]
     for r in rows:
         fam = family(r["file"])
         published = PUBLISHED.get(fam)
         acc, ref, ratio = (
             (f"{published[0]:.0e}", f"{published[1]:.2e}", f"{r['seconds'] / published[1]:.3g}")
-            if published else ("-", "-", "-")
+            if published
+            else ("-", "-", "-")
         )
         mark = "" if r["converged"] else " (not converged)"
         lines.append(
@@ -127,30 +141,45 @@ def _table(rows, tol):
     solved = sum(r["converged"] for r in rows)
     total = sum(r["seconds"] for r in rows)
     lines.append("-" * len(header))
-    lines.append(f"{solved}/{len(rows)} solved to natural-map error <= {tol:g} in {total:.3f} s "
-                 f"in all; ratio = own / published (< 1: faster)")
+    lines.append(
+        f"{solved}/{len(rows)} solved to natural-map error <= {tol:g} in {total:.3f} s "
+        f"in all; ratio = own / published (< 1: faster)"
+    )
     helped = [r["file"] for r in rows if r["gauss_seidel"]]
     if helped:
         lines.append("needed Gauss-Seidel sweeps: " + ", ".join(helped))
-    fragile = [f"{r['file']} {r['perturbed'][0]}/{r['perturbed'][1]}" for r in rows
-               if r["perturbed"][0] < r["perturbed"][1]]
+    fragile = [
+        f"{r['file']} {r['perturbed'][0]}/{r['perturbed'][1]}"
+        for r in rows
+        if r["perturbed"][0] < r["perturbed"][1]
+    ]
     if rows and rows[0]["perturbed"][1]:
-        lines.append("converged from perturbed starts: "
-                     + ("all" if not fragile else "all but " + ", ".join(fragile)))
+        lines.append(
+            "converged from perturbed starts: "
+            + ("all" if not fragile else "all but " + ", ".join(fragile))
+        )
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("files", nargs="*", type=Path,
-                        help=f"problem files (default: every .dat/.hdf5 in {DATA})")
+    parser.add_argument(
+        "files", nargs="*", type=Path, help=f"problem files (default: every .dat/.hdf5 in {DATA})"
+    )
     parser.add_argument("--tol", type=float, default=1e-8, help="natural-map error (1e-8)")
-    parser.add_argument("--perturbed", type=int, default=0, metavar="N",
-                        help="also solve each file from N starts perturbed by 1e-10 (0)")
+    parser.add_argument(
+        "--perturbed",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also solve each file from N starts perturbed by 1e-10 (0)",
+    )
     args = parser.parse_args(argv)
     files = args.files or sorted(p for p in DATA.iterdir() if p.suffix in (".dat", ".hdf5"))
-    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, "
-          f"{platform.system()}")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, "
+        f"{platform.system()}"
+    )
     rows = [time_file(path, args.tol, args.perturbed) for path in files]
     print(_table(rows, args.tol))
     return 0 if all(r["converged"] for r in rows) else 1

@@ -45,10 +45,10 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
+from contactqp import solve
 from contactqp.compliance import grid, influence_matrix
 from contactqp.core.local_problem import LocalProblem
 from contactqp.io.fclib import read_any, write_problem
-from contactqp import solve
 
 __all__ = ["build_problem", "main"]
 
@@ -74,8 +74,13 @@ def build_problem(n_contacts: int) -> LocalProblem:
     q = np.zeros(3 * side * side)
     q[0::3] = gaps
     compliance = float(np.mean(np.diag(W)[0::3]))
-    return LocalProblem(W / compliance, q / np.abs(gaps).max(), np.zeros(side * side), 3,
-                        title=f"half-space, {side * side} cells, mu = 0")
+    return LocalProblem(
+        W / compliance,
+        q / np.abs(gaps).max(),
+        np.zeros(side * side),
+        3,
+        title=f"half-space, {side * side} cells, mu = 0",
+    )
 
 
 def best_time(run, budget: float = 2.0, max_repeat: int = 7):
@@ -99,8 +104,7 @@ def _cli_in_process(path: Path) -> dict:
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         try:
-            cli.main(["fclib", str(path), "--json"], prog_name="contactqp",
-                     standalone_mode=False)
+            cli.main(["fclib", str(path), "--json"], prog_name="contactqp", standalone_mode=False)
         except SystemExit as exc:
             if exc.code:
                 raise RuntimeError(f"contactqp fclib exited with {exc.code}") from None
@@ -109,20 +113,30 @@ def _cli_in_process(path: Path) -> dict:
 
 def _cli_subprocess(path: Path) -> tuple[float, dict]:
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "contactqp.cli", "fclib", str(path), "--json"],
-                          capture_output=True, text=True, check=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "contactqp.cli", "fclib", str(path), "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return time.perf_counter() - start, json.loads(proc.stdout.splitlines()[-1])
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--contacts", type=int, default=1600,
-                        help="number of contacts, a perfect square (1600)")
-    parser.add_argument("--file", type=Path,
-                        help="use (or write, if absent) this FCLIB file instead of a temporary one")
+    parser.add_argument(
+        "--contacts", type=int, default=1600, help="number of contacts, a perfect square (1600)"
+    )
+    parser.add_argument(
+        "--file",
+        type=Path,
+        help="use (or write, if absent) this FCLIB file instead of a temporary one",
+    )
     args = parser.parse_args(argv)
-    print(f"python {platform.python_version()}, numpy {np.__version__}, scipy "
-          f"{scipy.__version__}, {platform.machine()}, {platform.system()}")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, scipy "
+        f"{scipy.__version__}, {platform.machine()}, {platform.system()}"
+    )
     with tempfile.TemporaryDirectory() as scratch:
         path = args.file or Path(scratch) / f"halfspace_mu0_{args.contacts}.hdf5"
         start = time.perf_counter()
@@ -134,17 +148,20 @@ def main(argv=None) -> int:
         read = time.perf_counter() - start
         normal = np.arange(problem.n_contacts) * problem.dim
         W = problem.W
-        W_nn = (W[normal][:, normal].toarray() if hasattr(W, "toarray")
-                else W[np.ix_(normal, normal)])
+        W_nn = (
+            W[normal][:, normal].toarray() if hasattr(W, "toarray") else W[np.ix_(normal, normal)]
+        )
         solve_first, solve_best, solution = best_time(lambda: solve(problem))
         cli_first, cli_best, record = best_time(lambda: _cli_in_process(path))
         sub_seconds, sub_record = _cli_subprocess(path)
         chol_first, chol_best, _ = best_time(lambda: scipy.linalg.cholesky(W_nn))
     closed = int(np.count_nonzero(solution.forces[normal] > 0))
-    print(f"{problem.n_contacts} contacts (W {W.shape[0]}x{W.shape[1]}, "
-          f"{type(W).__name__}, {getattr(W, 'nnz', W.size)} entries), {closed} closed, "
-          f"{solution.iterations} iterations, natural-map error "
-          f"{solution.certificate.natural_map:.1e}, converged {solution.success}")
+    print(
+        f"{problem.n_contacts} contacts (W {W.shape[0]}x{W.shape[1]}, "
+        f"{type(W).__name__}, {getattr(W, 'nnz', W.size)} entries), {closed} closed, "
+        f"{solution.iterations} iterations, natural-map error "
+        f"{solution.certificate.natural_map:.1e}, converged {solution.success}"
+    )
     print(f"file written in {built:.2f} s, read in {read:.3f} s")
     rows = [
         ("solve (contactqp.solve)", solve_first, solve_best),
@@ -154,13 +171,19 @@ def main(argv=None) -> int:
     ]
     print(f"{'':40s} {'first s':>9s} {'best s':>9s} {'first/chol':>11s} {'best/chol':>10s}")
     for name, first, best in rows:
-        print(f"{name:40s} {first:9.4f} {best:9.4f} {first / chol_first:11.2f} "
-              f"{best / chol_best:10.2f}")
-    print(f"seconds reported by the command: in process {record['seconds']:.4f} (first call "
-          f"{cli_first:.4f} in all), subprocess {sub_record['seconds']:.4f}")
+        print(
+            f"{name:40s} {first:9.4f} {best:9.4f} {first / chol_first:11.2f} "
+            f"{best / chol_best:10.2f}"
+        )
+    print(
+        f"seconds reported by the command: in process {record['seconds']:.4f} (first call "
+        f"{cli_first:.4f} in all), subprocess {sub_record['seconds']:.4f}"
+    )
     ratio = solve_best / chol_best
-    print(f"target: solve <= 1 Cholesky of W_NN; best {ratio:.2f}, first call "
-          f"{solve_first / chol_first:.2f} -> {'met' if ratio <= 1 else 'NOT met'}")
+    print(
+        f"target: solve <= 1 Cholesky of W_NN; best {ratio:.2f}, first call "
+        f"{solve_first / chol_first:.2f} -> {'met' if ratio <= 1 else 'NOT met'}"
+    )
     return 0 if solution.success else 1
 
 

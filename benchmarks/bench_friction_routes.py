@@ -46,8 +46,8 @@ from pathlib import Path
 import numpy as np
 
 from contactqp.compliance import grid, influence_matrix
-from contactqp.io.fclib import read_problem
 from contactqp.core.local_problem import LocalProblem, natural_map_error
+from contactqp.io.fclib import read_problem
 from contactqp.methods.coulomb import solve_coulomb
 from contactqp.methods.polygonal import solve_polygonal
 from contactqp.methods.tresca import solve_tresca_fixed_point
@@ -56,13 +56,23 @@ __all__ = ["random_problem", "main"]
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
 #: Files on which the Tresca fixed point reaches 1e-8 (see the module notes for the others).
-FCLIB = ["FrictionContact3D_1c.dat", "FC3D_Example1.dat", "GFC3D_Example1.dat",
-         "GFC3D_TwoRods1.dat", "Rover1041.dat", "Rover4516.dat",
-         "LMGC_GlobalFrictionContactProblem00046.hdf5", "CubeH8.hdf5",
-         "FrictionContactProblem00374.dat", "FrictionContactProblem00071.dat",
-         "Box_Stacks-i0035-31-0.hdf5", "NESpheres_30_1.dat",
-         "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5", "Confeti-ex13-Fc3D-SBM.dat",
-         "spheres-in-a-box-98-i10000-256-10.hdf5"]
+FCLIB = [
+    "FrictionContact3D_1c.dat",
+    "FC3D_Example1.dat",
+    "GFC3D_Example1.dat",
+    "GFC3D_TwoRods1.dat",
+    "Rover1041.dat",
+    "Rover4516.dat",
+    "LMGC_GlobalFrictionContactProblem00046.hdf5",
+    "CubeH8.hdf5",
+    "FrictionContactProblem00374.dat",
+    "FrictionContactProblem00071.dat",
+    "Box_Stacks-i0035-31-0.hdf5",
+    "NESpheres_30_1.dat",
+    "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5",
+    "Confeti-ex13-Fc3D-SBM.dat",
+    "spheres-in-a-box-98-i10000-256-10.hdf5",
+]
 REPEAT_BELOW = 2.0  # s: runs shorter than this are repeated, the best time kept
 MIN_REPEATS, MAX_REPEATS = 3, 7  # runs of a short route: at least, at most
 REPEAT_BUDGET = 1.0  # s: more than MIN_REPEATS runs only while they take less than this in all
@@ -92,8 +102,11 @@ def timed(solve, problem):
         start = time.perf_counter()
         solution = solve(problem)
         times.append(time.perf_counter() - start)
-        if (times[0] >= REPEAT_BELOW or len(times) == MAX_REPEATS
-                or (len(times) >= MIN_REPEATS and sum(times) >= REPEAT_BUDGET)):
+        if (
+            times[0] >= REPEAT_BELOW
+            or len(times) == MAX_REPEATS
+            or (len(times) >= MIN_REPEATS and sum(times) >= REPEAT_BUDGET)
+        ):
             return min(times), solution
 
 
@@ -118,8 +131,11 @@ def row(name, problem, routes, tol):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--sizes", default="100,200,400,700,1000",
-                        help="contacts of the random half-space problems (comma separated)")
+    parser.add_argument(
+        "--sizes",
+        default="100,200,400,700,1000",
+        help="contacts of the random half-space problems (comma separated)",
+    )
     parser.add_argument("--tol", type=float, default=1e-8)
     parser.add_argument("--facets", type=int, default=8)
     parser.add_argument("--backend", default="clarabel", help="qpsolvers backend of poly")
@@ -132,9 +148,11 @@ def main(argv=None) -> int:
         "tresca": lambda p: solve_tresca_fixed_point(p, tol=tol),
         "poly": lambda p: solve_polygonal(p, facets=args.facets, backend=args.backend, tol=tol),
     }
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"python {platform.python_version()}, tol {tol:g}, poly: {args.facets} facets, "
-          f"{args.backend}")
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"python {platform.python_version()}, tol {tol:g}, poly: {args.facets} facets, "
+        f"{args.backend}"
+    )
     header = f"{'problem':<34}{'d':>2}{'nc':>6}"
     for route in routes:
         header += f"{route + ' s':>10}{'err':>9}{'it':>5}"
@@ -143,12 +161,23 @@ def main(argv=None) -> int:
     times = {"FCLIB files": [], "half-space problems": []}  # (tresca s, coulomb s) per problem
     problems = []
     if not args.no_fclib:
-        names = (sorted(p.name for p in DATA.iterdir() if p.suffix in (".dat", ".hdf5"))
-                 if args.all_fclib else FCLIB)
-        problems += [("FCLIB files", name, lambda name=name: read_problem(DATA / name))
-                     for name in names]
-    problems += [("half-space problems", "half-space, random gaps and drive",
-                  lambda n=int(n): random_problem(n)) for n in args.sizes.split(",") if n]
+        names = (
+            sorted(p.name for p in DATA.iterdir() if p.suffix in (".dat", ".hdf5"))
+            if args.all_fclib
+            else FCLIB
+        )
+        problems += [
+            ("FCLIB files", name, lambda name=name: read_problem(DATA / name)) for name in names
+        ]
+    problems += [
+        (
+            "half-space problems",
+            "half-space, random gaps and drive",
+            lambda n=int(n): random_problem(n),
+        )
+        for n in args.sizes.split(",")
+        if n
+    ]
     for group, name, build in problems:
         problem = build()
         line, results = row(name, problem, routes, tol)
@@ -159,10 +188,12 @@ def main(argv=None) -> int:
         if pairs:
             tresca, coulomb = np.array(pairs).T
             values = tresca / coulomb
-            print(f"# tresca/coulomb on the {len(values)} {group} both routes solved: geometric "
-                  f"mean {np.exp(np.mean(np.log(values))):.1f}x, range {min(values):.1f}x "
-                  f"to {max(values):.1f}x, total time {tresca.sum() / coulomb.sum():.1f}x; "
-                  f"target >= 10x")
+            print(
+                f"# tresca/coulomb on the {len(values)} {group} both routes solved: geometric "
+                f"mean {np.exp(np.mean(np.log(values))):.1f}x, range {min(values):.1f}x "
+                f"to {max(values):.1f}x, total time {tresca.sum() / coulomb.sum():.1f}x; "
+                f"target >= 10x"
+            )
     return 0
 
 

@@ -148,7 +148,9 @@ def run_backend(backend, W, c, unscale, timeout):
     """Fork a child that times ``backend``; ``(seconds, forces, note)``, note "timeout" if killed."""
     context = multiprocessing.get_context("fork")
     parent, child = context.Pipe(duplex=False)
-    process = context.Process(target=_backend_child, args=(child, backend, W, c, unscale), daemon=True)
+    process = context.Process(
+        target=_backend_child, args=(child, backend, W, c, unscale), daemon=True
+    )
     process.start()
     child.close()
     outcome = (math.nan, None, "timeout")
@@ -185,18 +187,35 @@ def _print_table(headers, rows):
 def main(argv=None) -> int:
     """Run the benchmark and print its tables; returns the exit code."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--sizes", default="400,1600,6400",
-                        help="comma-separated contact counts, perfect squares (default 400,1600,6400)")
-    parser.add_argument("--backends", default=None,
-                        help="comma-separated qpsolvers backends (default: every installed one); "
-                             "'none' for the own solver and Cholesky only")
+    parser.add_argument(
+        "--sizes",
+        default="400,1600,6400",
+        help="comma-separated contact counts, perfect squares (default 400,1600,6400)",
+    )
+    parser.add_argument(
+        "--backends",
+        default=None,
+        help="comma-separated qpsolvers backends (default: every installed one); "
+        "'none' for the own solver and Cholesky only",
+    )
     parser.add_argument("--surface", default="paraboloid", choices=["paraboloid", "wavy"])
-    parser.add_argument("--budget", type=float, default=60.0,
-                        help="s: skip a backend when its predicted time exceeds this (default 60)")
-    parser.add_argument("--raw-units", action="store_true",
-                        help="give the backends W and c in SI units instead of scaled ones")
-    parser.add_argument("--timeout", type=float, default=None,
-                        help="s: kill a backend run after this (default 3 x budget)")
+    parser.add_argument(
+        "--budget",
+        type=float,
+        default=60.0,
+        help="s: skip a backend when its predicted time exceeds this (default 60)",
+    )
+    parser.add_argument(
+        "--raw-units",
+        action="store_true",
+        help="give the backends W and c in SI units instead of scaled ones",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="s: kill a backend run after this (default 3 x budget)",
+    )
     args = parser.parse_args(argv)
 
     sizes = [int(s) for s in args.sizes.split(",") if s.strip()]
@@ -209,21 +228,34 @@ def main(argv=None) -> int:
         backends = [b.strip() for b in args.backends.split(",") if b.strip()]
         missing = [b for b in backends if b not in installed]
         if missing:
-            parser.error(f"--backends: not installed: {', '.join(missing)}; "
-                         f"installed: {', '.join(installed)}")
+            parser.error(
+                f"--backends: not installed: {', '.join(missing)}; "
+                f"installed: {', '.join(installed)}"
+            )
     timeout = args.timeout if args.timeout is not None else 3 * args.budget
 
-    print(f"contactqp {contactqp.__version__}, numpy {np.__version__}, scipy {scipy.__version__}, "
-          f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {platform.machine()}")
-    print(f"problem: half-space grid ({CELL * 1e6:.0f} um cells, E = {YOUNG / 1e9:.0f} GPa, "
-          f"nu = {POISSON}), rigid {args.surface}, dense dual W = A R A^T; "
-          f"backends on the dual box QP, accepted when max|l - l_own| / max l_own < {ACCURACY:g}")
-    threads = {k: os.environ[k] for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
-                                          "MKL_NUM_THREADS") if k in os.environ}
-    print(f"BLAS threads: {threads or 'library default'}; backends get "
-          f"{'SI units' if args.raw_units else 'scaled W / mean diag W, c / max|c|'}")
-    print(f"skip rule: time at previous size x (size ratio)^3 > {args.budget:g} s; "
-          f"hard timeout {timeout:g} s\n")
+    print(
+        f"contactqp {contactqp.__version__}, numpy {np.__version__}, scipy {scipy.__version__}, "
+        f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {platform.machine()}"
+    )
+    print(
+        f"problem: half-space grid ({CELL * 1e6:.0f} um cells, E = {YOUNG / 1e9:.0f} GPa, "
+        f"nu = {POISSON}), rigid {args.surface}, dense dual W = A R A^T; "
+        f"backends on the dual box QP, accepted when max|l - l_own| / max l_own < {ACCURACY:g}"
+    )
+    threads = {
+        k: os.environ[k]
+        for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+        if k in os.environ
+    }
+    print(
+        f"BLAS threads: {threads or 'library default'}; backends get "
+        f"{'SI units' if args.raw_units else 'scaled W / mean diag W, c / max|c|'}"
+    )
+    print(
+        f"skip rule: time at previous size x (size ratio)^3 > {args.budget:g} s; "
+        f"hard timeout {timeout:g} s\n"
+    )
 
     rows, notes, summary = [], [], {}
     previous = {}  # backend -> (size, seconds) of its last completed run
@@ -246,18 +278,27 @@ def main(argv=None) -> int:
             notes.append(f"{size}: own solver did not succeed: {result.message}")
         reference = result.forces
         scale = float(np.max(np.abs(reference)))
-        core_best, core, _ = best_time(lambda: solve_box_qp(W, c, lower=0.0, x0=cold_start(W, -c),
-                                                            check_finite=False))
-        chol_best, _, _ = best_time(lambda: scipy.linalg.cho_factor(W, lower=True, check_finite=False))
+        core_best, core, _ = best_time(
+            lambda: solve_box_qp(W, c, lower=0.0, x0=cold_start(W, -c), check_finite=False)
+        )
+        chol_best, _, _ = best_time(
+            lambda: scipy.linalg.cho_factor(W, lower=True, check_finite=False)
+        )
 
-        row = {"contacts": size,
-               "closed": int(np.count_nonzero(
-                   result.contact_status == contactqp.ContactStatus.CLOSED)),
-               "build R": _fmt_seconds(build), "assembly": _fmt_seconds(assembly),
-               "own 1st": _fmt_seconds(own_first), "own": _fmt_seconds(own_best),
-               "core": _fmt_seconds(core_best),
-               "it/fact/upd": f"{core.iterations}/{core.factorizations}/{core.updates}",
-               "chol": _fmt_seconds(chol_best), "own/chol": f"{own_best / chol_best:.2f}"}
+        row = {
+            "contacts": size,
+            "closed": int(
+                np.count_nonzero(result.contact_status == contactqp.ContactStatus.CLOSED)
+            ),
+            "build R": _fmt_seconds(build),
+            "assembly": _fmt_seconds(assembly),
+            "own 1st": _fmt_seconds(own_first),
+            "own": _fmt_seconds(own_best),
+            "core": _fmt_seconds(core_best),
+            "it/fact/upd": f"{core.iterations}/{core.factorizations}/{core.updates}",
+            "chol": _fmt_seconds(chol_best),
+            "own/chol": f"{own_best / chol_best:.2f}",
+        }
         summary[size] = {"own": own_best, "chol": chol_best, "backends": {}}
         for backend in backends:
             if backend in previous:
@@ -265,9 +306,11 @@ def main(argv=None) -> int:
                 predicted = last_seconds * (size / last_size) ** 3
                 if predicted > args.budget:
                     row[backend] = "skipped"
-                    notes.append(f"{size}: {backend} skipped, predicted {predicted:.0f} s "
-                                 f"> budget {args.budget:g} s ({_fmt_seconds(last_seconds)} "
-                                 f"at {last_size} x ({size}/{last_size})^3)")
+                    notes.append(
+                        f"{size}: {backend} skipped, predicted {predicted:.0f} s "
+                        f"> budget {args.budget:g} s ({_fmt_seconds(last_seconds)} "
+                        f"at {last_size} x ({size}/{last_size})^3)"
+                    )
                     continue
             seconds, forces, note = run_backend(backend, W_backend, c_backend, unscale, timeout)
             if note == "timeout":
@@ -288,16 +331,31 @@ def main(argv=None) -> int:
                 row[backend] = f"{_fmt_seconds(seconds)} x{seconds / own_best:.1f}"
                 summary[size]["backends"][backend] = seconds
         rows.append(row)
-        print(f"[{size} contacts done: own {_fmt_seconds(own_best)}, chol {_fmt_seconds(chol_best)}]",
-              file=sys.stderr, flush=True)
+        print(
+            f"[{size} contacts done: own {_fmt_seconds(own_best)}, chol {_fmt_seconds(chol_best)}]",
+            file=sys.stderr,
+            flush=True,
+        )
 
-    headers = ["contacts", "closed", "build R", "assembly", "own 1st", "own", "core", "it/fact/upd",
-               "chol", "own/chol"] + backends
+    headers = [
+        "contacts",
+        "closed",
+        "build R",
+        "assembly",
+        "own 1st",
+        "own",
+        "core",
+        "it/fact/upd",
+        "chol",
+        "own/chol",
+    ] + backends
     _print_table(headers, [[row.get(h, "-") for h in headers] for row in rows])
-    print("\nown: contactqp.solve(problem), best of repeats; own 1st: its first call; core: "
-          "solve_box_qp(W, -b) alone;\nit/fact/upd: core iterations / Cholesky factorisations / "
-          "updated factorisations of free blocks; chol: one cho_factor of the full W;\nbackend cells: best time and ratio to own "
-          "(x > 1: slower than own).")
+    print(
+        "\nown: contactqp.solve(problem), best of repeats; own 1st: its first call; core: "
+        "solve_box_qp(W, -b) alone;\nit/fact/upd: core iterations / Cholesky factorisations / "
+        "updated factorisations of free blocks; chol: one cho_factor of the full W;\nbackend cells: best time and ratio to own "
+        "(x > 1: slower than own)."
+    )
     for note in notes:
         print(f"note: {note}")
 
@@ -307,16 +365,23 @@ def main(argv=None) -> int:
         if entry["backends"]:
             fastest = min(entry["backends"], key=entry["backends"].get)
             speedup = entry["backends"][fastest] / entry["own"]
-            versus = (f"speed-up {speedup:.1f}x over the fastest accurate backend ({fastest}, "
-                      f"{_fmt_seconds(entry['backends'][fastest])} vs {_fmt_seconds(entry['own'])})")
+            versus = (
+                f"speed-up {speedup:.1f}x over the fastest accurate backend ({fastest}, "
+                f"{_fmt_seconds(entry['backends'][fastest])} vs {_fmt_seconds(entry['own'])})"
+            )
         else:
             speedup, versus = math.nan, "no accurate backend to compare with"
         ratio = entry["own"] / entry["chol"]
         met = speedup >= 10 and ratio <= 1.0
-        met_text = "met" if met else ("missed" if math.isfinite(speedup) or ratio > 1.0
-                                      else "not assessed")
-        print(f"\nsummary at {target} contacts: own solver: {versus}; own / Cholesky = {ratio:.2f} "
-              f"(target: >= 10x and <= 1.00: {met_text})")
+        met_text = (
+            "met"
+            if met
+            else ("missed" if math.isfinite(speedup) or ratio > 1.0 else "not assessed")
+        )
+        print(
+            f"\nsummary at {target} contacts: own solver: {versus}; own / Cholesky = {ratio:.2f} "
+            f"(target: >= 10x and <= 1.00: {met_text})"
+        )
     return 0
 
 

@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from contactqp.studies import GaussianGapField, run_batch
 from contactqp.applications.riveting import Assembly, FasteningCase
+from contactqp.studies import GaussianGapField, run_batch
 
 
 class ColdStart(FasteningCase):
@@ -47,57 +47,87 @@ class ColdStart(FasteningCase):
 
 def rate(case, source, samples, workers, chunk, directory: Path, name: str):
     """(samples per second, failed) of one run_batch into a new store."""
-    summary = run_batch(case, source, samples, directory / f"{name}.h5", workers=workers,
-                        chunk_size=chunk)
+    summary = run_batch(
+        case, source, samples, directory / f"{name}.h5", workers=workers, chunk_size=chunk
+    )
     assert summary.computed == samples
     return samples / summary.seconds, summary.failed
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--samples", type=int, default=400,
-                        help="samples per row of the comparison (default 400)")
-    parser.add_argument("--target", type=int, default=10_000,
-                        help="samples of the final run (0: skip; default 10000)")
+    parser.add_argument(
+        "--samples", type=int, default=400, help="samples per row of the comparison (default 400)"
+    )
+    parser.add_argument(
+        "--target",
+        type=int,
+        default=10_000,
+        help="samples of the final run (0: skip; default 10000)",
+    )
     parser.add_argument("--chunk", type=int, default=50, help="samples per task (default 50)")
     args = parser.parse_args(argv)
 
-    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"python {platform.python_version()}, numpy {np.__version__}")
+    print(
+        f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"python {platform.python_version()}, numpy {np.__version__}"
+    )
     start = time.perf_counter()
     model = Assembly().build()
     build = time.perf_counter() - start
     source = GaussianGapField(model.points, 1e-4, 0.04, mean=2e-4, seed=0)
-    print(f"# model: {model.n_pairs} contact pairs, {len(model.fasteners)} fasteners; "
-          f"build (2 plates, Morley, condensation) {build:.2f} s")
+    print(
+        f"# model: {model.n_pairs} contact pairs, {len(model.fasteners)} fasteners; "
+        f"build (2 plates, Morley, condensation) {build:.2f} s"
+    )
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         directory = Path(tmp)
         kinds = {"cold": ColdStart, "warm": FasteningCase}
-        configurations = [(method, start) for method in ("lawson-hanson", "active-set")
-                          for start in ("cold", "warm")] + [("nnls", "cold")]
+        configurations = [
+            (method, start)
+            for method in ("lawson-hanson", "active-set")
+            for start in ("cold", "warm")
+        ] + [("nnls", "cold")]
         for method, start in configurations:
             case = kinds[start](model, method=method)
             for workers in (1, 2):
                 samples = args.samples if method != "active-set" else max(args.samples // 4, 8)
-                per_second, failed = rate(case, source, samples, workers, args.chunk, directory,
-                                          f"{method}-{start}-{workers}")
+                per_second, failed = rate(
+                    case,
+                    source,
+                    samples,
+                    workers,
+                    args.chunk,
+                    directory,
+                    f"{method}-{start}-{workers}",
+                )
                 rows.append((f"{method}, {start}", workers, samples, per_second, failed))
         print()
         print("| solver | workers | samples | samples/s | s per 10,000 | failed |")
         print("|---|---:|---:|---:|---:|---:|")
         for label, workers, samples, per_second, failed in rows:
-            print(f"| {label} | {workers} | {samples} | {per_second:.1f} | "
-                  f"{1e4 / per_second:.0f} | {failed} |")
+            print(
+                f"| {label} | {workers} | {samples} | {per_second:.1f} | "
+                f"{1e4 / per_second:.0f} | {failed} |"
+            )
         if args.target:
             label, workers, *_ = max(rows, key=lambda r: r[3])
             method, start = label.split(", ")
-            summary = run_batch(kinds[start](model, method=method), source, args.target,
-                                directory / "target.h5", workers=workers, chunk_size=args.chunk)
+            summary = run_batch(
+                kinds[start](model, method=method),
+                source,
+                args.target,
+                directory / "target.h5",
+                workers=workers,
+                chunk_size=args.chunk,
+            )
             print()
-            print(f"target: {summary.samples} samples ({label}, {workers} workers) in "
-                  f"{summary.seconds:.1f} s, {summary.failed} failed "
-                  f"({summary.samples / summary.seconds:.0f} samples/s; goal: 60 s)")
+            print(
+                f"target: {summary.samples} samples ({label}, {workers} workers) in "
+                f"{summary.seconds:.1f} s, {summary.failed} failed "
+                f"({summary.samples / summary.seconds:.0f} samples/s; goal: 60 s)"
+            )
 
 
 if __name__ == "__main__":

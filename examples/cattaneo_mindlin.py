@@ -72,18 +72,25 @@ def contact_problem(cells_per_radius, sphere_radius, cell, young, poisson, mu, d
     return problem, length, force, x, y
 
 
-def run(cells_per_radius: int = 12, ratio: float = 0.5, mu: float = 0.3,
-        sphere_radius: float = 5e-3, cell: float = 1e-5, young: float = 210e9,
-        poisson: float = 0.3, solver: str = "coulomb") -> dict:
+def run(
+    cells_per_radius: int = 12,
+    ratio: float = 0.5,
+    mu: float = 0.3,
+    sphere_radius: float = 5e-3,
+    cell: float = 1e-5,
+    young: float = 210e9,
+    poisson: float = 0.3,
+    solver: str = "coulomb",
+) -> dict:
     """Solve the shear step for a target ``Q / (mu P) = ratio``; measured and theoretical values."""
     a = cells_per_radius * cell
     e_star = young / (1 - poisson**2)
     shear_modulus = young / (2 * (1 + poisson))
     load = 4 / 3 * e_star * a**3 / sphere_radius  # Hertz, d = a^2 / R_s
-    delta = (3 * mu * load * (2 - poisson) / (16 * shear_modulus * a)
-             * (1 - (1 - ratio) ** (2 / 3)))
-    problem, _, force, x, y = contact_problem(cells_per_radius, sphere_radius, cell, young,
-                                              poisson, mu, delta)
+    delta = 3 * mu * load * (2 - poisson) / (16 * shear_modulus * a) * (1 - (1 - ratio) ** (2 / 3))
+    problem, _, force, x, y = contact_problem(
+        cells_per_radius, sphere_radius, cell, young, poisson, mu, delta
+    )
     solution = cq.solve(problem, solver, tol=1e-8)
     r = force * solution.forces.reshape(-1, 3)
     P, Q = float(r[:, 0].sum()), float(r[:, 1].sum())
@@ -94,11 +101,17 @@ def run(cells_per_radius: int = 12, ratio: float = 0.5, mu: float = 0.3,
     stick_radius = float(np.sqrt(np.count_nonzero(stick) * area))
     contact_radius = float(np.sqrt(np.count_nonzero(status != ContactStatus.OPEN) * area))
     return {
-        "converged": bool(solution.success), "error": float(solution.certificate.natural_map),
-        "seconds": float(solution.seconds), "solver": solver, "cell": cell,
-        "load": P, "load_hertz": float(load),
-        "contact_radius": contact_radius, "contact_radius_hertz": float(a),
-        "ratio": float(measured_ratio), "ratio_target": float(ratio),
+        "converged": bool(solution.success),
+        "error": float(solution.certificate.natural_map),
+        "seconds": float(solution.seconds),
+        "solver": solver,
+        "cell": cell,
+        "load": P,
+        "load_hertz": float(load),
+        "contact_radius": contact_radius,
+        "contact_radius_hertz": float(a),
+        "ratio": float(measured_ratio),
+        "ratio_target": float(ratio),
         "stick_radius": stick_radius,
         "stick_radius_theory": float(a * (1 - measured_ratio) ** (1 / 3)),
         "stick_outside_theory": float(np.sqrt(x[stick] ** 2 + y[stick] ** 2).max(initial=0.0)),
@@ -118,16 +131,19 @@ def main(argv=None) -> dict:
     if args.cells < 1 or not 0 < args.ratio <= 1 or not args.mu > 0:
         parser.error("--cells must be >= 1, --ratio in (0, 1] and --mu > 0")
     out = run(args.cells, args.ratio, args.mu, poisson=args.poisson, solver=args.solver)
-    print(f"{args.solver}: natural-map error {out['error']:.1e} in {out['seconds']:.2f} s "
-          f"(converged: {out['converged']}); cell {out['cell']:g} m")
+    print(
+        f"{args.solver}: natural-map error {out['error']:.1e} in {out['seconds']:.2f} s "
+        f"(converged: {out['converged']}); cell {out['cell']:g} m"
+    )
     print(f"{'quantity':<26}{'contactqp':>13}{'theory':>13}{'rel. diff.':>12}")
-    rows = [("normal load P (N)", "load", "load_hertz"),
-            ("contact radius a (m)", "contact_radius", "contact_radius_hertz"),
-            ("Q / (mu P)", "ratio", "ratio_target"),
-            ("stick radius c (m)", "stick_radius", "stick_radius_theory")]
+    rows = [
+        ("normal load P (N)", "load", "load_hertz"),
+        ("contact radius a (m)", "contact_radius", "contact_radius_hertz"),
+        ("Q / (mu P)", "ratio", "ratio_target"),
+        ("stick radius c (m)", "stick_radius", "stick_radius_theory"),
+    ]
     for label, key, theory in rows:
-        print(f"{label:<26}{out[key]:13.6g}{out[theory]:13.6g}"
-              f"{out[key] / out[theory] - 1:12.2e}")
+        print(f"{label:<26}{out[key]:13.6g}{out[theory]:13.6g}{out[key] / out[theory] - 1:12.2e}")
     print(f"transverse force (N): {out['transverse_force']:.3g} (theory 0)")
     return out
 

@@ -30,9 +30,9 @@ import sys
 import numpy as np
 
 import contactqp as cq
+from contactqp.applications.springs import chain_flexibility
 from contactqp.core.history import linear_path
 from contactqp.methods import solve_history
-from contactqp.applications.springs import chain_flexibility
 
 
 def chain_problem(n: int, stiffness: float, mu: float, normal_stiffness: float = 1.0):
@@ -45,8 +45,9 @@ def chain_problem(n: int, stiffness: float, mu: float, normal_stiffness: float =
     K = np.zeros((2 * n, 2 * n))
     K[0::2, 0::2] = np.linalg.inv(chain_flexibility(n, stiffness))
     K[1::2, 1::2] = normal_stiffness * np.eye(n)
-    model = cq.ReducedModel(stiffness=K, dofs_per_node=2,
-                            coordinates=np.column_stack([np.arange(n), np.zeros(n)]))
+    model = cq.ReducedModel(
+        stiffness=K, dofs_per_node=2, coordinates=np.column_stack([np.arange(n), np.zeros(n)])
+    )
     floor = cq.PlaneObstacle(point=[0.0, 0.0], normal=[0.0, -1.0])
     return cq.FrictionalProblem(model, np.zeros(2 * n), [floor], mu=mu)
 
@@ -63,12 +64,14 @@ def cycle_path(n: int, weight: float, force_max: float, cycles: int, steps: int)
 def virgin(n: int, stiffness: float, limit: float, force) -> np.ndarray:
     """Displacements (m) of the bodies loaded from rest to ``force``: shape (..., n)."""
     j = np.arange(1, n + 1)
-    return np.cumsum(np.maximum(np.asarray(force)[..., None] - (n + 1 - j) * limit, 0.0) / stiffness,
-                     axis=-1)
+    return np.cumsum(
+        np.maximum(np.asarray(force)[..., None] - (n + 1 - j) * limit, 0.0) / stiffness, axis=-1
+    )
 
 
-def masing(n: int, stiffness: float, limit: float, force_max: float, forces: np.ndarray,
-           steps: int) -> np.ndarray:
+def masing(
+    n: int, stiffness: float, limit: float, force_max: float, forces: np.ndarray, steps: int
+) -> np.ndarray:
     """Closed-form displacements (K, n) along :func:`cycle_path` (Masing's rule)."""
     x_max = virgin(n, stiffness, limit, force_max)
     segment = np.maximum(np.arange(len(forces)) - 1, 0) // steps  # step 0 belongs to segment 0
@@ -78,8 +81,17 @@ def masing(n: int, stiffness: float, limit: float, force_max: float, forces: np.
     return np.where((segment == 0)[:, None], virgin(n, stiffness, limit, forces), x)
 
 
-def run(n: int = 3, stiffness: float = 1.0, mu: float = 0.2, mass: float = 2.0, g: float = 10.0,
-        force_max: float = 14.0, cycles: int = 2, steps: int = 14, solver: str | None = None):
+def run(
+    n: int = 3,
+    stiffness: float = 1.0,
+    mu: float = 0.2,
+    mass: float = 2.0,
+    g: float = 10.0,
+    force_max: float = 14.0,
+    cycles: int = 2,
+    steps: int = 14,
+    solver: str | None = None,
+):
     """Solve the cycle; return the history, the closed form and the energies per cycle."""
     weight = mass * g
     limit = mu * weight
@@ -88,11 +100,16 @@ def run(n: int = 3, stiffness: float = 1.0, mu: float = 0.2, mass: float = 2.0, 
     history = solve_history(problem, loads, solver)
     forces = loads[:, -2]
     exact = masing(n, stiffness, limit, force_max, forces, steps)
-    per_cycle = history.dissipated[1 + steps:].reshape(cycles, 2 * steps).sum(axis=1)
+    per_cycle = history.dissipated[1 + steps :].reshape(cycles, 2 * steps).sum(axis=1)
     return {
-        "history": history, "force": forces, "x": history.displacements[:, 0::2], "exact": exact,
+        "history": history,
+        "force": forces,
+        "x": history.displacements[:, 0::2],
+        "exact": exact,
         "dissipated_per_cycle": per_cycle,
-        "closed_form_per_cycle": 4.0 * limit * float(np.sum(virgin(n, stiffness, limit, force_max))),
+        "closed_form_per_cycle": 4.0
+        * limit
+        * float(np.sum(virgin(n, stiffness, limit, force_max))),
     }
 
 
@@ -109,20 +126,35 @@ def main(argv=None) -> int:
     parser.add_argument("--solver", choices=["coulomb", "tresca"], default=None)
     parser.add_argument("--plot", metavar="PNG", help="save the loop F - x_n to this file")
     args = parser.parse_args(argv)
-    out = run(args.n, args.stiffness, args.mu, args.mass, args.g, args.force_max, args.cycles,
-              args.steps, args.solver)
+    out = run(
+        args.n,
+        args.stiffness,
+        args.mu,
+        args.mass,
+        args.g,
+        args.force_max,
+        args.cycles,
+        args.steps,
+        args.solver,
+    )
     history = out["history"]
-    print(f"{'step':>4} {'F (N)':>9} {'x_n (m)':>11} {'closed form':>11}  "
-          "status (o open, s stick, S slip; body 1 first)")
+    print(
+        f"{'step':>4} {'F (N)':>9} {'x_n (m)':>11} {'closed form':>11}  "
+        "status (o open, s stick, S slip; body 1 first)"
+    )
     for k, step in enumerate(history):
         status = "".join("osS"[code] for code in step.contact_status)
-        print(f"{k:4d} {out['force'][k]:9.3f} {out['x'][k, -1]:11.6f} {out['exact'][k, -1]:11.6f}"
-              f"  {status}")
+        print(
+            f"{k:4d} {out['force'][k]:9.3f} {out['x'][k, -1]:11.6f} {out['exact'][k, -1]:11.6f}"
+            f"  {status}"
+        )
     error = np.max(np.abs(out["x"] - out["exact"]))
     print(f"largest deviation from the closed form: {error:.2e} m")
     for c, energy in enumerate(out["dissipated_per_cycle"], start=1):
-        print(f"cycle {c}: dissipated {energy:.6f} J (closed form "
-              f"{out['closed_form_per_cycle']:.6f} J)")
+        print(
+            f"cycle {c}: dissipated {energy:.6f} J (closed form "
+            f"{out['closed_form_per_cycle']:.6f} J)"
+        )
     print(f"all steps certified: {history.success}")
     if args.plot:
         import matplotlib

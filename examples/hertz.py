@@ -26,8 +26,13 @@ import contactqp as cq
 from contactqp.compliance import grid, normal_influence
 
 
-def run(cells_per_radius: int = 12, sphere_radius: float = 5e-3, cell: float = 1e-5,
-        young: float = 210e9, poisson: float = 0.3) -> dict:
+def run(
+    cells_per_radius: int = 12,
+    sphere_radius: float = 5e-3,
+    cell: float = 1e-5,
+    young: float = 210e9,
+    poisson: float = 0.3,
+) -> dict:
     """Solve the indentation and return the measured and theoretical values (SI units)."""
     a_theory = cells_per_radius * cell
     depth = a_theory**2 / sphere_radius
@@ -43,8 +48,14 @@ def run(cells_per_radius: int = 12, sphere_radius: float = 5e-3, cell: float = 1
         "cell": cell,
         "load": float(result.forces.sum()),
         "load_theory": float(load_theory),
-        "radius": float(np.sqrt(np.count_nonzero(result.contact_status == cq.ContactStatus.CLOSED)
-                                * cell * cell / np.pi)),
+        "radius": float(
+            np.sqrt(
+                np.count_nonzero(result.contact_status == cq.ContactStatus.CLOSED)
+                * cell
+                * cell
+                / np.pi
+            )
+        ),
         "radius_theory": float(a_theory),
         "peak_pressure": float(result.forces.max() / cell**2),
         "peak_pressure_theory": float(2 * e_star * a_theory / (np.pi * sphere_radius)),
@@ -64,15 +75,22 @@ def main(argv=None) -> dict:
     if args.cells < 1 or not args.sphere_radius > 0:
         parser.error("--cells must be >= 1 and --sphere-radius > 0")
     out = run(args.cells, args.sphere_radius, young=args.young, poisson=args.poisson)
-    print(f"rigid sphere R_s = {args.sphere_radius:g} m on E = {args.young:g} Pa, "
-          f"nu = {args.poisson:g}; {out['cells']} cells of {out['cell']:g} m, "
-          f"solved in {out['seconds'] * 1e3:.1f} ms (certified: {out['success']})")
+    print(
+        f"rigid sphere R_s = {args.sphere_radius:g} m on E = {args.young:g} Pa, "
+        f"nu = {args.poisson:g}; {out['cells']} cells of {out['cell']:g} m, "
+        f"solved in {out['seconds'] * 1e3:.1f} ms (certified: {out['success']})"
+    )
     print(f"{'quantity':<22}{'contactqp':>14}{'Hertz':>14}{'rel. diff.':>12}")
-    for label, key, unit in [("load P", "load", "N"), ("contact radius a", "radius", "m"),
-                             ("peak pressure p0", "peak_pressure", "Pa")]:
+    for label, key, unit in [
+        ("load P", "load", "N"),
+        ("contact radius a", "radius", "m"),
+        ("peak pressure p0", "peak_pressure", "Pa"),
+    ]:
         measured, theory = out[key], out[f"{key}_theory"]
-        print(f"{label + ' (' + unit + ')':<22}{measured:14.6g}{theory:14.6g}"
-              f"{measured / theory - 1:12.2e}")
+        print(
+            f"{label + ' (' + unit + ')':<22}{measured:14.6g}{theory:14.6g}"
+            f"{measured / theory - 1:12.2e}"
+        )
     return out
 
 

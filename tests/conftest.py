@@ -24,8 +24,10 @@ def compiled_kernels_built() -> bool:
     if package is None or not package.submodule_search_locations:
         return False
     kernels = Path(next(iter(package.submodule_search_locations))) / "kernels"
-    return any((kernels / f"compiled{suffix}").exists()
-               for suffix in importlib.machinery.EXTENSION_SUFFIXES)
+    return any(
+        (kernels / f"compiled{suffix}").exists()
+        for suffix in importlib.machinery.EXTENSION_SUFFIXES
+    )
 
 
 if not compiled_kernels_built():

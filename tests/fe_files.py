@@ -42,8 +42,9 @@ def _split(value: int) -> tuple[int, int]:
     return value & 0xFFFFFFFF, value >> 32
 
 
-def write_ansys_full(path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), counts=None,
-                     version="20.1"):
+def write_ansys_full(
+    path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), counts=None, version="20.1"
+):
     """Write a symmetric stiffness as an ANSYS ``.full`` file.
 
     Parameters
@@ -86,9 +87,9 @@ def write_ansys_full(path, stiffness, nodes, dofs=(1, 2, 3), constrained=(), cou
     position += records[-2].size + records[-1].size
     ptr_stf = position
     for column in range(neqn):
-        rows = lower.indices[lower.indptr[column]:lower.indptr[column + 1]]
+        rows = lower.indices[lower.indptr[column] : lower.indptr[column + 1]]
         records.append(_int_record(rows + 1))
-        records.append(_double_record(lower.data[lower.indptr[column]:lower.indptr[column + 1]]))
+        records.append(_double_record(lower.data[lower.indptr[column] : lower.indptr[column + 1]]))
         position += records[-2].size + records[-1].size
     head[0], head[NEQN], head[NMROW], head[NMATRX] = -4, neqn, neqn, 1
     head[LENBAC], head[NUMDOF], head[NNODES] = n_nodes, numdof, n_nodes
@@ -126,8 +127,10 @@ def write_op4_binary(path, matrices: dict, form: int = 6):
             nonzero = np.flatnonzero(A[:, column])
             if nonzero.size:
                 first, last = nonzero[0], nonzero[-1] + 1
-                record(struct.pack("<3i", column + 1, first + 1, 2 * (last - first))
-                       + A[first:last, column].astype("<f8").tobytes())
+                record(
+                    struct.pack("<3i", column + 1, first + 1, 2 * (last - first))
+                    + A[first:last, column].astype("<f8").tobytes()
+                )
         record(struct.pack("<3id", ncols + 1, 1, 2, 1.0))
     with open(path, "wb") as handle:
         handle.write(bytes(out))

@@ -50,11 +50,14 @@ def test_riveting_and_friction_assemblies_share_one_part_and_model():
     assert type(plate) is type(block) is Part
     assert (block.length, block.width) == (0.100, 0.040)  # the friction case's smaller parts
     assert FrictionAssembly().thickness == 0.0012
-    np.testing.assert_allclose(plate.rigidity, 70e9 * 0.002 ** 3 / (12 * (1 - 0.33 ** 2)))
-    for assembly in (Assembly(upper=Part(width=0.2)),
-                     FrictionAssembly(upper=Part(length=0.3, width=0.040))):
-        with pytest.raises(InvalidInputError, match="lower and upper parts must have the same "
-                                                    "length and width"):
+    np.testing.assert_allclose(plate.rigidity, 70e9 * 0.002**3 / (12 * (1 - 0.33**2)))
+    for assembly in (
+        Assembly(upper=Part(width=0.2)),
+        FrictionAssembly(upper=Part(length=0.3, width=0.040)),
+    ):
+        with pytest.raises(
+            InvalidInputError, match="lower and upper parts must have the same length and width"
+        ):
             assembly.build()
 
 
@@ -65,8 +68,11 @@ def test_the_friction_model_refuses_absurd_gaps_like_the_plates():
     assert model.pair(1, 1) == 3
     pairs = model.obstacles(np.full(4, 1e-4))[0]
     np.testing.assert_array_equal(pairs.pairs, [[0, 4], [1, 5], [2, 6], [3, 7]])
-    with pytest.raises(InvalidInputError, match=r"^gaps: an overlap of 1000 mm is deeper than "
-                                                r"the 1\.2 mm plates"):
+    with pytest.raises(
+        InvalidInputError,
+        match=r"^gaps: an overlap of 1000 mm is deeper than "
+        r"the 1\.2 mm plates",
+    ):
         model.obstacles(np.full(4, -1.0))
     with pytest.raises(InvalidInputError, match="gaps must have 4 values, got 3"):
         model.obstacles(np.zeros(3))

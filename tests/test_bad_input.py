@@ -33,8 +33,11 @@ FCLIB = ROOT.parent / "shared" / "data" / "fclib"
 def run(*args) -> tuple[int, str, str]:
     """``contactqp ARGS`` in-process: (exit status, stdout, stderr); warnings go to stderr."""
     out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
-            warnings.catch_warnings():
+    with (
+        contextlib.redirect_stdout(out),
+        contextlib.redirect_stderr(err),
+        warnings.catch_warnings(),
+    ):
         warnings.simplefilter("default")
         status = main([str(arg) for arg in args])
     return status, out.getvalue(), err.getvalue()
@@ -58,27 +61,35 @@ def example(tmp_path, name="two_springs.toml", edit=lambda text: text) -> Path:
 
 def qp_problem(tmp_path, backend, settings: str) -> Path:
     """two_springs.toml solved by the qp solver with ``backend`` and these backend settings."""
-    return example(tmp_path, edit=lambda text: text.replace(
-        'name = "active-set"\ntol = 1e-12', f'name = "qp"\nbackend = "{backend}"')
-        + f"\n[solver.backend_options]\n{settings}\n")
+    return example(
+        tmp_path,
+        edit=lambda text: (
+            text.replace('name = "active-set"\ntol = 1e-12', f'name = "qp"\nbackend = "{backend}"')
+            + f"\n[solver.backend_options]\n{settings}\n"
+        ),
+    )
 
 
 # --------------------------------------------------------------------------------------------
 # qp backend settings
 
 
-@pytest.mark.parametrize("backend, settings, needle", [
-    ("clarabel", "foo = 1", "no attribute 'foo'"),
-    ("clarabel", 'max_iter = "abc"', "must be a number, got the string 'abc'"),
-    ("clarabel", 'verbose = "abc"', "refuses verbose = 'abc'"),
-    ("piqp", "foo = 1", "undefined solver setting foo"),  # piqp warns, when verbose only
-    ("osqp", "eps_abs = 1e300\neps_rel = -1.0", "eps_rel: must be >= 0"),
-    ("osqp", "polish_refine_iter = -3", "polish_refine_iter"),  # osqp's own check (C code)
-    ("quadprog", "max_iter = 50", "unexpected keyword argument 'max_iter'"),
-    ("clarabel", "max_iter = 0", "must be positive"),
-])
-def test_a_backend_setting_the_backend_refuses_is_one_line_naming_it(tmp_path, capfd, backend,
-                                                                     settings, needle):
+@pytest.mark.parametrize(
+    "backend, settings, needle",
+    [
+        ("clarabel", "foo = 1", "no attribute 'foo'"),
+        ("clarabel", 'max_iter = "abc"', "must be a number, got the string 'abc'"),
+        ("clarabel", 'verbose = "abc"', "refuses verbose = 'abc'"),
+        ("piqp", "foo = 1", "undefined solver setting foo"),  # piqp warns, when verbose only
+        ("osqp", "eps_abs = 1e300\neps_rel = -1.0", "eps_rel: must be >= 0"),
+        ("osqp", "polish_refine_iter = -3", "polish_refine_iter"),  # osqp's own check (C code)
+        ("quadprog", "max_iter = 50", "unexpected keyword argument 'max_iter'"),
+        ("clarabel", "max_iter = 0", "must be positive"),
+    ],
+)
+def test_a_backend_setting_the_backend_refuses_is_one_line_naming_it(
+    tmp_path, capfd, backend, settings, needle
+):
     problem = qp_problem(tmp_path, backend, settings)
     status, _, err = run("solve", problem)
     key = settings.splitlines()[-1].split(" =")[0]
@@ -86,13 +97,22 @@ def test_a_backend_setting_the_backend_refuses_is_one_line_naming_it(tmp_path, c
     assert "Traceback" not in err and capfd.readouterr().out == ""  # nothing from C code either
 
 
-@pytest.mark.parametrize("edit, needle", [
-    (lambda text: text.replace('name = "active-set"', "name = []"),
-     "[solver].name: must be a string, got an array of 0 entries"),
-    (lambda text: text.replace('name = "active-set"\ntol = 1e-12', 'name = "qp"')
-     + "\n[solver.backend_options]\nmax_iter = true\n",
-     "[solver.backend_options].max_iter: must be a number, got the boolean true"),
-])
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (
+            lambda text: text.replace('name = "active-set"', "name = []"),
+            "[solver].name: must be a string, got an array of 0 entries",
+        ),
+        (
+            lambda text: (
+                text.replace('name = "active-set"\ntol = 1e-12', 'name = "qp"')
+                + "\n[solver.backend_options]\nmax_iter = true\n"
+            ),
+            "[solver.backend_options].max_iter: must be a number, got the boolean true",
+        ),
+    ],
+)
 def test_solver_entries_of_the_wrong_type_are_one_line(tmp_path, edit, needle):
     status, _, err = run("solve", example(tmp_path, edit=edit))
     assert_one_line_error(status, err, needle)
@@ -112,14 +132,23 @@ def test_an_unknown_backend_is_named_when_the_file_is_read(tmp_path):
     assert_one_line_error(status, err, "[solver].backend", "'no-such-qp' is not installed")
 
 
-@pytest.mark.parametrize("settings, needle", [
-    ("foo = 1", "[friction.backend_options].foo: backend 'clarabel' refuses foo = 1"),
-    ('tol_feas = "tight"', "[friction.backend_options].tol_feas"),
-    ("max_iter = 5", "max_iter: is an option of friction solver 'polygonal'"),
-])
+@pytest.mark.parametrize(
+    "settings, needle",
+    [
+        ("foo = 1", "[friction.backend_options].foo: backend 'clarabel' refuses foo = 1"),
+        ('tol_feas = "tight"', "[friction.backend_options].tol_feas"),
+        ("max_iter = 5", "max_iter: is an option of friction solver 'polygonal'"),
+    ],
+)
 def test_friction_backend_settings_are_checked_too(tmp_path, settings, needle):
-    problem = example(tmp_path, "cyclic_block.toml", lambda text: text.replace(
-        "\nmu = 0.3\n", "\nmu = 0.3\nfacets = 8\n") + f"\n[friction.backend_options]\n{settings}\n")
+    problem = example(
+        tmp_path,
+        "cyclic_block.toml",
+        lambda text: (
+            text.replace("\nmu = 0.3\n", "\nmu = 0.3\nfacets = 8\n")
+            + f"\n[friction.backend_options]\n{settings}\n"
+        ),
+    )
     status, _, err = run("solve", problem)
     assert_one_line_error(status, err, needle)
 
@@ -133,8 +162,12 @@ def damaged_archives(directory: Path) -> dict[str, Path]:
     good = directory / "good.npz"
     np.savez(good, R=R, spare=R)
     data = good.read_bytes()
-    files = {"truncated": data[: len(data) // 2], "tail cut": data[:-30],
-             "corrupt member": data[:100] + b"x" * 40 + data[140:], "not a zip": b"hello"}
+    files = {
+        "truncated": data[: len(data) // 2],
+        "tail cut": data[:-30],
+        "corrupt member": data[:100] + b"x" * 40 + data[140:],
+        "not a zip": b"hello",
+    }
     paths = {}
     for name, content in files.items():
         paths[name] = directory / f"{name.replace(' ', '_')}.npz"
@@ -144,14 +177,22 @@ def damaged_archives(directory: Path) -> dict[str, Path]:
     return paths
 
 
-@pytest.mark.parametrize("damage", ["truncated", "tail cut", "corrupt member", "not a zip",
-                                    "object array"])
+@pytest.mark.parametrize(
+    "damage", ["truncated", "tail cut", "corrupt member", "not a zip", "object array"]
+)
 def test_a_damaged_npz_is_one_line_naming_the_key_and_the_file(tmp_path, damage):
     path = damaged_archives(tmp_path)[damage]
-    problem = example(tmp_path, edit=lambda text: text.replace(
-        '"two_springs_R.csv"', f'{{ file = "{path.name}", key = "R" }}'))
-    with pytest.raises(FileFormatError, match=r"\[model\]\.flexibility \('.*\.npz'\): not a "
-                                              r"readable \.npy / \.npz file"):
+    problem = example(
+        tmp_path,
+        edit=lambda text: text.replace(
+            '"two_springs_R.csv"', f'{{ file = "{path.name}", key = "R" }}'
+        ),
+    )
+    with pytest.raises(
+        FileFormatError,
+        match=r"\[model\]\.flexibility \('.*\.npz'\): not a "
+        r"readable \.npy / \.npz file",
+    ):
         load_problem_file(problem)
     status, _, err = run("solve", problem)
     assert_one_line_error(status, err, "[model].flexibility", path.name)
@@ -170,14 +211,19 @@ def test_a_toml_file_with_a_byte_order_mark_is_read(tmp_path):
 # Sizes: load steps, bodies
 
 
-@pytest.mark.parametrize("steps, total", [("100000000000000000000", "300000000000000000001"),
-                                          ("50000", "150001")])
+@pytest.mark.parametrize(
+    "steps, total", [("100000000000000000000", "300000000000000000001"), ("50000", "150001")]
+)
 def test_an_absurd_number_of_load_steps_is_one_line(tmp_path, steps, total):
-    problem = example(tmp_path, "cyclic_block.toml",
-                      lambda text: text.replace("\nsteps = 4\n", f"\nsteps = {steps}\n"))
+    problem = example(
+        tmp_path,
+        "cyclic_block.toml",
+        lambda text: text.replace("\nsteps = 4\n", f"\nsteps = {steps}\n"),
+    )
     status, _, err = run("solve", problem)
-    assert_one_line_error(status, err, "[loading].steps", f"gives {total} load steps",
-                          "more than the 100000 allowed")
+    assert_one_line_error(
+        status, err, "[loading].steps", f"gives {total} load steps", "more than the 100000 allowed"
+    )
 
 
 def test_a_long_history_shows_its_progress_on_stderr(tmp_path, monkeypatch):
@@ -185,25 +231,29 @@ def test_a_long_history_shows_its_progress_on_stderr(tmp_path, monkeypatch):
     from contactqp.cli import solve as solve_command
 
     # as if every step took longer than the delay before progress is shown
-    monkeypatch.setattr(solve_command, "progress",
-                        lambda what: app.progress(what, after=0.0, every=0.0))
+    monkeypatch.setattr(
+        solve_command, "progress", lambda what: app.progress(what, after=0.0, every=0.0)
+    )
     problem = example(tmp_path, "cyclic_block.toml")  # 13 steps
     status, out, err = run("solve", problem, "--json")
     assert status == 0 and '"steps": 13' in out
-    assert err.splitlines() == [f"contactqp: step {k} of 13 ({100 * k // 13} %), 0 s"
-                                for k in range(1, 14)]
+    assert err.splitlines() == [
+        f"contactqp: step {k} of 13 ({100 * k // 13} %), 0 s" for k in range(1, 14)
+    ]
 
 
 def test_many_forces_on_a_long_chain_show_their_progress(monkeypatch):
     from contactqp.cli import app
     from contactqp.cli import springs as springs_command
 
-    monkeypatch.setattr(springs_command, "progress",
-                        lambda what: app.progress(what, after=0.0, every=0.0))
+    monkeypatch.setattr(
+        springs_command, "progress", lambda what: app.progress(what, after=0.0, every=0.0)
+    )
     status, out, err = run("springs", "--n", "1000", "--force", "1,2,3", "--json")
     assert status == 0 and len(out.splitlines()) == 3
-    assert err.splitlines() == [f"contactqp: force {k} of 3 ({100 * k // 3} %), 0 s"
-                                for k in (1, 2, 3)]
+    assert err.splitlines() == [
+        f"contactqp: force {k} of 3 ({100 * k // 3} %), 0 s" for k in (1, 2, 3)
+    ]
 
 
 def test_a_short_run_shows_no_progress(tmp_path):
@@ -217,15 +267,21 @@ def test_a_hundred_thousand_springs_from_the_command_line():
     assert status == 0 and err == ""
     x = np.array(json.loads(out)["x"])
     i = np.arange(1, n + 1)  # closed form: body i slides once F > (n + 1 - i) mu m g
-    np.testing.assert_allclose(x, np.cumsum(np.maximum(F - (n + 1 - i) * limit, 0.0)),
-                               rtol=0, atol=1e-9 * x.max())
+    np.testing.assert_allclose(
+        x, np.cumsum(np.maximum(F - (n + 1 - i) * limit, 0.0)), rtol=0, atol=1e-9 * x.max()
+    )
 
 
-@pytest.mark.parametrize("args, needle", [
-    (("springs", "--n", "1000001"), "--n"), (("springs", "--n", "10" * 40), "--n"),
-    (("layers", "--steps", "100000"), "--steps"), (("layers", "--mu", "1e300"), "--mu"),
-    (("layers", "--cohesion", "1e300"), "--cohesion"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("springs", "--n", "1000001"), "--n"),
+        (("springs", "--n", "10" * 40), "--n"),
+        (("layers", "--steps", "100000"), "--steps"),
+        (("layers", "--mu", "1e300"), "--mu"),
+        (("layers", "--cohesion", "1e300"), "--cohesion"),
+    ],
+)
 def test_sizes_beyond_what_is_offered_are_one_line(args, needle):
     status, _, err = run(*args)
     assert_one_line_error(status, err, needle)
@@ -239,35 +295,62 @@ def without(monkeypatch, module: str) -> None:
     """Make ``import module`` fail, as after an install without its extra; modules of contactqp
     that import it at their top are dropped too, so that they are imported again."""
     for name in list(sys.modules):
-        if name == module or name.startswith(module + ".") or (
-                module == "skfem" and name.startswith("contactqp.compliance.fem")):
+        if (
+            name == module
+            or name.startswith(module + ".")
+            or (module == "skfem" and name.startswith("contactqp.compliance.fem"))
+        ):
             monkeypatch.delitem(sys.modules, name)
     monkeypatch.setitem(sys.modules, module, None)
 
 
 def op4_problem(tmp_path) -> Path:
     (tmp_path / "R.op4").write_text("not read: pyNastran is missing\n")
-    return example(tmp_path, edit=lambda text: text.replace(
-        '"two_springs_R.csv"', '{ file = "R.op4", key = "KAA" }'))
+    return example(
+        tmp_path,
+        edit=lambda text: text.replace('"two_springs_R.csv"', '{ file = "R.op4", key = "KAA" }'),
+    )
 
 
-@pytest.mark.parametrize("module, extra, command", [
-    ("skfem", "fem", lambda tmp: ["layers", "--steps", "2"]),
-    ("matplotlib", "plot", lambda tmp: ["layers", "--steps", "2", "--plot", tmp / "l.png"]),
-    ("matplotlib", "plot", lambda tmp: ["springs", "--plot", tmp / "s.png"]),
-    ("qpsolvers", "qp", lambda tmp: ["solve", qp_problem(tmp, "clarabel", "max_iter = 99")]),
-    ("qpsolvers", "qp", lambda tmp: ["solve", example(tmp, "cyclic_block.toml", lambda text:
-                                                      text.replace("\nmu = 0.3\n",
-                                                                   "\nmu = 0.3\nfacets = 6\n"))]),
-    ("pyNastran", "nastran", lambda tmp: ["solve", op4_problem(tmp)]),
-    ("clarabel", "qp", lambda tmp: ["rod"]),
-    ("clarabel", "qp", lambda tmp: ["solve", example(tmp, "cyclic_block.toml", lambda text:
-                                                     text.replace("\nmu = 0.3\n", "\nmu = 0.3"
-                                                                  "\nsolver = 'tresca'\n"))]),
-    ("h5py", "hdf5", lambda tmp: ["fclib", FCLIB / "CubeH8.hdf5"]),
-])
-def test_a_missing_optional_dependency_names_its_extra(tmp_path, monkeypatch, module, extra,
-                                                       command):
+@pytest.mark.parametrize(
+    "module, extra, command",
+    [
+        ("skfem", "fem", lambda tmp: ["layers", "--steps", "2"]),
+        ("matplotlib", "plot", lambda tmp: ["layers", "--steps", "2", "--plot", tmp / "l.png"]),
+        ("matplotlib", "plot", lambda tmp: ["springs", "--plot", tmp / "s.png"]),
+        ("qpsolvers", "qp", lambda tmp: ["solve", qp_problem(tmp, "clarabel", "max_iter = 99")]),
+        (
+            "qpsolvers",
+            "qp",
+            lambda tmp: [
+                "solve",
+                example(
+                    tmp,
+                    "cyclic_block.toml",
+                    lambda text: text.replace("\nmu = 0.3\n", "\nmu = 0.3\nfacets = 6\n"),
+                ),
+            ],
+        ),
+        ("pyNastran", "nastran", lambda tmp: ["solve", op4_problem(tmp)]),
+        ("clarabel", "qp", lambda tmp: ["rod"]),
+        (
+            "clarabel",
+            "qp",
+            lambda tmp: [
+                "solve",
+                example(
+                    tmp,
+                    "cyclic_block.toml",
+                    lambda text: text.replace("\nmu = 0.3\n", "\nmu = 0.3\nsolver = 'tresca'\n"),
+                ),
+            ],
+        ),
+        ("h5py", "hdf5", lambda tmp: ["fclib", FCLIB / "CubeH8.hdf5"]),
+    ],
+)
+def test_a_missing_optional_dependency_names_its_extra(
+    tmp_path, monkeypatch, module, extra, command
+):
     without(monkeypatch, module)
     status, _, err = run(*command(tmp_path))
     assert_one_line_error(status, err, f"pip install 'contactqp[{extra}]'")
@@ -282,8 +365,13 @@ def toml_value(value) -> str:
     if isinstance(value, bool):
         return str(value).lower()
     if isinstance(value, float):
-        return ("nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
-                if math.isinf(value) else repr(value))
+        return (
+            "nan"
+            if math.isnan(value)
+            else ("inf" if value > 0 else "-inf")
+            if math.isinf(value)
+            else repr(value)
+        )
     if isinstance(value, (int, str)):
         return str(value) if isinstance(value, int) else json.dumps(value)
     if isinstance(value, list):
@@ -293,16 +381,20 @@ def toml_value(value) -> str:
 
 def toml_text(doc: dict) -> str:
     """A problem file's text: scalars first, then one [table] or [[table]] per entry."""
-    lines = [f"{key} = {toml_value(value)}" for key, value in doc.items()
-             if not isinstance(value, dict) and not (
-                 isinstance(value, list) and value and all(isinstance(v, dict) for v in value))]
+    lines = [
+        f"{key} = {toml_value(value)}"
+        for key, value in doc.items()
+        if not isinstance(value, dict)
+        and not (isinstance(value, list) and value and all(isinstance(v, dict) for v in value))
+    ]
     for key, value in doc.items():
         if isinstance(value, dict):
             lines += [f"[{key}]"] + [f"{json.dumps(k)} = {toml_value(v)}" for k, v in value.items()]
         elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
             for table in value:
-                lines += [f"[[{key}]]"] + [f"{json.dumps(k)} = {toml_value(v)}"
-                                           for k, v in table.items()]
+                lines += [f"[[{key}]]"] + [
+                    f"{json.dumps(k)} = {toml_value(v)}" for k, v in table.items()
+                ]
     return "\n".join(lines) + "\n"
 
 
@@ -311,28 +403,91 @@ MISSING = object()  # a key removed from the file
 #: Values a new user might type by mistake: wrong types and shapes, non-finite and huge
 #: numbers, negative and empty ones, files that are missing, empty or damaged.
 BAD_VALUES = [
-    math.nan, math.inf, -math.inf, 1e300, -1e300, -1, 0, -0.5, 1.5, 10**30, True, "", "abc",
-    [], [[]], [1, "a"], [math.nan, 1.0], [1e300, 1e300], [[1.0, 2.0], [3.0]], [[1e300]],
-    [-1, 0], [0, 0], {}, {"file": "R.csv", "key": "R"}, {"file": "good.npz"},
-    "missing.csv", "empty.csv", "commas.csv", "text.csv", "corrupt.npz", "good.npz",
-    "two_springs_R.csv", MISSING,
+    math.nan,
+    math.inf,
+    -math.inf,
+    1e300,
+    -1e300,
+    -1,
+    0,
+    -0.5,
+    1.5,
+    10**30,
+    True,
+    "",
+    "abc",
+    [],
+    [[]],
+    [1, "a"],
+    [math.nan, 1.0],
+    [1e300, 1e300],
+    [[1.0, 2.0], [3.0]],
+    [[1e300]],
+    [-1, 0],
+    [0, 0],
+    {},
+    {"file": "R.csv", "key": "R"},
+    {"file": "good.npz"},
+    "missing.csv",
+    "empty.csv",
+    "commas.csv",
+    "text.csv",
+    "corrupt.npz",
+    "good.npz",
+    "two_springs_R.csv",
+    MISSING,
 ]
 
 BASES = {
-    "two_springs.toml": ["name", "model.flexibility", "model.dofs_per_node", "model.stiffness",
-                         "model.coordinates", "loads.values", "loads.entries", "obstacle",
-                         "obstacle.0.type", "obstacle.0.nodes", "obstacle.0.gaps",
-                         "obstacle.0.direction", "obstacle.0.directions", "solver",
-                         "solver.name", "solver.tol", "solver.max_iter",
-                         "solver.certificate_tol", "model"],
-    "cyclic_block.toml": ["friction.mu", "friction.cohesion", "friction.facets",
-                          "friction.solver", "friction.tol", "friction.max_iter",
-                          "friction.backend", "friction.backend_options", "loading.factors",
-                          "loading.steps", "loading.points", "loads.entries",
-                          "loads.entries.0.value", "loads.entries.1.node", "obstacle.0.gaps",
-                          "friction", "loading", "model.flexibility"],
-    "qp.toml": ["solver.backend", "solver.backend_options", "solver.backend_options.max_iter",
-                "solver.backend_options.tol_feas", "loads.values", "obstacle.0.gaps"],
+    "two_springs.toml": [
+        "name",
+        "model.flexibility",
+        "model.dofs_per_node",
+        "model.stiffness",
+        "model.coordinates",
+        "loads.values",
+        "loads.entries",
+        "obstacle",
+        "obstacle.0.type",
+        "obstacle.0.nodes",
+        "obstacle.0.gaps",
+        "obstacle.0.direction",
+        "obstacle.0.directions",
+        "solver",
+        "solver.name",
+        "solver.tol",
+        "solver.max_iter",
+        "solver.certificate_tol",
+        "model",
+    ],
+    "cyclic_block.toml": [
+        "friction.mu",
+        "friction.cohesion",
+        "friction.facets",
+        "friction.solver",
+        "friction.tol",
+        "friction.max_iter",
+        "friction.backend",
+        "friction.backend_options",
+        "loading.factors",
+        "loading.steps",
+        "loading.points",
+        "loads.entries",
+        "loads.entries.0.value",
+        "loads.entries.1.node",
+        "obstacle.0.gaps",
+        "friction",
+        "loading",
+        "model.flexibility",
+    ],
+    "qp.toml": [
+        "solver.backend",
+        "solver.backend_options",
+        "solver.backend_options.max_iter",
+        "solver.backend_options.tol_feas",
+        "loads.values",
+        "obstacle.0.gaps",
+    ],
 }
 
 
@@ -341,7 +496,8 @@ BASES = {
 FOUND = {
     # overflow: RuntimeWarnings on stderr, exit 0 with a huge or NaN answer ("silently wrong",
     # result.py / problem.py / box_qp.py certificates)
-    ("two_springs.toml", "loads.values", 1e300), ("qp.toml", "loads.values", 1e300),
+    ("two_springs.toml", "loads.values", 1e300),
+    ("qp.toml", "loads.values", 1e300),
     ("cyclic_block.toml", "friction.cohesion", 1e300),
     ("cyclic_block.toml", "loading.factors", 1e300),
     ("cyclic_block.toml", "loads.entries.0.value", 1e300),
@@ -420,8 +576,7 @@ def test_broken_problem_files_give_one_line_and_the_right_exit_code(property_dir
 
 
 @pytest.mark.parametrize(("base", "path", "value"), sorted(FOUND, key=repr))
-def test_broken_values_found_give_one_line_and_the_right_exit_code(property_dir, base, path,
-                                                                    value):
+def test_broken_values_found_give_one_line_and_the_right_exit_code(property_dir, base, path, value):
     doc = tomllib.loads((property_dir / base).read_text())
     assert_solve_exits_clean(property_dir, mutated(doc, path, value))
 
@@ -432,31 +587,57 @@ def assert_solve_exits_clean(directory: Path, doc: dict) -> None:
     problem.write_text(toml_text(doc))
     try:
         status, _, err = run("solve", problem, "--json")
-    except BaseException as exc:  # noqa: BLE001  (what the user would see as a traceback)
+    except BaseException as exc:
         pytest.fail(f"traceback: {type(exc).__name__}: {exc}\n{problem.read_text()}")
     assert_clean_exit(status, err)
 
 
-BAD_OPTION_VALUES = ["nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "", "abc", "1.5",
-                     "1" + "0" * 30, "1,,2", "missing.npy"]
+BAD_OPTION_VALUES = [
+    "nan",
+    "inf",
+    "-inf",
+    "1e300",
+    "-1e300",
+    "-1",
+    "0",
+    "",
+    "abc",
+    "1.5",
+    "1" + "0" * 30,
+    "1,,2",
+    "missing.npy",
+]
 
 COMMANDS = {  # command, options that take a value, options fixed to keep a run cheap
     "springs": (["--n", "--stiffness", "--mu", "--mass", "--g", "--force"], []),
     "layers": (["--mu", "--cohesion", "--steps"], ["--steps", "2"]),
     "rod": (["--elements"], []),
     "fclib": (["--tol"], []),
-    "riveting": (["--samples", "--seed", "--workers", "--mean-gap", "--amplitude",
-                  "--correlation-length", "--method", "--gaps"], ["--samples", "1"]),
+    "riveting": (
+        [
+            "--samples",
+            "--seed",
+            "--workers",
+            "--mean-gap",
+            "--amplitude",
+            "--correlation-length",
+            "--method",
+            "--gaps",
+        ],
+        ["--samples", "1"],
+    ),
 }
 
 
 #: Command lines the property test found, kept as regressions: (command, option, value).
 OPTIONS_FOUND = {
     # riveting / batch.py: tracebacks (OverflowError from h5py, from the gap field)
-    ("riveting", "--samples", "1" + "0" * 30), ("riveting", "--amplitude", "1e300"),
+    ("riveting", "--samples", "1" + "0" * 30),
+    ("riveting", "--amplitude", "1e300"),
     ("riveting", "--correlation-length", "1e300"),
     # riveting: RuntimeWarnings on stderr and exit 0 (gaps of 1e300 m, or none)
-    ("riveting", "--mean-gap", "1e300"), ("riveting", "--mean-gap", "-1e300"),
+    ("riveting", "--mean-gap", "1e300"),
+    ("riveting", "--mean-gap", "-1e300"),
     ("riveting", "--mean-gap", "0"),
     # rod.py: RuntimeWarning (invalid value in cast) before the one line
     ("rod", "--elements", "1" + "0" * 30),
@@ -465,8 +646,9 @@ OPTIONS_FOUND = {
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
-def test_broken_command_lines_give_one_line_and_the_right_exit_code(property_dir, tmp_path_factory,
-                                                                     data):
+def test_broken_command_lines_give_one_line_and_the_right_exit_code(
+    property_dir, tmp_path_factory, data
+):
     command = data.draw(st.sampled_from(sorted(COMMANDS)), label="command")
     options, fixed = COMMANDS[command]
     option = data.draw(st.sampled_from(options), label="option")
@@ -476,7 +658,8 @@ def test_broken_command_lines_give_one_line_and_the_right_exit_code(property_dir
 
 @pytest.mark.parametrize(("command", "option", "value"), sorted(OPTIONS_FOUND))
 def test_broken_command_lines_found_give_one_line_and_the_right_exit_code(
-        property_dir, tmp_path_factory, command, option, value):
+    property_dir, tmp_path_factory, command, option, value
+):
     assert_command_exits_clean(property_dir, tmp_path_factory, command, option, value)
 
 
@@ -490,7 +673,7 @@ def assert_command_exits_clean(property_dir, tmp_path_factory, command, option, 
         args += ["--out", str(tmp_path_factory.mktemp("study"))]
     try:
         status, _, err = run(*args)
-    except BaseException as exc:  # noqa: BLE001  (what the user would see as a traceback)
+    except BaseException as exc:
         pytest.fail(f"traceback: {type(exc).__name__}: {exc} for {args}")
     assert_clean_exit(status, err)
 
@@ -518,8 +701,12 @@ def test_an_empty_csv_is_one_line_and_no_warning(tmp_path, content):
 
 
 def test_a_warning_on_the_command_line_is_one_line(tmp_path):
-    problem = example(tmp_path, edit=lambda text: text.replace(
-        '"two_springs_R.csv"', "[[5e-7, 5e-7], [5.0000000001e-7, 1.5e-6]]"))
+    problem = example(
+        tmp_path,
+        edit=lambda text: text.replace(
+            '"two_springs_R.csv"', "[[5e-7, 5e-7], [5.0000000001e-7, 1.5e-6]]"
+        ),
+    )
     status, _, err = run("solve", problem)
     assert status in (0, 1) and "Traceback" not in err
     warning = [line for line in err.splitlines() if "symmetrised" in line]

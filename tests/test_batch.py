@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from contactqp.core.status import ContactStatus
 from contactqp import ContactProblem, NodePairs, solve
 from contactqp.applications.riveting import Assembly, FasteningCase
+from contactqp.core.status import ContactStatus
 from contactqp.errors import FileFormatError, InvalidInputError
+from contactqp.io.plot import plot_statistics
 from contactqp.studies import (
     GapSamples,
     GapVariation,
@@ -18,7 +19,6 @@ from contactqp.studies import (
     load_gap_samples,
     run_batch,
 )
-from contactqp.io.plot import plot_statistics
 
 N = 24
 
@@ -35,8 +35,9 @@ def source(riveted):
 
 def test_gaussian_field_has_its_target_amplitude_and_correlation():
     x = np.arange(40) * 0.01
-    field = GaussianGapField(np.column_stack([x, 0 * x]), amplitude=2e-4,
-                             correlation_length=0.03, mean=5e-4, seed=3)
+    field = GaussianGapField(
+        np.column_stack([x, 0 * x]), amplitude=2e-4, correlation_length=0.03, mean=5e-4, seed=3
+    )
     samples = field.realisations(range(4000))
     # 4000 samples: standard errors about 1.1 % of sigma for the deviation, 0.016 for a
     # correlation; the bounds are 4 to 5 standard errors
@@ -44,7 +45,7 @@ def test_gaussian_field_has_its_target_amplitude_and_correlation():
     np.testing.assert_allclose(samples.std(axis=0), 2e-4, rtol=0.05)
     corr = np.corrcoef(samples.T)
     for lag in (1, 2, 3, 5):
-        target = np.exp(-(lag * 0.01) ** 2 / (2 * 0.03 ** 2))
+        target = np.exp(-((lag * 0.01) ** 2) / (2 * 0.03**2))
         np.testing.assert_allclose(np.diagonal(corr, lag).mean(), target, atol=0.03)
 
 
@@ -87,7 +88,7 @@ def test_shared_dual_gives_the_fresh_problem_answer(riveted, source):
     k = riveted.n_pairs
     pairs = np.column_stack([np.arange(k), k + np.arange(k)])
     loads = np.zeros(2 * k)
-    loads[riveted.fasteners] = 40.0   # clamping forces: plates pushed together at the fasteners
+    loads[riveted.fasteners] = 40.0  # clamping forces: plates pushed together at the fasteners
     loads[k + riveted.fasteners] = -40.0
     base = ContactProblem(riveted.model, loads, [NodePairs(pairs, np.zeros(k))])
     case = GapVariation(base)
@@ -107,8 +108,13 @@ def test_shared_dual_gives_the_fresh_problem_answer(riveted, source):
 def serial(riveted, source, tmp_path_factory):
     path = tmp_path_factory.mktemp("serial") / "s.h5"
     summary = run_batch(FasteningCase(riveted), source, N, path, chunk_size=5)
-    assert summary.as_dict() | {"seconds": 0} == {"samples": N, "computed": N, "reused": 0,
-                                                  "failed": 0, "seconds": 0}
+    assert summary.as_dict() | {"seconds": 0} == {
+        "samples": N,
+        "computed": N,
+        "reused": 0,
+        "failed": 0,
+        "seconds": 0,
+    }
     return load_batch(path)
 
 
@@ -117,13 +123,15 @@ def assert_same(data, reference):
     np.testing.assert_array_equal(data.indices, reference.indices)
     for name, values in reference.fields.items():
         scale = float(np.max(np.abs(values.astype(float))))
-        np.testing.assert_allclose(data.fields[name], values, rtol=1e-10, atol=1e-12 * scale,
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            data.fields[name], values, rtol=1e-10, atol=1e-12 * scale, err_msg=name
+        )
 
 
 def test_process_pool_gives_the_serial_results(riveted, source, serial, tmp_path):
-    summary = run_batch(FasteningCase(riveted), source, N,
-                        tmp_path / "p.h5", workers=2, chunk_size=5)
+    summary = run_batch(
+        FasteningCase(riveted), source, N, tmp_path / "p.h5", workers=2, chunk_size=5
+    )
     assert summary.computed == N
     assert_same(load_batch(tmp_path / "p.h5"), serial)
     from contactqp.studies import executors
@@ -135,11 +143,22 @@ def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path
     import distributed
 
     # threads in this process, reached over TCP like a remote scheduler
-    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
-                                  protocol="tcp", host="127.0.0.1",
-                                  dashboard_address=None) as cluster:
-        summary = run_batch(FasteningCase(riveted), source, N,
-                            tmp_path / "d.h5", scheduler=cluster.scheduler_address, chunk_size=5)
+    with distributed.LocalCluster(
+        n_workers=1,
+        processes=False,
+        threads_per_worker=1,
+        protocol="tcp",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
+        summary = run_batch(
+            FasteningCase(riveted),
+            source,
+            N,
+            tmp_path / "d.h5",
+            scheduler=cluster.scheduler_address,
+            chunk_size=5,
+        )
     assert summary.computed == N
     assert_same(load_batch(tmp_path / "d.h5"), serial)
 
@@ -178,18 +197,22 @@ def test_statistics_from_file_samples_match_direct_solves(riveted, source, tmp_p
     from_csv = load_gap_samples(tmp_path / "g.csv")
     np.testing.assert_allclose(from_csv.samples, gaps, rtol=1e-15)
     case = FasteningCase(riveted)
-    summary = run_batch(case, load_gap_samples(tmp_path / "g.npy"), 6, tmp_path / "f.h5",
-                        workers=2, chunk_size=2)
+    summary = run_batch(
+        case, load_gap_samples(tmp_path / "g.npy"), 6, tmp_path / "f.h5", workers=2, chunk_size=2
+    )
     assert summary.complete and summary.failed == 0
     stats = load_batch(tmp_path / "f.h5").statistics(levels=(0.5, 0.9))
     final = [riveted.fasten(g).final for g in gaps]
-    np.testing.assert_allclose(stats.mean, np.mean([r.gaps for r in final], axis=0),
-                               rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(stats.quantiles[1], np.quantile([r.gaps for r in final], 0.9,
-                                                               axis=0), rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(stats.contact_probability,
-                               np.mean([r.contact_status == ContactStatus.CLOSED for r in final],
-                                       axis=0))
+    np.testing.assert_allclose(
+        stats.mean, np.mean([r.gaps for r in final], axis=0), rtol=1e-9, atol=1e-15
+    )
+    np.testing.assert_allclose(
+        stats.quantiles[1], np.quantile([r.gaps for r in final], 0.9, axis=0), rtol=1e-9, atol=1e-15
+    )
+    np.testing.assert_allclose(
+        stats.contact_probability,
+        np.mean([r.contact_status == ContactStatus.CLOSED for r in final], axis=0),
+    )
     assert 0 < stats.contact_probability.max() <= 1
     png = plot_statistics(stats, riveted.points, tmp_path / "stats.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
@@ -203,16 +226,23 @@ def test_a_store_refuses_the_same_delassus_operator_with_another_free_deformatio
     from contactqp import GapObstacle, ReducedModel
 
     loads = np.array([0.0, 5.0])
-    cases = [GapVariation(ContactProblem(ReducedModel(flexibility=[[1.0, c], [c, 2.0]],
-                                                      dofs_per_node=1),
-                                         loads, [GapObstacle([0], [1.0])]))
-             for c in (0.1, 0.5)]
+    cases = [
+        GapVariation(
+            ContactProblem(
+                ReducedModel(flexibility=[[1.0, c], [c, 2.0]], dofs_per_node=1),
+                loads,
+                [GapObstacle([0], [1.0])],
+            )
+        )
+        for c in (0.1, 0.5)
+    ]
     samples = GapSamples(np.linspace(0.0, 3.0, 4)[:, None])
     run_batch(cases[0], samples, 4, tmp_path / "c.h5")
     with pytest.raises(InvalidInputError, match="another study"):
         run_batch(cases[1], samples, 4, tmp_path / "c.h5")
-    strict = ContactProblem(cases[0].problem.model, loads, [GapObstacle([0], [1.0])],
-                            certificate_tol=1e-12)
+    strict = ContactProblem(
+        cases[0].problem.model, loads, [GapObstacle([0], [1.0])], certificate_tol=1e-12
+    )
     with pytest.raises(InvalidInputError, match="another study"):
         run_batch(GapVariation(strict), samples, 4, tmp_path / "c.h5")
 
@@ -232,12 +262,20 @@ def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path, monkeypa
         closed = free.getsockname()[1]
     case = FasteningCase(riveted)
     for address, message in [
-            ("no-port", ("Dask scheduler 'no-port' is not an address like tcp://host:port: "
-                         "missing port number")),
-            ("tcp://127.0.0.1:99999", "port 99999 out of range"),
-            ("foo://host:1", "unknown scheme 'foo'"),
-            (f"tcp://127.0.0.1:{closed}",
-             f"cannot reach the Dask scheduler 'tcp://127.0.0.1:{closed}'")]:
+        (
+            "no-port",
+            (
+                "Dask scheduler 'no-port' is not an address like tcp://host:port: "
+                "missing port number"
+            ),
+        ),
+        ("tcp://127.0.0.1:99999", "port 99999 out of range"),
+        ("foo://host:1", "unknown scheme 'foo'"),
+        (
+            f"tcp://127.0.0.1:{closed}",
+            f"cannot reach the Dask scheduler 'tcp://127.0.0.1:{closed}'",
+        ),
+    ]:
         with pytest.raises(InvalidInputError, match=message):
             run_batch(case, source, 2, tmp_path / "a.h5", scheduler=address)
         assert not (tmp_path / "a.h5").exists(), address
@@ -246,9 +284,15 @@ def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path, monkeypa
     import sys
 
     holder = subprocess.Popen(  # another process holds the store open (HDF5 locks it)
-        [sys.executable, "-c", "import h5py, sys, time; f = h5py.File(sys.argv[1], 'w'); "
-         "print('open', flush=True); time.sleep(60)", str(tmp_path / "busy.h5")],
-        stdout=subprocess.PIPE)
+        [
+            sys.executable,
+            "-c",
+            "import h5py, sys, time; f = h5py.File(sys.argv[1], 'w'); "
+            "print('open', flush=True); time.sleep(60)",
+            str(tmp_path / "busy.h5"),
+        ],
+        stdout=subprocess.PIPE,
+    )
     try:
         assert holder.stdout.readline().strip() == b"open"
         with pytest.raises(FileFormatError, match="busy.h5: cannot open the batch store"):
@@ -261,8 +305,7 @@ def test_bad_scheduler_or_store_is_bad_input(riveted, source, tmp_path, monkeypa
         run_batch(case, source, 2, tmp_path / "junk.h5")
 
 
-def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source, serial,
-                                                                  tmp_path):
+def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source, serial, tmp_path):
     import h5py
 
     from contactqp.studies.store import FORMAT
@@ -270,15 +313,17 @@ def test_a_store_whose_creation_was_interrupted_is_started_again(riveted, source
     path = tmp_path / "half.h5"
     with h5py.File(path, "w") as store:  # killed while creating the datasets (marked first)
         store.attrs["format"] = FORMAT
-        store.create_dataset("initial_gap", shape=(0, riveted.n_pairs),
-                             maxshape=(None, riveted.n_pairs), dtype="f8")
+        store.create_dataset(
+            "initial_gap", shape=(0, riveted.n_pairs), maxshape=(None, riveted.n_pairs), dtype="f8"
+        )
     summary = run_batch(FasteningCase(riveted), source, N, path, chunk_size=5)
     assert summary.computed == N
     assert_same(load_batch(path), serial)
 
 
 def test_a_store_refuses_an_hdf5_file_that_is_not_a_store_and_leaves_it_as_it_is(
-        riveted, source, tmp_path):
+    riveted, source, tmp_path
+):
     # was: any HDF5 file without a 'done' dataset was wiped and reused
     import h5py
 
@@ -291,15 +336,16 @@ def test_a_store_refuses_an_hdf5_file_that_is_not_a_store_and_leaves_it_as_it_is
         before = (tmp_path / name).read_bytes()
         with pytest.raises(FileFormatError) as info:
             run_batch(case, source, 2, tmp_path / name)
-        assert str(info.value) == (f"{tmp_path / name} is not a contactqp batch store (it "
-                                   "holds other HDF5 data, left as it is): give another output")
+        assert str(info.value) == (
+            f"{tmp_path / name} is not a contactqp batch store (it "
+            "holds other HDF5 data, left as it is): give another output"
+        )
         assert (tmp_path / name).read_bytes() == before
     h5py.File(tmp_path / "empty.h5", "w").close()  # an empty file holds nothing to lose
     assert run_batch(case, source, 2, tmp_path / "empty.h5").computed == 2
 
 
-def test_a_store_whose_growth_was_interrupted_grows_on_resume(riveted, source, serial,
-                                                              tmp_path):
+def test_a_store_whose_growth_was_interrupted_grows_on_resume(riveted, source, serial, tmp_path):
     import h5py
 
     path = tmp_path / "grow.h5"
@@ -334,8 +380,9 @@ def test_bad_sources(tmp_path):
     (tmp_path / "g.h5").write_text("1,2\n")
     with pytest.raises(FileFormatError) as info:
         load_gap_samples(tmp_path / "g.h5")
-    assert str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy, .npz or .csv " \
-                              "(or .txt)"
+    assert (
+        str(info.value) == f"{tmp_path / 'g.h5'}: gap samples must be .npy, .npz or .csv (or .txt)"
+    )
     (tmp_path / "g.txt").write_text("1,2\n3,x\n")
     with pytest.raises(FileFormatError, match=r"g\.txt: not a table of numbers"):
         load_gap_samples(tmp_path / "g.txt")
@@ -349,17 +396,20 @@ def test_corrupt_or_truncated_numpy_gap_files_are_one_line_format_errors(tmp_pat
     np.save(tmp_path / "g.npy", gaps)
     np.testing.assert_array_equal(load_gap_samples(tmp_path / "g.npz").samples, gaps)
     whole = (tmp_path / "g.npz").read_bytes()
-    broken = {"cut.npz": whole[:len(whole) // 2],   # truncated: BadZipFile
-              "crc.npz": whole[:60] + bytes(b ^ 0xFF for b in whole[60:90]) + whole[90:],
-              "junk.npz": b"PK\x03\x04 not really a zip",
-              "cut.npy": (tmp_path / "g.npy").read_bytes()[:100],   # EOF in the data
-              "zip.npy": whole[:len(whole) // 2]}   # np.load goes by content, not name
+    broken = {
+        "cut.npz": whole[: len(whole) // 2],  # truncated: BadZipFile
+        "crc.npz": whole[:60] + bytes(b ^ 0xFF for b in whole[60:90]) + whole[90:],
+        "junk.npz": b"PK\x03\x04 not really a zip",
+        "cut.npy": (tmp_path / "g.npy").read_bytes()[:100],  # EOF in the data
+        "zip.npy": whole[: len(whole) // 2],
+    }  # np.load goes by content, not name
     for name, data in broken.items():
         (tmp_path / name).write_bytes(data)
         with pytest.raises(FileFormatError) as info:
             load_gap_samples(tmp_path / name)
-        assert str(info.value).startswith(f"{tmp_path / name}: ") and "\n" not in str(
-            info.value), name
+        assert str(info.value).startswith(f"{tmp_path / name}: ") and "\n" not in str(info.value), (
+            name
+        )
     np.savez(tmp_path / "two.npz", a=gaps, b=gaps)
     with pytest.raises(InvalidInputError, match=r"two\.npz: the archive holds 2 arrays"):
         load_gap_samples(tmp_path / "two.npz")
@@ -398,9 +448,12 @@ def test_a_killed_process_loses_nothing_stored(riveted, source, serial, tmp_path
 
     path = tmp_path / "k.h5"
     child = subprocess.Popen(
-        [sys.executable, "-c", CHILD, str(path), str(N)], stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, start_new_session=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        [sys.executable, "-c", CHILD, str(path), str(N)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     assert child.stdout.readline().strip() == b"started"
     assert child.stdout.readline().split()[0] == b"stored"  # (a fixed delay may come sooner)
     os.killpg(child.pid, getattr(signal, how))
@@ -433,8 +486,9 @@ run_batch(FasteningCase(model), field, int(sys.argv[2]), sys.argv[1], workers=2,
 """
 
 
-def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, source, serial,
-                                                                      tmp_path):
+def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(
+    riveted, source, serial, tmp_path
+):
     # Ctrl-C reaching the parent only (kill -INT of its pid): the chunks the workers had
     # started still finish, and are stored rather than thrown away
     import os
@@ -445,8 +499,10 @@ def test_ctrl_c_of_a_pool_study_stores_the_chunks_its_workers_finish(riveted, so
     path, log = tmp_path / "p.h5", tmp_path / "started.txt"
     child = subprocess.Popen(
         [sys.executable, "-c", POOL_CHILD, str(path), str(4 * N), str(log)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     assert child.stdout.readline().strip() == b"started"
     wait_for_lines(log, 1)  # a worker runs a chunk (a fixed delay may pass before the pool runs)
     os.kill(child.pid, signal.SIGINT)
@@ -488,7 +544,8 @@ class LoggedField(GaussianGapField):
 
 
 def test_ctrl_c_while_a_pool_study_stores_a_chunk_keeps_the_chunks_its_workers_run(
-        riveted, source, serial, tmp_path):
+    riveted, source, serial, tmp_path
+):
     # Ctrl-C while the parent stores the first chunk and a worker runs another: that chunk
     # was computed and thrown away, and the pool went on with the whole study until exit
     path, log = tmp_path / "s.h5", tmp_path / "started.txt"
@@ -499,12 +556,15 @@ def test_ctrl_c_while_a_pool_study_stores_a_chunk_keeps_the_chunks_its_workers_r
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_batch(FasteningCase(riveted), field, 4 * N, path, workers=2, chunk_size=5,
-                  progress=interrupt)
+        run_batch(
+            FasteningCase(riveted), field, 4 * N, path, workers=2, chunk_size=5, progress=interrupt
+        )
     started = sorted(int(k) for line in log.read_text().split("\n") for k in line.split())
     stored = load_batch(path).indices.tolist()
     assert len(started) >= 10 and set(started) <= set(stored) and len(stored) < 4 * N, (
-        started, stored)
+        started,
+        stored,
+    )
     rest = run_batch(FasteningCase(riveted), source, 4 * N, path)
     assert (rest.reused, rest.computed) == (len(stored), 4 * N - len(stored))
     assert_same(load_batch(path, N), serial)

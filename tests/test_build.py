@@ -36,11 +36,11 @@ def test_build_ext_leaves_out_an_extension_it_cannot_compile(monkeypatch, capsys
             raise CompileError("command 'cc' failed: No such file or directory")
         built.append(ext.name)
 
-    monkeypatch.setattr(setuptools.command.build_ext.build_ext, "build_extension",
-                        build_extension)
+    monkeypatch.setattr(setuptools.command.build_ext.build_ext, "build_extension", build_extension)
     other = setuptools.Extension("contactqp.other", ["other.c"])
-    command = project.OptionalBuildExt(Distribution({"name": "contactqp",
-                                                     "ext_modules": [project.KERNELS, other]}))
+    command = project.OptionalBuildExt(
+        Distribution({"name": "contactqp", "ext_modules": [project.KERNELS, other]})
+    )
     command.ensure_finalized()
     command.build_extensions()
     assert built == ["contactqp.other"] and command.extensions == [other]
@@ -55,10 +55,10 @@ def test_build_ext_fails_on_what_is_not_a_build_failure(monkeypatch):
     def build_extension(self, ext):
         raise KeyError("a bug, not a missing compiler")
 
-    monkeypatch.setattr(setuptools.command.build_ext.build_ext, "build_extension",
-                        build_extension)
-    command = project.OptionalBuildExt(Distribution({"name": "contactqp",
-                                                     "ext_modules": [project.KERNELS]}))
+    monkeypatch.setattr(setuptools.command.build_ext.build_ext, "build_extension", build_extension)
+    command = project.OptionalBuildExt(
+        Distribution({"name": "contactqp", "ext_modules": [project.KERNELS]})
+    )
     command.ensure_finalized()
     with pytest.raises(KeyError):
         command.build_extensions()
@@ -69,8 +69,11 @@ def copy_of_the_project(target: Path) -> Path:
     target.mkdir()
     for name in ("pyproject.toml", "setup.py", "README.md"):
         shutil.copy(ROOT / name, target / name)
-    shutil.copytree(ROOT / "src" / "contactqp", target / "src" / "contactqp",
-                    ignore=shutil.ignore_patterns("*.so", "*.pyd", "*.c", "__pycache__"))
+    shutil.copytree(
+        ROOT / "src" / "contactqp",
+        target / "src" / "contactqp",
+        ignore=shutil.ignore_patterns("*.so", "*.pyd", "*.c", "__pycache__"),
+    )
     return target
 
 
@@ -79,9 +82,23 @@ def test_pip_install_without_a_compiler_gives_a_working_package(tmp_path):
     source = copy_of_the_project(tmp_path / "source")
     installed = tmp_path / "installed"
     build = subprocess.run(
-        [sys.executable, "-m", "pip", "install", "-v", "--no-deps", "--target", str(installed),
-         str(source)], capture_output=True, text=True, cwd=source, timeout=300,
-        env={**os.environ, "CC": "false", "PIP_DISABLE_PIP_VERSION_CHECK": "1"})
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "-v",
+            "--no-deps",
+            "--target",
+            str(installed),
+            str(source),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=source,
+        timeout=300,
+        env={**os.environ, "CC": "false", "PIP_DISABLE_PIP_VERSION_CHECK": "1"},
+    )
     log = build.stdout + build.stderr
     if build.returncode and "No matching distribution" in log:
         pytest.skip("pip cannot fetch the build requirements here (offline)")
@@ -92,14 +109,23 @@ def test_pip_install_without_a_compiler_gives_a_working_package(tmp_path):
     assert (installed / "contactqp" / "py.typed").is_file()
     assert (installed / "contactqp" / "kernels" / "compiled.pyi").is_file()
     check = subprocess.run(
-        [sys.executable, "-W", "always", "-c",
-         "import numpy as np, contactqp.kernels as k\n"
-         "from contactqp.core.local_problem import LocalProblem\n"
-         "from contactqp.methods.coulomb import solve_coulomb\n"
-         "s = solve_coulomb(LocalProblem(np.diag([1.0, 2.0]), [-1.0, 0.8], [0.3], 2))\n"
-         "print(k.IMPLEMENTATION, s.success, k.__file__)"],
-        capture_output=True, text=True, cwd=tmp_path, timeout=120,
-        env={**os.environ, "PYTHONPATH": str(installed), "CONTACTQP_PURE_NUMPY": ""})
+        [
+            sys.executable,
+            "-W",
+            "always",
+            "-c",
+            "import numpy as np, contactqp.kernels as k\n"
+            "from contactqp.core.local_problem import LocalProblem\n"
+            "from contactqp.methods.coulomb import solve_coulomb\n"
+            "s = solve_coulomb(LocalProblem(np.diag([1.0, 2.0]), [-1.0, 0.8], [0.3], 2))\n"
+            "print(k.IMPLEMENTATION, s.success, k.__file__)",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+        env={**os.environ, "PYTHONPATH": str(installed), "CONTACTQP_PURE_NUMPY": ""},
+    )
     assert check.returncode == 0, check.stderr
     implementation, converged, where = check.stdout.split()
     assert (implementation, converged) == ("pure_numpy", "True")

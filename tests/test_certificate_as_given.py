@@ -19,11 +19,11 @@ import pytest
 import scipy.sparse as sp
 
 import contactqp as cq
+from contactqp import solve
+from contactqp.core.local_problem import LocalProblem, natural_map_error
 from contactqp.io.fclib import read_global_problem, read_problem
 from contactqp.io.siconos import parse_dat
-from contactqp.core.local_problem import LocalProblem, natural_map_error
 from contactqp.methods.coulomb import solve_coulomb
-from contactqp import solve
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "fclib"
@@ -44,8 +44,13 @@ def written_local(g):
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "contactqp.cli", *args], capture_output=True,
-                          text=True, cwd=ROOT, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "contactqp.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    )
 
 
 def digest(path):
@@ -61,8 +66,9 @@ def test_lmgc_global_file_is_solved_as_written():
     # the file's M is unsymmetric (22 % of the Jacobi-scaled entries), so is W = H^T M^-1 H
     assert np.abs(written.W - written.W.T).max() > 0.1 * np.abs(written.W).max()
     condensed = read_problem(LMGC)
-    np.testing.assert_allclose(dense(condensed.W), written.W, rtol=0,
-                               atol=1e-9 * np.abs(written.W).max())
+    np.testing.assert_allclose(
+        dense(condensed.W), written.W, rtol=0, atol=1e-9 * np.abs(written.W).max()
+    )
     solution = solve(condensed, tol=TOL)
     assert solution.success, solution.message
     # was 3.9e-3 when W was symmetrised (the solver then reported 2e-14)
@@ -92,6 +98,7 @@ def test_global_solution_is_certified_on_the_written_equations():
 
 def test_ill_conditioned_m_says_what_accuracy_it_allows():
     from contactqp.core.local_problem import GlobalProblem
+
     # cond(M) = 2e13 after Jacobi scaling: u = H^T M^-1 (H r + f) + w loses 13 digits
     delta = 1e-13
     M = np.array([[1.0, 1.0 - delta], [1.0 - delta, 1.0]])
@@ -108,8 +115,13 @@ def test_ill_conditioned_m_says_what_accuracy_it_allows():
 
 
 def test_cli_json_certifies_global_files_and_reports_limits(tmp_path):
-    proc = run("fclib", str(LMGC), str(DATA / "GFC3D_TwoRods1.dat"),
-               str(DATA / "fc2d_granularflowonwall_02020_00213.dat"), "--json")
+    proc = run(
+        "fclib",
+        str(LMGC),
+        str(DATA / "GFC3D_TwoRods1.dat"),
+        str(DATA / "fc2d_granularflowonwall_02020_00213.dat"),
+        "--json",
+    )
     assert proc.returncode == 0, proc.stderr
     lmgc, rods, granular = (json.loads(line) for line in proc.stdout.splitlines())
     assert lmgc["converged"] and lmgc["error"] <= TOL and lmgc["equilibrium"] <= 1e-13
@@ -172,8 +184,11 @@ def test_rescaling_solvers_report_the_given_problems_error(route):
         solution = solve_tresca_fixed_point(problem, tol=TOL)
     W = dense(problem.W)
     u = W @ solution.forces + problem.q
-    assert solution.certificate.natural_map == pytest.approx(natural_map_error(
-        LocalProblem(W, problem.q, problem.mu, 3), solution.forces, u), rel=1e-9, abs=1e-18)
+    assert solution.certificate.natural_map == pytest.approx(
+        natural_map_error(LocalProblem(W, problem.q, problem.mu, 3), solution.forces, u),
+        rel=1e-9,
+        abs=1e-18,
+    )
     assert solution.success == (solution.certificate.natural_map <= TOL)
     # the fixed point stalls near 6e-7 on this problem (the zero-row contact; with a unit
     # block there it converges), and says so; Newton converges
@@ -188,8 +203,10 @@ def test_frictionless_route_is_judged_on_every_row_of_the_unsymmetric_w():
     solution = solve(problem, tol=TOL)
     assert solution.success, solution.message
     assert np.all(solution.forces.reshape(6, 3)[:, 1:] == 0)
-    assert natural_map_error(LocalProblem(dense(problem.W), problem.q, problem.mu, 3),
-                             solution.forces) <= TOL
+    assert (
+        natural_map_error(LocalProblem(dense(problem.W), problem.q, problem.mu, 3), solution.forces)
+        <= TOL
+    )
 
 
 def test_symmetrised_model_is_certified_on_the_flexibility_given():
@@ -208,8 +225,9 @@ def test_symmetrised_model_is_certified_on_the_flexibility_given():
     # the solvers use the symmetric part; on the matrix given the equilibrium misses by ~4e-7,
     # and the certificate says so (it reported 1.7e-16, the symmetric part's residual)
     on_given = np.abs(U - given @ net).max()
-    length = max(np.abs(U).max(), 0.1, np.diag(R).max() * max(np.abs(loads).max(),
-                                                               result.forces.max()))
+    length = max(
+        np.abs(U).max(), 0.1, np.diag(R).max() * max(np.abs(loads).max(), result.forces.max())
+    )
     assert on_given / length > 1e-7  # the certificate's tolerance
     assert result.certificate.equilibrium >= 0.99 * on_given / length
     assert not result.success
@@ -231,13 +249,23 @@ def _inputs(tmp_path):
 def test_solution_dir_keeps_inputs_with_the_same_stem(tmp_path):
     folder = _inputs(tmp_path)
     before = {p.name: digest(p) for p in folder.iterdir()}
-    proc = run("fclib", str(folder / "x.dat"), str(folder / "x.hdf5"), "--json",
-               "--solution-dir", str(folder))
+    proc = run(
+        "fclib",
+        str(folder / "x.dat"),
+        str(folder / "x.hdf5"),
+        "--json",
+        "--solution-dir",
+        str(folder),
+    )
     assert proc.returncode == 0, proc.stderr
     # x.dat's solution used to be written into the input x.hdf5
     assert {name: digest(folder / name) for name in before} == before
     assert sorted(p.name for p in folder.iterdir()) == [
-        "x.dat", "x.dat.solution.hdf5", "x.hdf5", "x.hdf5.solution.hdf5"]
+        "x.dat",
+        "x.dat.solution.hdf5",
+        "x.hdf5",
+        "x.hdf5.solution.hdf5",
+    ]
     g = read_global_problem(folder / "x.dat")
     with h5py.File(folder / "x.dat.solution.hdf5") as fh:
         r, u, v = (fh[f"solution/{k}"][()] for k in "ruv")
@@ -263,21 +291,36 @@ def test_solution_dir_refuses_to_overwrite_inputs_or_foreign_files(tmp_path):
     shutil.copyfile(folder / "x.dat", other / "x.dat")
     out = tmp_path / "out"
     # two inputs, one solution file
-    _assert_refused(run("fclib", str(folder / "x.dat"), str(other / "x.dat"),
-                        "--solution-dir", str(out)), "same solution file")
+    _assert_refused(
+        run("fclib", str(folder / "x.dat"), str(other / "x.dat"), "--solution-dir", str(out)),
+        "same solution file",
+    )
     assert not out.exists()
     # the target is one of the inputs
     shutil.copyfile(folder / "x.hdf5", folder / "x.dat.solution.hdf5")
     before = digest(folder / "x.dat.solution.hdf5")
-    _assert_refused(run("fclib", str(folder / "x.dat"), str(folder / "x.dat.solution.hdf5"),
-                        "--solution-dir", str(folder)), "overwrite the input")
+    _assert_refused(
+        run(
+            "fclib",
+            str(folder / "x.dat"),
+            str(folder / "x.dat.solution.hdf5"),
+            "--solution-dir",
+            str(folder),
+        ),
+        "overwrite the input",
+    )
     # a file the command did not write is never replaced, inputs or not
-    _assert_refused(run("fclib", str(folder / "x.dat"), "--solution-dir", str(folder)),
-                    "not a solution file written by contactqp")
+    _assert_refused(
+        run("fclib", str(folder / "x.dat"), "--solution-dir", str(folder)),
+        "not a solution file written by contactqp",
+    )
     assert digest(folder / "x.dat.solution.hdf5") == before
     # nor, in a later run, another input's solution
     assert run("fclib", str(folder / "x.dat"), "--solution-dir", str(out)).returncode == 0
     written = digest(out / "x.dat.solution.hdf5")
-    _assert_refused(run("fclib", str(other / "x.dat"), "--solution-dir", str(out)),
-                    "the solution of another input", str(folder / "x.dat"))
+    _assert_refused(
+        run("fclib", str(other / "x.dat"), "--solution-dir", str(out)),
+        "the solution of another input",
+        str(folder / "x.dat"),
+    )
     assert digest(out / "x.dat.solution.hdf5") == written

@@ -9,16 +9,17 @@ import h5py
 import numpy as np
 import pytest
 
-from contactqp.io.fclib import read_problem, write_problem
 from contactqp.core.local_problem import LocalProblem, natural_map_error
+from contactqp.io.fclib import read_problem, write_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 FCLIB = ROOT.parent / "shared" / "data" / "fclib"
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "contactqp.cli", *args], capture_output=True,
-                          text=True, cwd=ROOT)
+    return subprocess.run(
+        [sys.executable, "-m", "contactqp.cli", *args], capture_output=True, text=True, cwd=ROOT
+    )
 
 
 def assert_one_line_error(proc, code):
@@ -29,13 +30,28 @@ def assert_one_line_error(proc, code):
 
 
 def test_springs_json_reproduces_the_published_table():
-    proc = run("springs", "--n", "3", "--stiffness", "1", "--mu", "0.2", "--mass", "2", "--g", "10",
-               "--force", "3,6,9,14", "--json")
+    proc = run(
+        "springs",
+        "--n",
+        "3",
+        "--stiffness",
+        "1",
+        "--mu",
+        "0.2",
+        "--mass",
+        "2",
+        "--g",
+        "10",
+        "--force",
+        "3,6,9,14",
+        "--json",
+    )
     assert proc.returncode == 0, proc.stderr
     rows = [json.loads(line) for line in proc.stdout.splitlines()]
     assert [r["force"] for r in rows] == [3, 6, 9, 14]
-    np.testing.assert_allclose([r["x"] for r in rows],
-                               [[0, 0, 0], [0, 0, 2], [0, 1, 6], [2, 8, 18]], atol=1e-12)
+    np.testing.assert_allclose(
+        [r["x"] for r in rows], [[0, 0, 0], [0, 0, 2], [0, 1, 6], [2, 8, 18]], atol=1e-12
+    )
 
 
 def test_springs_plot_and_table(tmp_path):
@@ -45,14 +61,22 @@ def test_springs_plot_and_table(tmp_path):
     assert "18" in proc.stdout and figure.stat().st_size > 1000
 
 
-@pytest.mark.parametrize("args", [
-    ("springs", "--mu", "-1"), ("springs", "--force", "x"), ("springs", "--n", "0"),
-    ("solve", "missing.toml"), ("fclib", "missing.hdf5"), ("nonsense",),
-    ("springs", "--plot", "/tmp/contactqp-never-written.xyz"),  # no such figure format
-    ("springs", "--plot", "/proc/none/chain.png"),  # unwritable
-    ("solve", "examples/problems/two_springs.toml", "--out", "/proc/none"),
-    ("layers", "--steps", "1"), ("riveting", "--samples", "-3", "--out", "/proc/none"),
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("springs", "--mu", "-1"),
+        ("springs", "--force", "x"),
+        ("springs", "--n", "0"),
+        ("solve", "missing.toml"),
+        ("fclib", "missing.hdf5"),
+        ("nonsense",),
+        ("springs", "--plot", "/tmp/contactqp-never-written.xyz"),  # no such figure format
+        ("springs", "--plot", "/proc/none/chain.png"),  # unwritable
+        ("solve", "examples/problems/two_springs.toml", "--out", "/proc/none"),
+        ("layers", "--steps", "1"),
+        ("riveting", "--samples", "-3", "--out", "/proc/none"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(args):
     assert_one_line_error(run(*args), 2)
 
@@ -67,16 +91,24 @@ def test_solve_example_writes_results(tmp_path):
 
 def frictionless_copy(source, target):
     problem = read_problem(source)
-    write_problem(target, LocalProblem(problem.W, problem.q, np.zeros_like(problem.mu), problem.dim))
+    write_problem(
+        target, LocalProblem(problem.W, problem.q, np.zeros_like(problem.mu), problem.dim)
+    )
     return target
 
 
 def test_fclib_frictionless_problems_are_solved(tmp_path):
     # the shared files all have friction; their frictionless twins are solved to the README's
     # measure, recomputed here from the written solution (independent of the solver's report)
-    files = [frictionless_copy(FCLIB / name, tmp_path / name.replace(".dat", ".hdf5"))
-             for name in ("fc2d_granularflowonwall_02020_00213.dat", "Capsules-i122-1617.dat",
-                          "Spheres-i099-356-679.hdf5", "Rover1041.dat")]
+    files = [
+        frictionless_copy(FCLIB / name, tmp_path / name.replace(".dat", ".hdf5"))
+        for name in (
+            "fc2d_granularflowonwall_02020_00213.dat",
+            "Capsules-i122-1617.dat",
+            "Spheres-i099-356-679.hdf5",
+            "Rover1041.dat",
+        )
+    ]
     out = tmp_path / "solutions"
     proc = run("fclib", *map(str, files), "--json", "--solution-dir", str(out))
     assert proc.returncode == 0, proc.stderr
@@ -113,8 +145,9 @@ def test_fclib_unsolvable_problem_says_why_and_keeps_other_results(tmp_path):
     hopeless = tmp_path / "hopeless.hdf5"
     write_problem(hopeless, LocalProblem(np.zeros((3, 3)), [-1.0, 0.5, 0.0], [0.3], 3))
     out = tmp_path / "solutions"
-    proc = run("fclib", str(hopeless), str(FCLIB / "Rover4516.dat"), "--json",
-               "--solution-dir", str(out))
+    proc = run(
+        "fclib", str(hopeless), str(FCLIB / "Rover4516.dat"), "--json", "--solution-dir", str(out)
+    )
     assert_one_line_error(proc, 1)
     assert "hopeless.hdf5" in proc.stderr and "not converged" in proc.stderr
     bad, good = [json.loads(line) for line in proc.stdout.splitlines()]

@@ -28,8 +28,9 @@ INTERFERENCE, AMPLITUDE, STEPS = 1e-5, np.array([200.0, 500.0]), 4
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "contactqp.cli", *args], capture_output=True,
-                          text=True, cwd=ROOT)
+    return subprocess.run(
+        [sys.executable, "-m", "contactqp.cli", *args], capture_output=True, text=True, cwd=ROOT
+    )
 
 
 def assert_one_line_error(proc, code, *fragments):
@@ -58,8 +59,10 @@ def blocks_by_hand():
 def cyclic_by_hand():
     """Factors, u_x (K, 2) and dissipation (K,) of cyclic_block.toml (Masing's rule)."""
     turning = [0.0, 1.0, -1.0, 1.0]
-    factors = np.concatenate([[0.0]] + [a + (b - a) * np.arange(1, STEPS + 1) / STEPS
-                                        for a, b in zip(turning[:-1], turning[1:])])
+    factors = np.concatenate(
+        [[0.0]]
+        + [a + (b - a) * np.arange(1, STEPS + 1) / STEPS for a, b in zip(turning[:-1], turning[1:])]
+    )
     limit = MU * KY * INTERFERENCE
     force = factors[:, None] * AMPLITUDE
     segment = (np.maximum(np.arange(len(factors)) - 1, 0) // STEPS)[:, None]
@@ -88,10 +91,15 @@ def test_friction_json_and_files_match_the_hand_answer(tmp_path):
     assert [r["status"] for r in rows] == ["stick", "slip"]
     np.testing.assert_allclose([float(r["normal_force"]) for r in rows], normal, rtol=1e-9)
     np.testing.assert_allclose([float(r["tangential_force"]) for r in rows], friction, rtol=1e-9)
-    np.testing.assert_allclose([float(r["slip"]) for r in rows], u_x, rtol=1e-9,
-                               atol=1e-9 * u_x.max())
-    np.testing.assert_allclose([float(r["dissipated"]) for r in rows], dissipation, rtol=1e-9,
-                               atol=1e-9 * dissipation.max())
+    np.testing.assert_allclose(
+        [float(r["slip"]) for r in rows], u_x, rtol=1e-9, atol=1e-9 * u_x.max()
+    )
+    np.testing.assert_allclose(
+        [float(r["dissipated"]) for r in rows],
+        dissipation,
+        rtol=1e-9,
+        atol=1e-9 * dissipation.max(),
+    )
     u = [float(r["u"]) for r in read_rows(tmp_path / "displacements.csv")]
     np.testing.assert_allclose(u, [u_x[0], -GAP, u_x[1], -GAP], rtol=1e-9, atol=1e-9 * GAP)
 
@@ -124,8 +132,9 @@ def test_history_json_records_match_masing():
     slipping = (slid > 1e-12).sum(axis=1)
     assert [r["slip"] for r in records] == slipping.tolist()
     assert [r["stick"] for r in records] == (2 - slipping).tolist()
-    np.testing.assert_allclose([r["dissipated"] for r in records], dissipated,
-                               atol=1e-9 * dissipated.max())
+    np.testing.assert_allclose(
+        [r["dissipated"] for r in records], dissipated, atol=1e-9 * dissipated.max()
+    )
     np.testing.assert_allclose(summary["dissipated"], dissipated.sum(), rtol=1e-9)
     assert all(r["certificate"]["passed"] for r in records)
 
@@ -140,8 +149,11 @@ def test_history_files_and_table(tmp_path):
     np.testing.assert_allclose(u[:, 0::2], x, rtol=1e-9, atol=1e-9 * np.abs(x).max())
     np.testing.assert_allclose(u[:, 1::2], INTERFERENCE, rtol=1e-9)
     steps = read_rows(tmp_path / "steps.csv")
-    np.testing.assert_allclose([float(r["cumulative_dissipated"]) for r in steps],
-                               np.cumsum(dissipated), atol=1e-9 * dissipated.sum())
+    np.testing.assert_allclose(
+        [float(r["cumulative_dissipated"]) for r in steps],
+        np.cumsum(dissipated),
+        atol=1e-9 * dissipated.sum(),
+    )
     assert all(r["success"] == "True" for r in steps)
     text = " ".join(proc.stdout.split())
     assert f"{K} steps" in text and f"total dissipated {dissipated.sum():.6g} J" in text
@@ -160,8 +172,9 @@ def test_failed_history_step_exits_1_and_names_the_step(tmp_path):
     failed = summary["failed_steps"]
     assert failed and not summary["success"]
     factor = summary["records"][failed[0]]["factor"]
-    line = assert_one_line_error(proc, 1, f"step {failed[0]} (factor {factor:g})",
-                                 "certificate failed")
+    line = assert_one_line_error(
+        proc, 1, f"step {failed[0]} (factor {factor:g})", "certificate failed"
+    )
     if len(failed) > 1:
         assert f"({len(failed) - 1} more steps failed)" in line
     proc = run("solve", str(path))  # the table marks it too

@@ -102,8 +102,7 @@ def test_indefinite_and_unconnected_freedoms_are_named():
 def test_factorize_solves_like_a_dense_solve():
     K = bar_stiffness(30, k=7.0)
     b = np.linspace(-1.0, 2.0, 30)
-    np.testing.assert_allclose(factorize(K).solve(b), np.linalg.solve(K.toarray(), b),
-                               rtol=1e-12)
+    np.testing.assert_allclose(factorize(K).solve(b), np.linalg.solve(K.toarray(), b), rtol=1e-12)
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -114,12 +113,16 @@ def test_finite_element_condensation_equals_unit_loads_and_is_reciprocal(dim):
     the condensed R (and its own reciprocity error) checks Maxwell-Betti on the FE model.
     """
     if dim == 2:
-        model = ElasticModel(plate(1.0, 0.3, 10, 3), 70e9, 0.33, plane="stress", thickness=2e-3,
-                             order=2).fix("left")
+        model = ElasticModel(
+            plate(1.0, 0.3, 10, 3), 70e9, 0.33, plane="stress", thickness=2e-3, order=2
+        ).fix("left")
         points = [[1.0, 0.3], [0.8, 0.3], [0.6, 0.3], [0.4, 0.3], [1.0, 0.0], [0.6, 0.0]]
     else:
-        model = ElasticModel(block(1.0, 0.4, 0.2, 5, 2, 2, cell="tet"), 210e9, 0.3,
-                             order=2).fix("left").fix("back", [1])
+        model = (
+            ElasticModel(block(1.0, 0.4, 0.2, 5, 2, 2, cell="tet"), 210e9, 0.3, order=2)
+            .fix("left")
+            .fix("back", [1])
+        )
         points = [[1.0, 0.0, 0.2], [0.6, 0.2, 0.2], [0.4, 0.0, 0.0], [1.0, 0.2, 0.0]]
     nodes = model.select_nodes(points, where="boundary").nodes
     R = model.reduced_model(nodes).flexibility
@@ -168,8 +171,11 @@ def test_an_unsymmetric_stiffness_is_refused_not_symmetrised():
     K = bar_stiffness(4).toarray()
     K[2, 1] *= 1.01
     labels = ["a", "b", "c", "d"]
-    with pytest.raises(InvalidInputError, match=r"not symmetric: .* = 0\.005 > 1e-06 between "
-                                                r"[bc] and [bc]"):
+    with pytest.raises(
+        InvalidInputError,
+        match=r"not symmetric: .* = 0\.005 > 1e-06 between "
+        r"[bc] and [bc]",
+    ):
         condense(K, [0], labels=labels)
     D = np.diag([1e-6, 1e3, 1.0, 1e6])
     with pytest.raises(InvalidInputError, match=r"not symmetric: .* = 0\.005 > 1e-06"):
@@ -178,8 +184,9 @@ def test_an_unsymmetric_stiffness_is_refused_not_symmetrised():
     # round-off asymmetry of a symmetric matrix in very different units is accepted
     S = bar_stiffness(4).toarray()
     S[2, 1] *= 1 + 1e-12
-    np.testing.assert_allclose(condense(D @ S @ D, np.arange(4)),
-                               np.linalg.inv(D @ S @ D), rtol=1e-9)
+    np.testing.assert_allclose(
+        condense(D @ S @ D, np.arange(4)), np.linalg.inv(D @ S @ D), rtol=1e-9
+    )
 
 
 def test_malformed_stiffness_and_labels_are_invalid_input():

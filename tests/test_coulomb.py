@@ -22,19 +22,19 @@ import scipy.sparse as sp
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
-from contactqp.core.status import ContactStatus
-from contactqp.io import read_problem
+import contactqp.core.local_problem
+from contactqp import solve
 from contactqp.core.local_problem import (
     LocalProblem,
     check_positive_semidefinite,
     contact_status,
     natural_map_error,
 )
-import contactqp.core.local_problem
+from contactqp.core.status import ContactStatus
+from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
+from contactqp.io import read_problem
 from contactqp.methods import coulomb
 from contactqp.methods.coulomb import alart_curnier, solve_coulomb
-from contactqp import solve
 from contactqp.methods.pgs import GaussSeidel
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
@@ -62,8 +62,14 @@ component = st.floats(-10.0, 10.0).filter(lambda x: abs(x) > 1e-3)
 
 
 @settings(max_examples=150, deadline=None)
-@given(dim=st.sampled_from([2, 3]), a=coefficient, b=coefficient, mu=st.floats(0.05, 2.0),
-       q=st.lists(component, min_size=3, max_size=3), sparse=st.booleans())
+@given(
+    dim=st.sampled_from([2, 3]),
+    a=coefficient,
+    b=coefficient,
+    mu=st.floats(0.05, 2.0),
+    q=st.lists(component, min_size=3, max_size=3),
+    sparse=st.booleans(),
+)
 @example(dim=2, a=0.1, b=0.99999, mu=0.1, q=[-1.0, 1.0, 0.0], sparse=False)  # slips by 1e-5
 def test_one_contact_closed_forms(dim, a, b, mu, q, sparse):
     q = np.array(q[:dim])
@@ -73,8 +79,9 @@ def test_one_contact_closed_forms(dim, a, b, mu, q, sparse):
     expected, status = one_contact(a, b, q, mu)
     assert solution.success and solution.certificate.natural_map <= 1e-12
     np.testing.assert_allclose(solution.forces, expected, rtol=0, atol=1e-9 * (1 + np.abs(q).max()))
-    np.testing.assert_allclose(solution.displacements, W @ solution.forces + q, rtol=0,
-                               atol=1e-12 * 10)
+    np.testing.assert_allclose(
+        solution.displacements, W @ solution.forces + q, rtol=0, atol=1e-12 * 10
+    )
     # on the cone edge stick and slip are the same point: a slip velocity below the status's
     # threshold (1e-6 of max(a, b) times the force scale, see contact_status) is "zero"
     w = max(a, b)
@@ -105,8 +112,14 @@ def test_cohesion_turns_slip_into_stick(dim):
 
 
 @settings(max_examples=100, deadline=None)
-@given(dim=st.sampled_from([2, 3]), a=coefficient, b=coefficient, mu=st.floats(0.05, 2.0),
-       c=st.floats(0.0, 5.0), q=st.lists(component, min_size=3, max_size=3))
+@given(
+    dim=st.sampled_from([2, 3]),
+    a=coefficient,
+    b=coefficient,
+    mu=st.floats(0.05, 2.0),
+    c=st.floats(0.0, 5.0),
+    q=st.lists(component, min_size=3, max_size=3),
+)
 def test_cohesion_closed_forms(dim, a, b, mu, c, q):
     q = np.array(q[:dim])
     W = np.diag([a] + [b] * (dim - 1))
@@ -116,8 +129,9 @@ def test_cohesion_closed_forms(dim, a, b, mu, c, q):
     solution = solve_coulomb(problem, tol=tol)
     expected, _ = one_contact(a, b, q, mu, c)
     assert solution.success
-    np.testing.assert_allclose(solution.forces, expected, rtol=0,
-                               atol=1e-9 * (1 + np.abs(expected).max()))
+    np.testing.assert_allclose(
+        solution.forces, expected, rtol=0, atol=1e-9 * (1 + np.abs(expected).max())
+    )
     assert natural_map_error(problem, expected) <= tol
 
 
@@ -145,8 +159,9 @@ def assert_mohr_coulomb_law(problem, r, u, atol):
     carrying = bound > atol  # reaction away from the apex: closed contact
     np.testing.assert_allclose(U[carrying, 0], 0.0, atol=atol)
     sliding = ut > atol  # slip: on the cone's edge, opposite to the slip velocity
-    np.testing.assert_allclose(R[sliding, 1:], -(bound / ut)[sliding, None] * U[sliding, 1:],
-                               atol=atol)
+    np.testing.assert_allclose(
+        R[sliding, 1:], -(bound / ut)[sliding, None] * U[sliding, 1:], atol=atol
+    )
     return carrying, sliding
 
 
@@ -157,8 +172,9 @@ def test_cohesive_solution_obeys_the_law_contact_by_contact(dim):
     problem = LocalProblem(base.W, base.q, base.mu, dim, cohesion=cohesion)
     solution = solve_coulomb(problem, tol=1e-12)
     assert solution.success
-    carrying, sliding = assert_mohr_coulomb_law(problem, solution.forces, solution.displacements,
-                                                1e-9)
+    carrying, sliding = assert_mohr_coulomb_law(
+        problem, solution.forces, solution.displacements, 1e-9
+    )
     assert carrying.any() and sliding.any() and (carrying & ~sliding).any()
     np.testing.assert_array_equal(solution.contact_status == ContactStatus.SLIP, sliding & carrying)
 
@@ -192,8 +208,9 @@ def test_newton_agrees_with_gauss_seidel_where_unique(dim, sparse):
     assert solution.success and "gauss-seidel" not in solution.message
     assert set(solution.status_labels) == {"open", "stick", "slip"}  # every regime is exercised
     reference = gauss_seidel_alone(problem, 1e-13)
-    np.testing.assert_allclose(solution.forces, reference, rtol=0,
-                               atol=1e-9 * np.abs(reference).max())
+    np.testing.assert_allclose(
+        solution.forces, reference, rtol=0, atol=1e-9 * np.abs(reference).max()
+    )
 
 
 def test_dense_and_sparse_newton_matrices_give_the_same_solution(monkeypatch):
@@ -218,8 +235,9 @@ def test_warm_start():
     again = solve_coulomb(problem, r0=cold.forces)
     assert again.iterations == 0 and again.certificate.natural_map == cold.certificate.natural_map
     rng = np.random.default_rng(0)
-    near = solve_coulomb(problem,
-                         r0=cold.forces * (1 + 1e-4 * rng.standard_normal(cold.forces.size)))
+    near = solve_coulomb(
+        problem, r0=cold.forces * (1 + 1e-4 * rng.standard_normal(cold.forces.size))
+    )
     assert near.success and near.iterations < cold.iterations
 
 
@@ -232,8 +250,9 @@ def test_gauss_seidel_rounds_finish_what_newton_cannot(monkeypatch):
     solution = solve_coulomb(problem, tol=1e-10)
     assert solution.success and "gauss-seidel" in solution.message
     assert "levenberg-marquardt 1 it." in solution.message
-    np.testing.assert_allclose(solution.forces, reference.forces, rtol=0,
-                               atol=1e-7 * np.abs(reference.forces).max())
+    np.testing.assert_allclose(
+        solution.forces, reference.forces, rtol=0, atol=1e-7 * np.abs(reference.forces).max()
+    )
 
 
 def test_non_convergence_is_reported_not_hidden():
@@ -268,7 +287,8 @@ def test_alart_curnier_jacobian_matches_finite_differences(dim):
         du = (alart_curnier(R, U + e, mu, rho) - alart_curnier(R, U - e, mu, rho)) / (2 * h)
         # contacts within h of a kink have one-sided derivatives: leave them out
         smooth = np.all(np.abs(dr - A[:, :, k]) < 1e-3, axis=1) | np.all(
-            np.abs(du - B[:, :, k]) < 1e-3, axis=1)
+            np.abs(du - B[:, :, k]) < 1e-3, axis=1
+        )
         assert smooth.mean() > 0.97
         np.testing.assert_allclose(dr[smooth], A[smooth, :, k], atol=1e-6)
         np.testing.assert_allclose(du[smooth], B[smooth, :, k], atol=1e-6)
@@ -297,8 +317,7 @@ def test_contact_status_does_not_depend_on_units(cohesion):
     reference = solve_coulomb(LocalProblem(base.W, base.q, base.mu, 3, cohesion=c), tol=1e-13)
     assert reference.success and {"stick", "slip"} <= set(reference.status_labels)
     force, length = 1e3, 1e-5  # N and m per unit of the dimensionless problem
-    si = LocalProblem(base.W * (length / force), base.q * length, base.mu, 3,
-                      cohesion=c * force)
+    si = LocalProblem(base.W * (length / force), base.q * length, base.mu, 3, cohesion=c * force)
     status = contact_status(si, reference.forces * force, reference.displacements * length)
     np.testing.assert_array_equal(status, reference.contact_status)
 
@@ -315,14 +334,17 @@ def test_frictionless_problems_stay_on_the_box_qp():
 # --- bad input ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"mu": [-0.1]}, "mu must be >= 0"),
-    ({"cohesion": [-1.0]}, "cohesion must be >= 0"),
-    ({"cohesion": [np.nan]}, "cohesion contains NaN"),
-    ({"cohesion": [1.0, 2.0]}, "cohesion must have length"),
-    ({"mu": [0.0], "cohesion": [1.0]}, "cohesion > 0 needs mu > 0"),
-    ({"q": [np.nan, 0.0, 0.0]}, "q contains NaN"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"mu": [-0.1]}, "mu must be >= 0"),
+        ({"cohesion": [-1.0]}, "cohesion must be >= 0"),
+        ({"cohesion": [np.nan]}, "cohesion contains NaN"),
+        ({"cohesion": [1.0, 2.0]}, "cohesion must have length"),
+        ({"mu": [0.0], "cohesion": [1.0]}, "cohesion > 0 needs mu > 0"),
+        ({"q": [np.nan, 0.0, 0.0]}, "q contains NaN"),
+    ],
+)
 def test_invalid_problems(kwargs, match):
     args = {"W": np.eye(3), "q": [-1.0, 0.0, 0.0], "mu": [0.3], "dim": 3} | kwargs
     with pytest.raises(InvalidInputError, match=match) as info:
@@ -330,12 +352,15 @@ def test_invalid_problems(kwargs, match):
     assert "\n" not in str(info.value)
 
 
-@pytest.mark.parametrize("W, match", [
-    (np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]]), "Cholesky"),
-    (sp.csr_matrix(np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]])), "Cholesky"),
-    (np.diag([1.0, -1e-3, 1.0]), "diagonal entry 1 is -0.001"),
-    (np.array([[1.0, 0, 0], [0, 0.0, 1.0], [0, 1.0, 1.0]]), "zero diagonal"),
-])
+@pytest.mark.parametrize(
+    "W, match",
+    [
+        (np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]]), "Cholesky"),
+        (sp.csr_matrix(np.array([[1.0, 0, 0], [0, 1.0, 2.0], [0, 2.0, 1.0]])), "Cholesky"),
+        (np.diag([1.0, -1e-3, 1.0]), "diagonal entry 1 is -0.001"),
+        (np.array([[1.0, 0, 0], [0, 0.0, 1.0], [0, 1.0, 1.0]]), "zero diagonal"),
+    ],
+)
 def test_indefinite_w_is_refused(W, match):
     problem = LocalProblem(W, [-1.0, 0.0, 0.0], [0.3], 3)
     with pytest.raises(NotPositiveDefiniteError, match=match):
@@ -373,13 +398,16 @@ def test_psd_check_accepts_singular_and_rounded_matrices():
     check_positive_semidefinite(read_problem(DATA / "fc2d_granularflowonwall_02020_00213.dat").W)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"tol": 0.0}, "tol must be a positive"),
-    ({"tol": float("nan")}, "tol must be a positive"),
-    ({"max_iter": 0}, "max_iter must be an integer >= 1"),
-    ({"r0": [1.0, 0.0]}, r"r0 must have shape \(3,\)"),
-    ({"r0": [np.inf, 0.0, 0.0]}, "r0 contains NaN"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"tol": 0.0}, "tol must be a positive"),
+        ({"tol": float("nan")}, "tol must be a positive"),
+        ({"max_iter": 0}, "max_iter must be an integer >= 1"),
+        ({"r0": [1.0, 0.0]}, r"r0 must have shape \(3,\)"),
+        ({"r0": [np.inf, 0.0, 0.0]}, "r0 contains NaN"),
+    ],
+)
 def test_invalid_options(kwargs, match):
     with pytest.raises(InvalidInputError, match=match):
         solve_coulomb(LocalProblem(np.eye(3), [-1.0, 0.0, 0.0], [0.3], 3), **kwargs)

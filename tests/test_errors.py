@@ -45,15 +45,20 @@ def exception_classes(path: Path) -> list[str]:
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.ClassDef):
             bases = [ast.unparse(base).rsplit(".", 1)[-1] for base in node.bases]
-            if any(base.endswith(("Error", "Exception", "Warning")) or base in errors.__all__
-                   for base in bases):
+            if any(
+                base.endswith(("Error", "Exception", "Warning")) or base in errors.__all__
+                for base in bases
+            ):
                 found.append(node.name)
     return found
 
 
 def test_every_exception_class_is_defined_in_errors_py():
-    elsewhere = {str(path.relative_to(PACKAGE)): names for path in PACKAGE.rglob("*.py")
-                 if path.name != "errors.py" and (names := exception_classes(path))}
+    elsewhere = {
+        str(path.relative_to(PACKAGE)): names
+        for path in PACKAGE.rglob("*.py")
+        if path.name != "errors.py" and (names := exception_classes(path))
+    }
     assert elsewhere == {}
     assert set(exception_classes(PACKAGE / "errors.py")) == set(errors.__all__)
 
@@ -65,8 +70,9 @@ def test_a_solver_error_is_not_bad_input():
 
 
 def test_a_backend_not_installed_is_named_with_those_that_are():
-    with pytest.raises(InvalidInputError,
-                       match=r"^backend 'nope' is not installed; available: a, b$"):
+    with pytest.raises(
+        InvalidInputError, match=r"^backend 'nope' is not installed; available: a, b$"
+    ):
         require_backend("nope", ["b", "a"])
     require_backend("a", ["b", "a"])
 
@@ -141,8 +147,11 @@ def test_tresca_without_an_answer_raises_a_solver_error(monkeypatch):
 def run(*args) -> tuple[int, str, str]:
     """``contactqp ARGS`` in-process: (exit status, stdout, stderr)."""
     out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
-            warnings.catch_warnings():
+    with (
+        contextlib.redirect_stdout(out),
+        contextlib.redirect_stderr(err),
+        warnings.catch_warnings(),
+    ):
         warnings.simplefilter("ignore")
         status = main([str(arg) for arg in args])
     return status, out.getvalue(), err.getvalue()
@@ -160,8 +169,11 @@ def assert_one_line(status, err, expected_status, *needles):
 def qp_example(tmp_path, backend="clarabel", settings="") -> Path:
     """two_springs.toml solved by the qp solver with ``backend``."""
     shutil.copy(EXAMPLES / "two_springs_R.csv", tmp_path)
-    text = (EXAMPLES / "two_springs.toml").read_text().replace(
-        'name = "active-set"\ntol = 1e-12', f'name = "qp"\nbackend = "{backend}"')
+    text = (
+        (EXAMPLES / "two_springs.toml")
+        .read_text()
+        .replace('name = "active-set"\ntol = 1e-12', f'name = "qp"\nbackend = "{backend}"')
+    )
     target = tmp_path / "two_springs.toml"
     target.write_text(text + (f"\n[solver.backend_options]\n{settings}\n" if settings else ""))
     return target
@@ -190,8 +202,9 @@ def test_cli_exits_1_when_the_backend_stops_short(tmp_path):
 
 def test_cli_exits_2_in_one_line_for_an_unknown_backend(tmp_path):
     status, _, err = run("solve", qp_example(tmp_path, backend="no-such-qp"))
-    assert_one_line(status, err, 2, "[solver].backend", "backend 'no-such-qp' is not installed",
-                    "available: ")
+    assert_one_line(
+        status, err, 2, "[solver].backend", "backend 'no-such-qp' is not installed", "available: "
+    )
 
 
 def test_fclib_exits_1_for_a_solver_error_and_2_for_bad_input(tmp_path, monkeypatch):

@@ -44,7 +44,8 @@ def test_cattaneo_mindlin_example(solver, ratio, capsys):
     a cell (measured a tenth of a cell), no cell sticks beyond c + h, some cells slip, and the
     transverse force vanishes (symmetry)."""
     out = load_example("cattaneo_mindlin").main(
-        ["--cells", "8", "--ratio", str(ratio), "--solver", solver])
+        ["--cells", "8", "--ratio", str(ratio), "--solver", solver]
+    )
     printed = capsys.readouterr().out
     assert "stick radius" in printed
     assert out["converged"] and out["error"] <= 1e-8

@@ -127,14 +127,17 @@ def test_fem_based_w_positive_definite_and_as_given(name):
     assert np.linalg.eigvalsh(0.5 * (W + W.T)).min() > 0
 
 
-@pytest.mark.parametrize("name, digits", [
-    ("fc2d_granularflowonwall_02020_00213.dat", {"W": 6}),  # cs_print, %g
-    ("FC3D_Example1_SBM.dat", {"W": 7}),  # sparse-block values, %e
-    ("FC3D_Example1.dat", {}),  # dense, full precision
-    ("GFC3D_TwoRods1.dat", {"M": 7, "H": 7}),
-    ("FrictionContact3D_1c.dat", {}),  # integers are exact
-    ("CubeH8.hdf5", {}),  # HDF5 holds doubles
-])
+@pytest.mark.parametrize(
+    "name, digits",
+    [
+        ("fc2d_granularflowonwall_02020_00213.dat", {"W": 6}),  # cs_print, %g
+        ("FC3D_Example1_SBM.dat", {"W": 7}),  # sparse-block values, %e
+        ("FC3D_Example1.dat", {}),  # dense, full precision
+        ("GFC3D_TwoRods1.dat", {"M": 7, "H": 7}),
+        ("FrictionContact3D_1c.dat", {}),  # integers are exact
+        ("CubeH8.hdf5", {}),  # HDF5 holds doubles
+    ],
+)
 def test_significant_digits_of_the_data_are_recorded(name, digits):
     from contactqp.io.fclib import read_any
 
@@ -295,11 +298,16 @@ def test_strided_views_are_measured_as_their_copies():
     wide_r[::2] = [1.0, -0.5, 0.0, 0.0, 0.0, 0.0]
     wide_u = np.zeros(12)
     wide_u[::2] = W @ wide_r[::2] + q
-    assert natural_map_error(p, wide_r[::2], wide_u[::2]) == natural_map_error(
-        p, wide_r[::2].copy(), wide_u[::2].copy()) == 0.0
+    assert (
+        natural_map_error(p, wide_r[::2], wide_u[::2])
+        == natural_map_error(p, wide_r[::2].copy(), wide_u[::2].copy())
+        == 0.0
+    )
     x = np.arange(12.0) - 5.0
-    np.testing.assert_array_equal(projection_on_cones(x[::2], [0.5, 0.3], 3),
-                                  projection_on_cones(x[::2].copy(), [0.5, 0.3], 3))
+    np.testing.assert_array_equal(
+        projection_on_cones(x[::2], [0.5, 0.3], 3),
+        projection_on_cones(x[::2].copy(), [0.5, 0.3], 3),
+    )
 
 
 def test_compiled_loops_refuse_rows_they_cannot_hold():

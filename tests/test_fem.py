@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 import skfem
 
-from contactqp.errors import RigidBodyModeError
 from contactqp.compliance.fem import (
     Box,
     ElasticModel,
@@ -15,7 +14,12 @@ from contactqp.compliance.fem import (
     plate,
     read_mesh,
 )
-from contactqp.errors import FileFormatError, InvalidInputError, UnsupportedProblemError
+from contactqp.errors import (
+    FileFormatError,
+    InvalidInputError,
+    RigidBodyModeError,
+    UnsupportedProblemError,
+)
 
 E, NU = 200e9, 0.3  # steel (Pa, -)
 STRESS = 1e6  # applied traction (Pa)
@@ -27,7 +31,8 @@ def _distorted(mesh, rng):
     interior = np.setdiff1d(np.arange(p.shape[1]), mesh.boundary_nodes())
     p[:, interior] += rng.uniform(-0.05, 0.05, (p.shape[0], interior.size))
     return type(mesh)(p, mesh.t).with_boundaries(
-        {"left": lambda x: x[0] == 0.0, "right": lambda x: x[0] == 2.0})
+        {"left": lambda x: x[0] == 0.0, "right": lambda x: x[0] == 2.0}
+    )
 
 
 def _tension_model(cell, order, plane, distort=False):
@@ -49,9 +54,18 @@ def _tension_model(cell, order, plane, distort=False):
 
 
 @pytest.mark.parametrize("distort", [False, True], ids=["regular", "distorted"])
-@pytest.mark.parametrize("cell,order,plane", [
-    ("tri", 1, "stress"), ("tri", 2, "strain"), ("quad", 1, "strain"), ("quad", 2, "stress"),
-    ("tet", 1, None), ("tet", 2, None), ("hex", 1, None)])
+@pytest.mark.parametrize(
+    "cell,order,plane",
+    [
+        ("tri", 1, "stress"),
+        ("tri", 2, "strain"),
+        ("quad", 1, "strain"),
+        ("quad", 2, "stress"),
+        ("tet", 1, None),
+        ("tet", 2, None),
+        ("hex", 1, None),
+    ],
+)
 def test_bar_in_tension_is_exact(cell, order, plane, distort):
     """Patch test: a uniform stress lies in every element space, so the answer is exact, on a
     regular mesh and on one whose interior nodes are moved at random.
@@ -60,8 +74,11 @@ def test_bar_in_tension_is_exact(cell, order, plane, distort):
     ``eps_xx = (1 - nu^2) s / E``, ``eps_yy = -nu (1 + nu) s / E``; 3D as plane stress.
     """
     model, u = _tension_model(cell, order, plane, distort)
-    axial, lateral = (STRESS / E, -NU * STRESS / E) if plane != "strain" else (
-        (1 - NU**2) * STRESS / E, -NU * (1 + NU) * STRESS / E)
+    axial, lateral = (
+        (STRESS / E, -NU * STRESS / E)
+        if plane != "strain"
+        else ((1 - NU**2) * STRESS / E, -NU * (1 + NU) * STRESS / E)
+    )
     x = model.mesh.p
     scale = axial * 2.0
     np.testing.assert_allclose(u[:, 0], axial * x[0], rtol=0, atol=1e-11 * scale)
@@ -112,7 +129,8 @@ def test_3d_cantilever_tip_deflection_matches_beam_theory():
     u = model.solve(tractions={"right": (0.0, 0.0, force / side**2)})
     tip = model.select_nodes([[length, side / 2, side / 2]]).nodes[0]
     beam = force * length**3 / (3 * E * side**4 / 12) + force * length / (
-        5 / 6 * E / (2 * (1 + NU)) * side**2)
+        5 / 6 * E / (2 * (1 + NU)) * side**2
+    )
     assert u[tip, 2] == pytest.approx(beam, rel=2e-2)
     assert max(abs(u[tip, 0]), abs(u[tip, 1])) < 1e-3 * u[tip, 2]
 
@@ -123,8 +141,12 @@ def test_point_loads_and_tractions_superpose():
     loads[model.select_nodes([[1.0, 0.2]]).nodes, :] = (30.0, -50.0)
     traction = {"top": (0.0, -1e4)}
     both = model.solve(loads, tractions=traction)
-    np.testing.assert_allclose(both, model.solve(loads) + model.solve(tractions=traction),
-                               rtol=1e-12, atol=1e-12 * np.abs(both).max())
+    np.testing.assert_allclose(
+        both,
+        model.solve(loads) + model.solve(tractions=traction),
+        rtol=1e-12,
+        atol=1e-12 * np.abs(both).max(),
+    )
 
 
 def test_thickness_scales_the_flexibility():
@@ -132,8 +154,11 @@ def test_thickness_scales_the_flexibility():
     nodes = [mesh.p.shape[1] - 1]
     thin = ElasticModel(mesh, E, NU, plane="stress", thickness=0.01).fix("left")
     thick = ElasticModel(mesh, E, NU, plane="stress", thickness=0.04).fix("left")
-    np.testing.assert_allclose(thin.reduced_model(nodes).flexibility,
-                               4 * thick.reduced_model(nodes).flexibility, rtol=1e-12)
+    np.testing.assert_allclose(
+        thin.reduced_model(nodes).flexibility,
+        4 * thick.reduced_model(nodes).flexibility,
+        rtol=1e-12,
+    )
 
 
 def test_quadratic_faces_are_clamped_at_mid_side_points():
@@ -174,20 +199,25 @@ def test_points_sharing_a_node_are_refused():
 def test_one_call_equals_the_model_route():
     mesh = plate(1.0, 0.2, 10, 2)
     points = [[1.0, 0.2], [0.5, 0.2]]
-    reduced = elastic_compliance(mesh, E, NU, "left", points, plane="stress", where="top",
-                                 components=[1])
+    reduced = elastic_compliance(
+        mesh, E, NU, "left", points, plane="stress", where="top", components=[1]
+    )
     model = ElasticModel(mesh, E, NU, plane="stress").fix("left")
     nodes = model.select_nodes(points, where="top")
-    np.testing.assert_array_equal(reduced.flexibility,
-                                  model.reduced_model(nodes, components=[1]).flexibility)
+    np.testing.assert_array_equal(
+        reduced.flexibility, model.reduced_model(nodes, components=[1]).flexibility
+    )
     assert reduced.n_freedoms == 2 and reduced.coordinates.tolist() == [[1.0, 0.2], [0.5, 0.2]]
 
 
-@pytest.mark.parametrize("fixing,motions", [
-    (lambda m: None, "translation along x, translation along y, rotation in the plane"),
-    (lambda m: m.fix("left", [0]), "translation along y"),
-    (lambda m: m.fix(Box((0, 0), (0, 0))), "rotation in the plane"),
-])
+@pytest.mark.parametrize(
+    "fixing,motions",
+    [
+        (lambda m: None, "translation along x, translation along y, rotation in the plane"),
+        (lambda m: m.fix("left", [0]), "translation along y"),
+        (lambda m: m.fix(Box((0, 0), (0, 0))), "rotation in the plane"),
+    ],
+)
 def test_missing_fixations_name_the_free_motions_2d(fixing, motions):
     model = ElasticModel(plate(1.0, 1.0, 3, 3), E, NU, plane="strain")
     fixing(model)
@@ -195,10 +225,16 @@ def test_missing_fixations_name_the_free_motions_2d(fixing, motions):
         model.reduced_model([5])
 
 
-@pytest.mark.parametrize("fixing,motions", [
-    (lambda m: m.fix("left", [0]), "translation along y, translation along z, rotation about x"),
-    (lambda m: m.fix(lambda x: (x[0] == 0) & (x[1] == 0)), "rotation about an axis along z"),
-])
+@pytest.mark.parametrize(
+    "fixing,motions",
+    [
+        (
+            lambda m: m.fix("left", [0]),
+            "translation along y, translation along z, rotation about x",
+        ),
+        (lambda m: m.fix(lambda x: (x[0] == 0) & (x[1] == 0)), "rotation about an axis along z"),
+    ],
+)
 def test_missing_fixations_name_the_free_motions_3d(fixing, motions):
     model = ElasticModel(block(1.0, 1.0, 1.0, 2, 2, 2), E, NU)
     fixing(model)
@@ -220,8 +256,10 @@ def test_a_mesh_read_from_a_file_gives_the_same_model(tmp_path):
     mesh.save(path, file_format="gmsh")
     read = read_mesh(path)
     assert set(read.boundaries) >= {"left", "right"}
-    reduced = [ElasticModel(m, E, NU, plane="stress").fix("left").reduced_model([6, 11])
-               for m in (mesh, read)]
+    reduced = [
+        ElasticModel(m, E, NU, plane="stress").fix("left").reduced_model([6, 11])
+        for m in (mesh, read)
+    ]
     np.testing.assert_allclose(reduced[1].flexibility, reduced[0].flexibility, rtol=1e-12)
 
 
@@ -233,8 +271,9 @@ def test_unused_nodes_of_a_file_are_dropped():
     model = ElasticModel(read, E, NU, plane="stress").fix(left)
     np.testing.assert_array_equal(model.mesh.p, mesh.p)
     expected = ElasticModel(mesh, E, NU, plane="stress").fix(left).reduced_model([3])
-    np.testing.assert_allclose(model.reduced_model([3]).flexibility, expected.flexibility,
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        model.reduced_model([3]).flexibility, expected.flexibility, rtol=1e-12
+    )
 
 
 def test_unreadable_and_unsupported_meshes_are_clear_errors(tmp_path):
@@ -256,34 +295,74 @@ def test_bar_picks_nearly_square_cells():
     assert isinstance(solid, skfem.MeshTet) and np.allclose(solid.p.max(axis=1), [2.0, 0.2, 0.1])
 
 
-@pytest.mark.parametrize("call,message", [
-    (lambda: ElasticModel(plate(1, 1, 1, 1), -1.0, NU, plane="stress"), "young must be a positive"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, 0.5, plane="stress"), r"poisson must lie in"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU), "plane must be 'stress' or 'strain'"),
-    (lambda: ElasticModel(block(1, 1, 1, 1, 1, 1), E, NU, thickness=0.1), "2D meshes only"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress", order=3), "order must be"),
-    (lambda: plate(1.0, 0.0, 2, 2), "width must be a positive"),
-    (lambda: block(1, 1, 1, 1, 1, 1, cell="tri"), "cell must be one of tet, hex"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("side"),
-     "no boundary named 'side'"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix(Box((0, 0, 0), (1, 1, 1))),
-     "Box has 3 coordinates but the mesh is 2-D"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left", [2]),
-     "components must be distinct directions in 0..1"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix(lambda x: x[0]),
-     "selector function must return 8 booleans"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left").solve(np.ones(8)),
-     "loads must be 2-D"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left").solve(
-        tractions={"top": (1.0, 2.0, 3.0)}), r"tractions\['top'\] must have shape \(2,\)"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left").reduced_model(
-        [0]), "u_x of node 0 at \\(0, 0\\) is fixed"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").reduced_model([1, 1]),
-     "nodes must be distinct"),
-    (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left").solve(
-        tractions=[("top", (1.0, 2.0))]), "tractions must be a dict"),
-    (lambda: read_mesh(3), "a file path or a meshio.Mesh"),
-])
+@pytest.mark.parametrize(
+    "call,message",
+    [
+        (
+            lambda: ElasticModel(plate(1, 1, 1, 1), -1.0, NU, plane="stress"),
+            "young must be a positive",
+        ),
+        (lambda: ElasticModel(plate(1, 1, 1, 1), E, 0.5, plane="stress"), r"poisson must lie in"),
+        (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU), "plane must be 'stress' or 'strain'"),
+        (lambda: ElasticModel(block(1, 1, 1, 1, 1, 1), E, NU, thickness=0.1), "2D meshes only"),
+        (lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress", order=3), "order must be"),
+        (lambda: plate(1.0, 0.0, 2, 2), "width must be a positive"),
+        (lambda: block(1, 1, 1, 1, 1, 1, cell="tri"), "cell must be one of tet, hex"),
+        (
+            lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("side"),
+            "no boundary named 'side'",
+        ),
+        (
+            lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix(
+                Box((0, 0, 0), (1, 1, 1))
+            ),
+            "Box has 3 coordinates but the mesh is 2-D",
+        ),
+        (
+            lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left", [2]),
+            "components must be distinct directions in 0..1",
+        ),
+        (
+            lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix(lambda x: x[0]),
+            "selector function must return 8 booleans",
+        ),
+        (
+            lambda: (
+                ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").fix("left").solve(np.ones(8))
+            ),
+            "loads must be 2-D",
+        ),
+        (
+            lambda: (
+                ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress")
+                .fix("left")
+                .solve(tractions={"top": (1.0, 2.0, 3.0)})
+            ),
+            r"tractions\['top'\] must have shape \(2,\)",
+        ),
+        (
+            lambda: (
+                ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress")
+                .fix("left")
+                .reduced_model([0])
+            ),
+            "u_x of node 0 at \\(0, 0\\) is fixed",
+        ),
+        (
+            lambda: ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress").reduced_model([1, 1]),
+            "nodes must be distinct",
+        ),
+        (
+            lambda: (
+                ElasticModel(plate(1, 1, 1, 1), E, NU, plane="stress")
+                .fix("left")
+                .solve(tractions=[("top", (1.0, 2.0))])
+            ),
+            "tractions must be a dict",
+        ),
+        (lambda: read_mesh(3), "a file path or a meshio.Mesh"),
+    ],
+)
 def test_bad_input_names_the_argument(call, message):
     with pytest.raises(InvalidInputError, match=message):
         call()
@@ -297,10 +376,16 @@ def test_second_order_cells_are_taken_with_straight_edges(tmp_path):
     quadratic.save(path, file_format="gmsh")
     read = read_mesh(path)
     assert isinstance(read, skfem.MeshTet2)
-    models = [ElasticModel(m, E, NU, order=2).fix(Box((0, 0, 0), (0, 0.4, 0.4)))
-              for m in (linear, read)]
+    models = [
+        ElasticModel(m, E, NU, order=2).fix(Box((0, 0, 0), (0, 0.4, 0.4))) for m in (linear, read)
+    ]
     assert models[1].n_nodes == linear.p.shape[1]
-    tip = [models[0].select_nodes([[1.0, 0.4, 0.4]]).nodes, models[1].select_nodes(
-        [[1.0, 0.4, 0.4]]).nodes]
-    np.testing.assert_allclose(models[1].reduced_model(tip[1]).flexibility,
-                               models[0].reduced_model(tip[0]).flexibility, rtol=1e-10)
+    tip = [
+        models[0].select_nodes([[1.0, 0.4, 0.4]]).nodes,
+        models[1].select_nodes([[1.0, 0.4, 0.4]]).nodes,
+    ]
+    np.testing.assert_allclose(
+        models[1].reduced_model(tip[1]).flexibility,
+        models[0].reduced_model(tip[0]).flexibility,
+        rtol=1e-10,
+    )

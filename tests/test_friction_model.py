@@ -8,15 +8,20 @@ two solver routes (Coulomb Newton and Tresca fixed point).
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import contactqp as cq
 from contactqp.core.contact import local_frames, tangent_basis
 
 
 def one_node(stiffness=None, coords=(0.0, 0.0), flexibility=None):
-    return cq.ReducedModel(stiffness=stiffness, flexibility=flexibility, dofs_per_node=len(coords),
-                           coordinates=[coords])
+    return cq.ReducedModel(
+        stiffness=stiffness,
+        flexibility=flexibility,
+        dofs_per_node=len(coords),
+        coordinates=[coords],
+    )
 
 
 def floor(dim):
@@ -42,8 +47,9 @@ def test_frames_are_orthonormal_and_right_handed(dim, data):
 
 def test_frames_of_a_floor_follow_the_axes():
     np.testing.assert_array_equal(tangent_basis([[0.0, -1.0]])[0], [[1.0, 0.0]])
-    np.testing.assert_array_equal(tangent_basis([[0.0, 0.0, -1.0]])[0],
-                                  [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    np.testing.assert_array_equal(
+        tangent_basis([[0.0, 0.0, -1.0]])[0], [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]
+    )
 
 
 def test_local_operator_of_planes_pairs_and_gaps_in_3d():
@@ -51,16 +57,18 @@ def test_local_operator_of_planes_pairs_and_gaps_in_3d():
     coords = rng.normal(size=(4, 3))
     model = cq.ReducedModel(flexibility=np.eye(12), dofs_per_node=3, coordinates=coords)
     direction = np.array([1.0, 2.0, 2.0]) / 3.0
-    obstacles = [cq.PlaneObstacle([0, 0, -5.0], [0, 0, -1.0], nodes=[0, 1]),
-                 cq.NodePairs([[2, 3]], [0.1], direction),
-                 cq.GapObstacle([3], [0.2], [[0.0, 1.0, 0.0]])]
+    obstacles = [
+        cq.PlaneObstacle([0, 0, -5.0], [0, 0, -1.0], nodes=[0, 1]),
+        cq.NodePairs([[2, 3]], [0.1], direction),
+        cq.GapObstacle([3], [0.2], [[0.0, 1.0, 0.0]]),
+    ]
     constraints = cq.ContactProblem(model, np.zeros(12), obstacles).constraints
     frames = local_frames(model, constraints)
     H = frames.operator.toarray()
     assert H.shape == (12, 12)
     np.testing.assert_allclose(H[0::3], -constraints.matrix.toarray())
     # rows of one contact are orthonormal (sqrt(2) for the pair, which acts on two nodes)
-    gram = np.array([H[3 * i:3 * i + 3] @ H[3 * i:3 * i + 3].T for i in range(4)])
+    gram = np.array([H[3 * i : 3 * i + 3] @ H[3 * i : 3 * i + 3].T for i in range(4)])
     np.testing.assert_allclose(gram, [np.eye(3), np.eye(3), 2 * np.eye(3), np.eye(3)], atol=1e-14)
     # the pair's tangents: +t on node 2, -t on node 3, orthogonal to the pair's direction
     t = frames.tangents[2]
@@ -78,9 +86,11 @@ def coupled_problem(seed, mu=0.3, given="flexibility", **kwargs):
     B = rng.normal(size=(6, 6))
     R = B @ B.T / 6 + np.eye(6)
     K = np.linalg.inv(R)
-    model = cq.ReducedModel(**{given: R if given == "flexibility" else 0.5 * (K + K.T)},
-                            dofs_per_node=2,
-                            coordinates=np.column_stack([np.arange(3.0), rng.uniform(0, 0.1, 3)]))
+    model = cq.ReducedModel(
+        **{given: R if given == "flexibility" else 0.5 * (K + K.T)},
+        dofs_per_node=2,
+        coordinates=np.column_stack([np.arange(3.0), rng.uniform(0, 0.1, 3)]),
+    )
     P = np.tile([1.0, -2.0], 3) + rng.normal(scale=0.5, size=6)
     return cq.FrictionalProblem(model, P, [floor(2)], mu=mu, **kwargs)
 
@@ -150,8 +160,9 @@ def test_single_contact_matches_enumeration(seed, mu):
         assert distance <= 1e-8 * max(1.0, np.max(np.abs(P)))
 
 
-@pytest.mark.parametrize("Q, slip, status", [(2.9, 0.0, "stick"), (4.0, 0.5, "slip"),
-                                              (-6.0, -1.5, "slip")])
+@pytest.mark.parametrize(
+    "Q, slip, status", [(2.9, 0.0, "stick"), (4.0, 0.5, "slip"), (-6.0, -1.5, "slip")]
+)
 def test_one_spring_sticks_until_mu_n_then_slips(Q, slip, status):
     k, mu, N = 2.0, 0.3, 10.0
     problem = cq.FrictionalProblem(one_node(np.diag([k, 5.0])), [Q, -N], [floor(2)], mu=mu)
@@ -174,9 +185,9 @@ def test_two_bodies_in_frictional_contact_slip_relative_to_each_other(Q):
     normal = N - 4.0 * gap / 2  # the springs close the gap, the rest is contact force
     friction = np.clip(Q, -mu * normal, mu * normal)
     np.testing.assert_allclose(result.forces[0], [normal, -friction], atol=1e-10)
-    np.testing.assert_allclose(result.displacements[[0, 2]], [(Q - friction) / k,
-                                                              -(Q - friction) / k],
-                               atol=1e-10)
+    np.testing.assert_allclose(
+        result.displacements[[0, 2]], [(Q - friction) / k, -(Q - friction) / k], atol=1e-10
+    )
     np.testing.assert_allclose(result.slip[0, 0], 2 * (Q - friction) / k, atol=1e-10)
     assert result.status_labels == ["slip" if abs(Q) > mu * normal else "stick"]
 
@@ -215,10 +226,10 @@ def test_polygonal_cone_reduces_the_limit_across_a_side_not_at_a_vertex(facets):
         assert polygonal.success and exact.success, (polygonal.message, exact.message)
         assert polygonal.method == "polygonal" and exact.method == "coulomb"
         local_direction = np.array([direction[0], -direction[1]])
-        np.testing.assert_allclose(polygonal.tangential_forces[0], -limit * local_direction,
-                                   atol=1e-7 * N)
-        np.testing.assert_allclose(polygonal.slip[0], (Q - limit) / k * local_direction,
-                                   atol=1e-7)
+        np.testing.assert_allclose(
+            polygonal.tangential_forces[0], -limit * local_direction, atol=1e-7 * N
+        )
+        np.testing.assert_allclose(polygonal.slip[0], (Q - limit) / k * local_direction, atol=1e-7)
         np.testing.assert_allclose(np.linalg.norm(exact.tangential_forces[0]), mu * N, rtol=1e-9)
         # the polygon is certified against its own law; against the exact cone it is off
         # by the reduction of the limit
@@ -230,8 +241,11 @@ def test_polygonal_answer_approaches_the_exact_cone_as_facets_grow():
     # forces move by O(mu pi / F) relative to the exact cone's
     rng = np.random.default_rng(3)
     B = rng.normal(size=(15, 15))
-    model = cq.ReducedModel(flexibility=B @ B.T / 15 + np.eye(15), dofs_per_node=3,
-                            coordinates=np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)]))
+    model = cq.ReducedModel(
+        flexibility=B @ B.T / 15 + np.eye(15),
+        dofs_per_node=3,
+        coordinates=np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)]),
+    )
     P = np.zeros(15)
     P[2::3] = -3.0
     P[0::3], P[1::3] = rng.normal(size=(2, 5))
@@ -268,7 +282,9 @@ def test_coupled_contacts_agree_across_routes_and_report_every_status(seed):
         assert result.success, result.message
         assert result.status_labels == ["stick", "slip", "open"]
     np.testing.assert_allclose(results[0].forces, results[1].forces, atol=1e-8)
-    assert results[0].dissipation[1] > 0 and results[0].dissipation[[0, 2]] == pytest.approx(0, abs=1e-9)
+    assert results[0].dissipation[1] > 0 and results[0].dissipation[[0, 2]] == pytest.approx(
+        0, abs=1e-9
+    )
 
 
 def test_certificate_rejects_wrong_answers():
@@ -277,13 +293,15 @@ def test_certificate_rejects_wrong_answers():
     assert good.success
     r = good.forces.copy()
     r[:, 1] *= 1.5  # friction beyond the cone somewhere, or sticking forces changed
-    bad = problem.make_result(r.ravel(), method="test", converged=True, message="", iterations=0,
-                              seconds=0.0)
+    bad = problem.make_result(
+        r.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert not bad.success and bad.status == 2 and not bad.certificate.passed
     flipped = good.forces.copy()
     flipped[:, 1] *= -1.0  # friction pushing along the slip: no longer maximum dissipation
-    wrong = problem.make_result(flipped.ravel(), method="test", converged=True, message="",
-                                iterations=0, seconds=0.0)
+    wrong = problem.make_result(
+        flipped.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert wrong.certificate.equilibrium < 1e-12  # U is recomputed from the forces...
     assert not wrong.certificate.passed  # ...but the law is violated
 
@@ -295,8 +313,9 @@ def stiff_contact_beside_a_soft_node(dim, facets=None):
     (across side 0 of a polygon, by (310 - 300 cos(pi / F)) * 1e-6 m).
     """
     R = np.diag([1e-6] * dim + [1.0] * dim)
-    model = cq.ReducedModel(flexibility=R, dofs_per_node=dim,
-                            coordinates=[[0.0] * dim, [5.0] + [1.0] * (dim - 1)])
+    model = cq.ReducedModel(
+        flexibility=R, dofs_per_node=dim, coordinates=[[0.0] * dim, [5.0] + [1.0] * (dim - 1)]
+    )
     P = np.zeros(2 * dim)
     P[0], P[dim - 1] = 310.0, -1000.0
     floor_ = cq.PlaneObstacle([0.0] * dim, [0.0] * (dim - 1) + [-1.0], nodes=[0])
@@ -313,9 +332,9 @@ def test_a_soft_node_away_from_the_contacts_does_not_blunt_status_or_certificate
     assert good.success, good.message
     assert good.status_labels == ["slip"] and good.slip[0, 0] > 9e-6
     wrong = good.forces * 0.99  # 1 % short of the normal force: 1e-5 m interpenetration
-    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
-                              iterations=0,
-                              seconds=0.0)
+    bad = problem.make_result(
+        wrong.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert bad.gaps[0] == pytest.approx(-1e-5, rel=1e-6)
     assert not bad.success and bad.certificate.penetration > 1e-3
 
@@ -325,35 +344,42 @@ def test_a_large_load_away_from_the_contacts_does_not_blunt_the_cone_check():
     # measured against 1e6 N, so friction 1 % beyond a polygonal cone (where the natural map
     # is not a checked residual) passed at 3e-8
     R = np.diag([1e-6] * 3 + [1e-3] * 3)
-    model = cq.ReducedModel(flexibility=R, dofs_per_node=3,
-                            coordinates=[[0.0, 0.0, 0.0], [5.0, 1.0, 1.0]])
-    problem = cq.FrictionalProblem(model, [5.0, 0.0, -10.0, 1e6, 0.0, 0.0],
-                                   [cq.PlaneObstacle([0.0] * 3, [0.0, 0.0, -1.0], nodes=[0])],
-                                   mu=0.3, facets=8)
+    model = cq.ReducedModel(
+        flexibility=R, dofs_per_node=3, coordinates=[[0.0, 0.0, 0.0], [5.0, 1.0, 1.0]]
+    )
+    problem = cq.FrictionalProblem(
+        model,
+        [5.0, 0.0, -10.0, 1e6, 0.0, 0.0],
+        [cq.PlaneObstacle([0.0] * 3, [0.0, 0.0, -1.0], nodes=[0])],
+        mu=0.3,
+        facets=8,
+    )
     good = cq.solve(problem)
     assert good.success and good.status_labels == ["slip"], good.message
     wrong = good.forces.copy()
     wrong[0, 1:] *= 1.01
-    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
-                              iterations=0,
-                              seconds=0.0)
+    bad = problem.make_result(
+        wrong.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
 def test_a_wide_gap_elsewhere_does_not_blunt_the_cone_check():
     # an open contact 1 m away from its obstacle on stiff springs (1e-6 m/N) is no force of
     # 1e6 N: friction 1 % beyond the cone on the loaded contact must still fail
-    model = cq.ReducedModel(flexibility=1e-6 * np.eye(4), dofs_per_node=2,
-                            coordinates=[[0.0, 0.0], [5.0, 0.0]])
-    problem = cq.FrictionalProblem(model, [5.0, -10.0, 0.0, 0.0],
-                                   [cq.GapObstacle([0, 1], [0.0, 1.0], [0.0, -1.0])], mu=0.3)
+    model = cq.ReducedModel(
+        flexibility=1e-6 * np.eye(4), dofs_per_node=2, coordinates=[[0.0, 0.0], [5.0, 0.0]]
+    )
+    problem = cq.FrictionalProblem(
+        model, [5.0, -10.0, 0.0, 0.0], [cq.GapObstacle([0, 1], [0.0, 1.0], [0.0, -1.0])], mu=0.3
+    )
     good = cq.solve(problem)
     assert good.success and good.status_labels == ["slip", "open"], good.message
     wrong = good.forces.copy()
     wrong[0, 1] *= 1.01
-    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
-                              iterations=0,
-                              seconds=0.0)
+    bad = problem.make_result(
+        wrong.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert not bad.success and bad.certificate.cone > 1e-3
 
 
@@ -382,9 +408,10 @@ def micrometre_contacts(far_gap=None, mu=0.3, facets=None, dim=2):
     return cq.FrictionalProblem(model, P, obstacles, mu=mu, facets=facets)
 
 
-@pytest.mark.parametrize("solver, facets, rtol", [("coulomb", None, 1e-12),
-                                                   ("tresca", None, 1e-9),
-                                                   ("polygonal", 8, 1e-9)])
+@pytest.mark.parametrize(
+    "solver, facets, rtol",
+    [("coulomb", None, 1e-12), ("tresca", None, 1e-9), ("polygonal", 8, 1e-9)],
+)
 def test_a_wide_gap_elsewhere_does_not_loosen_the_solution(solver, facets, rtol):
     # a contact 1 m from its obstacle, decoupled from six contacts on micrometre gaps, changes
     # nothing physically. Measured on the whole problem (FCLIB's error), each route stopped when
@@ -395,10 +422,15 @@ def test_a_wide_gap_elsewhere_does_not_loosen_the_solution(solver, facets, rtol)
     far = micrometre_contacts(far_gap=1.0, facets=facets)
     solved = cq.solve(far, solver)
     assert solved.success and solved.status_labels[-1] == "open", solved.message
-    np.testing.assert_allclose(solved.forces[:6], near.forces, rtol=0,
-                               atol=rtol * np.abs(near.forces).max())
-    np.testing.assert_allclose(solved.displacements[:12], near.displacements, rtol=0,
-                               atol=rtol * np.abs(near.displacements).max())
+    np.testing.assert_allclose(
+        solved.forces[:6], near.forces, rtol=0, atol=rtol * np.abs(near.forces).max()
+    )
+    np.testing.assert_allclose(
+        solved.displacements[:12],
+        near.displacements,
+        rtol=0,
+        atol=rtol * np.abs(near.displacements).max(),
+    )
     # the same solve stopped on the FCLIB measure alone: the certificate now sees the difference
     loose = cq.solve(far, solver, per_contact=False)
     assert np.abs(loose.forces[:6] - near.forces).max() > 1e-7 * np.abs(near.forces).max()
@@ -414,8 +446,9 @@ def test_polygonal_cone_in_3d_beside_a_wide_gap(far_gap):
     far = cq.solve(micrometre_contacts(far_gap=far_gap, facets=8, dim=3))
     assert near.success and far.success, (near.message, far.message)
     assert far.status_labels[-1] == "open"
-    np.testing.assert_allclose(far.forces[:6], near.forces, rtol=0,
-                               atol=1e-9 * np.abs(near.forces).max())
+    np.testing.assert_allclose(
+        far.forces[:6], near.forces, rtol=0, atol=1e-9 * np.abs(near.forces).max()
+    )
 
 
 def test_each_contact_is_certified_on_its_own_scales():
@@ -427,16 +460,16 @@ def test_each_contact_is_certified_on_its_own_scales():
     assert good.success, good.message
     wrong = good.forces.copy()
     wrong[:6] *= 1.01
-    bad = problem.make_result(wrong.ravel(), method="test", converged=True, message="",
-                              iterations=0,
-                              seconds=0.0)
+    bad = problem.make_result(
+        wrong.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert not bad.success and bad.certificate.complementarity > 1e-3
     # but a rounding-sized force on the open contact is judged against the contacts' forces
     noisy = good.forces.copy()
     noisy[6] = [1e-13, 1e-13]
-    fine = problem.make_result(noisy.ravel(), method="test", converged=True, message="",
-                               iterations=0,
-                               seconds=0.0)
+    fine = problem.make_result(
+        noisy.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert fine.success and fine.status_labels[6] == "open", fine.message
 
 
@@ -444,18 +477,25 @@ def test_frictionless_certificate_judges_gaps_on_the_contacts_length():
     # the same soft node blunted the frictionless certificate too: 1e-5 m of interpenetration
     # over 1 m/N * 1000 N passed as 1e-8
     problem = stiff_contact_beside_a_soft_node(2)
-    frictionless = cq.ContactProblem(problem.model, problem.loads,
-                                     [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0], nodes=[0])])
+    frictionless = cq.ContactProblem(
+        problem.model, problem.loads, [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0], nodes=[0])]
+    )
     forces = np.array([990.0])  # 1 % short of the 1000 N the contact carries
     U = frictionless.dual().displacements(forces)
-    bad = frictionless.make_result(U, forces, method="test", converged=True, message="",
-                                   iterations=0,
-                                   seconds=0.0)
+    bad = frictionless.make_result(
+        U, forces, method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
     assert bad.gaps[0] == pytest.approx(-1e-5, rel=1e-6)
     assert not bad.success and bad.certificate.penetration > 1e-3
-    good = frictionless.make_result(frictionless.dual().displacements([1000.0]), [1000.0],
-                                    method="test", converged=True, message="", iterations=0,
-                                    seconds=0.0)
+    good = frictionless.make_result(
+        frictionless.dual().displacements([1000.0]),
+        [1000.0],
+        method="test",
+        converged=True,
+        message="",
+        iterations=0,
+        seconds=0.0,
+    )
     assert good.success, good.message
 
 
@@ -465,24 +505,34 @@ def test_frictionless_certificate_judges_each_contact_on_its_own_length():
     good = cq.solve(problem)
     assert good.success, good.message
     wrong = good.forces * 1.01
-    bad = problem.make_result(problem.dual().displacements(wrong), wrong, method="test",
-                              converged=True, message="", iterations=0, seconds=0.0)
+    bad = problem.make_result(
+        problem.dual().displacements(wrong),
+        wrong,
+        method="test",
+        converged=True,
+        message="",
+        iterations=0,
+        seconds=0.0,
+    )
     assert not bad.success and bad.certificate.complementarity > 1e-3
 
 
 # --------------------------------------------------------------------------------- bad input
 
 
-@pytest.mark.parametrize("kwargs, argument", [
-    ({"mu": -0.1}, "mu"),
-    ({"mu": [0.1, np.nan, 0.2]}, "mu"),
-    ({"mu": [0.1, 0.2]}, "mu"),
-    ({"mu": 0.2, "cohesion": -1.0}, "cohesion"),
-    ({"mu": 0.2, "cohesion": np.inf}, "cohesion"),
-    ({"mu": 0.0, "cohesion": 1.0}, "cohesion"),
-    ({"mu": 0.2, "facets": 2}, "facets"),
-    ({"mu": 0.2, "facets": 6.5}, "facets"),
-])
+@pytest.mark.parametrize(
+    "kwargs, argument",
+    [
+        ({"mu": -0.1}, "mu"),
+        ({"mu": [0.1, np.nan, 0.2]}, "mu"),
+        ({"mu": [0.1, 0.2]}, "mu"),
+        ({"mu": 0.2, "cohesion": -1.0}, "cohesion"),
+        ({"mu": 0.2, "cohesion": np.inf}, "cohesion"),
+        ({"mu": 0.0, "cohesion": 1.0}, "cohesion"),
+        ({"mu": 0.2, "facets": 2}, "facets"),
+        ({"mu": 0.2, "facets": 6.5}, "facets"),
+    ],
+)
 def test_bad_friction_input_names_the_argument(kwargs, argument):
     with pytest.raises(cq.InvalidInputError, match=argument):
         coupled_problem(0, **kwargs)
@@ -490,21 +540,32 @@ def test_bad_friction_input_names_the_argument(kwargs, argument):
 
 def test_bad_models_and_solvers_are_clear_errors():
     with pytest.raises(cq.InvalidInputError, match="no tangent"):
-        cq.FrictionalProblem(cq.ReducedModel(flexibility=np.eye(2)), [0.0, 0.0],
-                             [cq.GapObstacle([0, 1], [0.0, 0.0])], mu=0.2)
-    mixed = cq.ReducedModel(flexibility=np.eye(5), dofs_per_node=[2, 3],
-                            coordinates=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+        cq.FrictionalProblem(
+            cq.ReducedModel(flexibility=np.eye(2)),
+            [0.0, 0.0],
+            [cq.GapObstacle([0, 1], [0.0, 0.0])],
+            mu=0.2,
+        )
+    mixed = cq.ReducedModel(
+        flexibility=np.eye(5), dofs_per_node=[2, 3], coordinates=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+    )
     with pytest.raises(cq.InvalidInputError, match="one number of freedoms"):
-        cq.FrictionalProblem(mixed, np.zeros(5),
-                             [cq.GapObstacle([0], [0.0], [0.0, -1.0]),
-                              cq.GapObstacle([1], [0.0], [0.0, 0.0, -1.0])], mu=0.2)
+        cq.FrictionalProblem(
+            mixed,
+            np.zeros(5),
+            [cq.GapObstacle([0], [0.0], [0.0, -1.0]), cq.GapObstacle([1], [0.0], [0.0, 0.0, -1.0])],
+            mu=0.2,
+        )
     with pytest.raises(cq.InvalidInputError, match="loads contains NaN"):
         coupled_problem(0).with_loads(np.full(6, np.nan))
-    with pytest.raises(cq.InvalidInputError,
-                       match="'coulomb' does not solve frictional-polygonal problems.*polygonal"):
+    with pytest.raises(
+        cq.InvalidInputError,
+        match="'coulomb' does not solve frictional-polygonal problems.*polygonal",
+    ):
         cq.solve(coupled_problem(0, facets=8), "coulomb")
-    with pytest.raises(cq.InvalidInputError,
-                       match="unknown method 'magic' for frictional problems.*coulomb"):
+    with pytest.raises(
+        cq.InvalidInputError, match="unknown method 'magic' for frictional problems.*coulomb"
+    ):
         cq.solve(coupled_problem(0), "magic")
     with pytest.raises(cq.InvalidInputError, match="previous"):
         coupled_problem(0).with_loads(np.zeros(6), previous="rest")
@@ -512,12 +573,14 @@ def test_bad_models_and_solvers_are_clear_errors():
     with pytest.raises(cq.InvalidInputError, match="loads"):
         coupled_problem(0).with_loads(["a"] * 6)
     with pytest.raises(cq.InvalidInputError, match="forces must hold 2 local components"):
-        coupled_problem(0).make_result(np.zeros(5), method="test", converged=True, message="",
-                                       iterations=0, seconds=0.0)
+        coupled_problem(0).make_result(
+            np.zeros(5), method="test", converged=True, message="", iterations=0, seconds=0.0
+        )
 
 
 def test_cohesion_on_a_gapped_contact_is_refused():
     model = cq.ReducedModel(flexibility=np.eye(2) * 1e-3, dofs_per_node=2)
     with pytest.raises(cq.InvalidInputError, match="contact 0 has cohesion 10 N and initial gap"):
-        cq.FrictionalProblem(model, [0.0, 0.0], [cq.GapObstacle([0], [1e-3], [1.0, 0.0])],
-                             mu=0.5, cohesion=10.0)
+        cq.FrictionalProblem(
+            model, [0.0, 0.0], [cq.GapObstacle([0], [1e-3], [1.0, 0.0])], mu=0.5, cohesion=10.0
+        )

@@ -36,8 +36,7 @@ def random_problem(seed, dim, nc, mu_max=0.3, skew=0.0, cohesion=False):
         S = rng.standard_normal((m, m))
         W = W + skew * (S - S.T)
     c = np.where(rng.random(nc) < 0.5, 0.5 * rng.random(nc), 0.0) if cohesion else None
-    return LocalProblem(W, rng.standard_normal(m), rng.uniform(0.05, mu_max, nc), dim,
-                        cohesion=c)
+    return LocalProblem(W, rng.standard_normal(m), rng.uniform(0.05, mu_max, nc), dim, cohesion=c)
 
 
 def single_contact(dim, q, a=2.0, b=3.0, mu=0.4):
@@ -49,8 +48,10 @@ def routes(dim):
     """Each route as (name, solver); the polygonal one is exact in 2-D only."""
     named = [("tresca", solve_tresca_fixed_point)]
     if dim == 2:
-        named += [("polygonal-clarabel", solve_polygonal),
-                  ("polygonal-daqp", lambda p, **k: solve_polygonal(p, backend="daqp", **k))]
+        named += [
+            ("polygonal-clarabel", solve_polygonal),
+            ("polygonal-daqp", lambda p, **k: solve_polygonal(p, backend="daqp", **k)),
+        ]
     return named
 
 
@@ -64,7 +65,7 @@ def routes(dim):
 def test_single_contact_closed_forms(dim, case):
     a, b, mu = 2.0, 3.0, 0.4
     q_normal = {"open": 1.5, "stick": -4.0, "slip": -4.0}[case]
-    q_tangent = {"open": [0.7, -0.2], "stick": [0.6, -0.8], "slip": [3.0, -4.0]}[case][:dim - 1]
+    q_tangent = {"open": [0.7, -0.2], "stick": [0.6, -0.8], "slip": [3.0, -4.0]}[case][: dim - 1]
     problem = single_contact(dim, [q_normal, *q_tangent], a, b, mu)
     q_tangent = np.asarray(q_tangent)
     if case == "open":
@@ -134,11 +135,14 @@ def test_routes_agree_with_solve_coulomb(dim, seed):
         assert solution.success, (name, solution.message)
         assert solution.certificate.natural_map <= TOL
         assert natural_map_error(problem, solution.forces) == pytest.approx(
-            solution.certificate.natural_map, rel=1e-12)
-        assert np.allclose(solution.displacements, problem.W @ solution.forces + problem.q, rtol=0,
-                           atol=1e-12)
-        difference = (np.linalg.norm(solution.forces - reference.forces)
-                      / np.linalg.norm(reference.forces))
+            solution.certificate.natural_map, rel=1e-12
+        )
+        assert np.allclose(
+            solution.displacements, problem.W @ solution.forces + problem.q, rtol=0, atol=1e-12
+        )
+        difference = np.linalg.norm(solution.forces - reference.forces) / np.linalg.norm(
+            reference.forces
+        )
         assert difference < 1e-6, (name, difference)
 
 
@@ -168,8 +172,9 @@ def test_unsymmetric_w_and_cohesion():
     solution = solve_tresca_fixed_point(problem, tol=TOL)
     assert reference.success and solution.success, solution.message
     assert natural_map_error(problem, solution.forces) <= TOL
-    assert np.allclose(solution.forces, reference.forces, rtol=0,
-                       atol=1e-6 * np.abs(reference.forces).max())
+    assert np.allclose(
+        solution.forces, reference.forces, rtol=0, atol=1e-6 * np.abs(reference.forces).max()
+    )
 
 
 def test_a_slowly_contracting_fixed_point_is_not_called_stalled():
@@ -204,12 +209,19 @@ def test_facets_below_three_or_not_integers_are_rejected(facets):
 
 
 @pytest.mark.parametrize("solve", [solve_tresca_fixed_point, solve_polygonal])
-@pytest.mark.parametrize("kwargs, name", [
-    ({"tol": 0.0}, "tol"), ({"tol": 1.0}, "tol"), ({"tol": np.nan}, "tol"),
-    ({"tol": "1e-8"}, "tol"),
-    ({"max_iter": 0}, "max_iter"), ({"max_iter": 2.0}, "max_iter"),
-    ({"r0": np.zeros(2)}, "r0"), ({"r0": [np.nan, 0.0, 0.0]}, "r0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"tol": 0.0}, "tol"),
+        ({"tol": 1.0}, "tol"),
+        ({"tol": np.nan}, "tol"),
+        ({"tol": "1e-8"}, "tol"),
+        ({"max_iter": 0}, "max_iter"),
+        ({"max_iter": 2.0}, "max_iter"),
+        ({"r0": np.zeros(2)}, "r0"),
+        ({"r0": [np.nan, 0.0, 0.0]}, "r0"),
+    ],
+)
 def test_bad_arguments_are_rejected(solve, kwargs, name):
     problem = single_contact(3, [-1.0, 0.1, 0.1])
     with pytest.raises(InvalidInputError, match=f"^{name} "):
@@ -223,8 +235,9 @@ def test_bad_problem_and_backend_are_rejected():
         solve_polygonal(single_contact(2, [-1.0, 0.1]), backend="nope")
 
 
-@pytest.mark.parametrize("name", ["FrictionContactProblem00071.dat",
-                                  "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5"])
+@pytest.mark.parametrize(
+    "name", ["FrictionContactProblem00071.dat", "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5"]
+)
 def test_tresca_meets_the_certificate_on_fclib_files(name):
     """Real problems written by other codes (2-D, 89 contacts, mu = 0.9; 3-D, 60 contacts,
     unsymmetric W): the natural-map error of the answer, recomputed here, is below 1e-8."""
@@ -277,13 +290,29 @@ def test_the_fixed_point_does_not_change_the_data_it_is_given(route):
     problem = LocalProblem(A @ A.T / (nc * d) + np.eye(nc * d), q, np.full(nc, 0.3), d)
     data = FixedPointData(problem)
     scale = data.f
-    make = {"tresca": lambda: _ClarabelTresca(data),
-            "polygonal": lambda: _PolygonalTresca(data, 8, "clarabel", {})}[route]
-    runs = [run_fixed_point(problem, data, make(), tol=TOL, max_iter=30, r0=None,
-                            exact=route == "tresca", method=route) for _ in range(2)]
+    make = {
+        "tresca": lambda: _ClarabelTresca(data),
+        "polygonal": lambda: _PolygonalTresca(data, 8, "clarabel", {}),
+    }[route]
+    runs = [
+        run_fixed_point(
+            problem,
+            data,
+            make(),
+            tol=TOL,
+            max_iter=30,
+            r0=None,
+            exact=route == "tresca",
+            method=route,
+        )
+        for _ in range(2)
+    ]
     assert data.f == scale
     assert runs[0].iterations == runs[1].iterations
     np.testing.assert_array_equal(runs[0].forces, runs[1].forces)
-    fresh = (solve_tresca_fixed_point(problem, tol=TOL, max_iter=30) if route == "tresca"
-             else solve_polygonal(problem, facets=8, tol=TOL, max_iter=30))
+    fresh = (
+        solve_tresca_fixed_point(problem, tol=TOL, max_iter=30)
+        if route == "tresca"
+        else solve_polygonal(problem, facets=8, tol=TOL, max_iter=30)
+    )
     np.testing.assert_array_equal(fresh.forces, runs[0].forces)

@@ -40,6 +40,7 @@ def homogeneous_integral(direction, X, Y, half_x, half_y):
     tiny = 1e-14 * (half_x + half_y)  # absolute floor for the integrals that vanish by symmetry
     inside = abs(X) < half_x and abs(Y) < half_y
     if inside:
+
         def reach(theta):  # distance from the point to the boundary along -theta (to a source)
             c, s = -np.cos(theta), -np.sin(theta)
             distances = []
@@ -53,14 +54,30 @@ def homogeneous_integral(direction, X, Y, half_x, half_y):
                 distances.append((-half_y - Y) / s)
             return min(distances)
 
-        corners = sorted(np.arctan2(Y - cy, X - cx) % (2 * np.pi)
-                         for cx in (-half_x, half_x) for cy in (-half_y, half_y))
-        value, _ = scipy.integrate.quad(lambda t: direction(t) * reach(t), 0.0, 2 * np.pi,
-                                        points=corners, epsabs=tiny, epsrel=1e-12, limit=200)
+        corners = sorted(
+            np.arctan2(Y - cy, X - cx) % (2 * np.pi)
+            for cx in (-half_x, half_x)
+            for cy in (-half_y, half_y)
+        )
+        value, _ = scipy.integrate.quad(
+            lambda t: direction(t) * reach(t),
+            0.0,
+            2 * np.pi,
+            points=corners,
+            epsabs=tiny,
+            epsrel=1e-12,
+            limit=200,
+        )
         return value
     value, _ = scipy.integrate.dblquad(
         lambda eta, xi: direction(np.arctan2(Y - eta, X - xi)) / np.hypot(X - xi, Y - eta),
-        -half_x, half_x, -half_y, half_y, epsabs=tiny, epsrel=1e-11)
+        -half_x,
+        half_x,
+        -half_y,
+        half_y,
+        epsabs=tiny,
+        epsrel=1e-11,
+    )
     return value
 
 
@@ -82,17 +99,35 @@ def test_grid_is_centred_and_ordered_x_fastest():
     assert np.allclose(np.diff(x[:4]), 2e-3) and np.all(y[:4] == y[0])
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"young": 0.0}, "young"), ({"young": -1.0}, "young"), ({"young": np.nan}, "young"),
-    ({"young": np.inf}, "young"), ({"poisson": 0.5}, "poisson"), ({"poisson": -1.0}, "poisson"),
-    ({"poisson": np.nan}, "poisson"), ({"dx": 0.0}, "dx"), ({"dx": -1e-3}, "dx"),
-    ({"dy": np.inf}, "dy"), ({"dy": "wide"}, "dy"),
-    ({"x": [0.0, np.nan]}, "x"), ({"y": [0.0]}, "y"), ({"x": [[0.0, 1.0]]}, "x"),
-    ({"x": []}, "x"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"young": 0.0}, "young"),
+        ({"young": -1.0}, "young"),
+        ({"young": np.nan}, "young"),
+        ({"young": np.inf}, "young"),
+        ({"poisson": 0.5}, "poisson"),
+        ({"poisson": -1.0}, "poisson"),
+        ({"poisson": np.nan}, "poisson"),
+        ({"dx": 0.0}, "dx"),
+        ({"dx": -1e-3}, "dx"),
+        ({"dy": np.inf}, "dy"),
+        ({"dy": "wide"}, "dy"),
+        ({"x": [0.0, np.nan]}, "x"),
+        ({"y": [0.0]}, "y"),
+        ({"x": [[0.0, 1.0]]}, "x"),
+        ({"x": []}, "x"),
+    ],
+)
 def test_invalid_inputs_name_the_argument(kwargs, name):
-    arguments = {"x": [0.0, 1e-3], "y": [0.0, 0.0], "dx": 1e-3, "dy": 1e-3,
-                 "young": E, "poisson": NU}
+    arguments = {
+        "x": [0.0, 1e-3],
+        "y": [0.0, 0.0],
+        "dx": 1e-3,
+        "dy": 1e-3,
+        "young": E,
+        "poisson": NU,
+    }
     arguments.update(kwargs)
     with pytest.raises(InvalidInputError, match=rf"^{name} ") as info:
         normal_influence(**arguments)
@@ -100,17 +135,29 @@ def test_invalid_inputs_name_the_argument(kwargs, name):
     assert "\n" not in str(info.value)
 
 
-@pytest.mark.parametrize("args, name", [
-    ((0, 3, 1.0, 1.0), "nx"), ((3, 2.5, 1.0, 1.0), "ny"), ((3, True, 1.0, 1.0), "ny"),
-    ((3, 3, -1.0, 1.0), "dx"), ((3, 3, 1.0, np.nan), "dy"),
-])
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        ((0, 3, 1.0, 1.0), "nx"),
+        ((3, 2.5, 1.0, 1.0), "ny"),
+        ((3, True, 1.0, 1.0), "ny"),
+        ((3, 3, -1.0, 1.0), "dx"),
+        ((3, 3, 1.0, np.nan), "dy"),
+    ],
+)
 def test_grid_rejects_bad_arguments(args, name):
     with pytest.raises(InvalidInputError, match=rf"^{name} "):
         grid(*args)
 
 
-@pytest.mark.parametrize("x, y", [([0.0, 0.0], [0.0, 0.2e-3]), ([0.0, 0.4e-3], [0.0, 0.2e-3]),
-                                  ([0.0, 1e-3, 0.0], [0.0, 0.0, 0.0])])
+@pytest.mark.parametrize(
+    "x, y",
+    [
+        ([0.0, 0.0], [0.0, 0.2e-3]),
+        ([0.0, 0.4e-3], [0.0, 0.2e-3]),
+        ([0.0, 1e-3, 0.0], [0.0, 0.0, 0.0]),
+    ],
+)
 def test_overlapping_cells_are_rejected(x, y):
     """Overlapping or repeated cells (off and on the lattice) would make R singular."""
     with pytest.raises(InvalidInputError, match="overlap"):
@@ -121,8 +168,9 @@ def test_overlapping_cells_are_rejected(x, y):
 # (1) symmetry and positive definiteness
 
 
-@pytest.mark.parametrize("nx, ny, dx, dy", [(12, 12, 1e-4, 1e-4), (20, 6, 0.5e-4, 2e-4),
-                                             (1, 30, 1e-3, 1e-4)])
+@pytest.mark.parametrize(
+    "nx, ny, dx, dy", [(12, 12, 1e-4, 1e-4), (20, 6, 0.5e-4, 2e-4), (1, 30, 1e-3, 1e-4)]
+)
 def test_matrix_is_symmetric_and_positive_definite(nx, ny, dx, dy):
     """Exact symmetry (Maxwell-Betti for equal cells), SPD (the 1/r kernel is positive definite).
 
@@ -154,7 +202,8 @@ def test_irregular_arrangement_takes_the_general_path_and_agrees():
         assert pair[0, 1] == pytest.approx(R[i, j], rel=1e-13)
         X, Y = abs(shifted[i] - shifted[j]), abs(y[i] - y[j])
         assert R[i, j] == pytest.approx(
-            KERNEL * kernel_integral(X, Y, dx / 2, dy / 2) / (dx * dy), rel=1e-9)
+            KERNEL * kernel_integral(X, Y, dx / 2, dy / 2) / (dx * dy), rel=1e-9
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -233,8 +282,13 @@ def test_single_cell_diagonal_has_the_closed_form():
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.floats(0.2, 5.0), st.floats(0.2, 5.0), st.integers(-6, 6), st.integers(-6, 6),
-       st.floats(-0.9, 0.49))
+@given(
+    st.floats(0.2, 5.0),
+    st.floats(0.2, 5.0),
+    st.integers(-6, 6),
+    st.integers(-6, 6),
+    st.floats(-0.9, 0.49),
+)
 def test_swapping_axes_and_scaling(aspect_x, aspect_y, i, j, nu):
     """Invariances of the exact solution: exchanging x and y (with dx and dy) leaves the
     coefficient unchanged, scaling all lengths by s divides it by s, and it is proportional to
@@ -304,8 +358,9 @@ def test_hertz_rigid_sphere(n, cells_per_radius):
     r = np.sqrt(r2)
     assert np.all((result.contact_status == ContactStatus.CLOSED)[r < a - h])
     assert not np.any((result.contact_status == ContactStatus.CLOSED)[r > a + h])
-    a_equivalent = np.sqrt(np.count_nonzero(result.contact_status == ContactStatus.CLOSED)
-                           * h * h / np.pi)
+    a_equivalent = np.sqrt(
+        np.count_nonzero(result.contact_status == ContactStatus.CLOSED) * h * h / np.pi
+    )
     assert abs(a_equivalent - a) < 0.5 * h
 
     # Physical signs: the surface sinks under the sphere and follows it in contact; the contact
@@ -335,12 +390,15 @@ def point_force_kernels(nu=NU, shear=G_SHEAR):
     at z = 0, z the outward normal): a as the displacement axis, b the force axis."""
     c = 1.0 / (2 * np.pi * shear)
     k = (1 - 2 * nu) / (4 * np.pi * shear)
+
     def cross(t):
         return c * nu * np.cos(t) * np.sin(t)
 
-    return [[lambda t: c * ((1 - nu) + nu * np.cos(t) ** 2), cross, lambda t: k * np.cos(t)],
-            [cross, lambda t: c * ((1 - nu) + nu * np.sin(t) ** 2), lambda t: k * np.sin(t)],
-            [lambda t: -k * np.cos(t), lambda t: -k * np.sin(t), lambda t: c * (1 - nu)]]
+    return [
+        [lambda t: c * ((1 - nu) + nu * np.cos(t) ** 2), cross, lambda t: k * np.cos(t)],
+        [cross, lambda t: c * ((1 - nu) + nu * np.sin(t) ** 2), lambda t: k * np.sin(t)],
+        [lambda t: -k * np.cos(t), lambda t: -k * np.sin(t), lambda t: c * (1 - nu)],
+    ]
 
 
 @pytest.mark.parametrize("dx, dy", [(1e-4, 1e-4), (1e-4, 3e-4)])
@@ -356,8 +414,15 @@ def test_cerruti_and_coupling_coefficients_match_quadrature(dx, dy, offset):
     else:
         block = influence_matrix([X, 0.0], [Y, 0.0], dx, dy, E, NU)[:3, 3:]
     kernels = point_force_kernels()
-    expected = np.array([[homogeneous_integral(kernels[a][b], X, Y, dx / 2, dy / 2) / (dx * dy)
-                          for b in range(3)] for a in range(3)])
+    expected = np.array(
+        [
+            [
+                homogeneous_integral(kernels[a][b], X, Y, dx / 2, dy / 2) / (dx * dy)
+                for b in range(3)
+            ]
+            for a in range(3)
+        ]
+    )
     assert np.allclose(block, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
     assert np.abs(expected).max() > 0
 
@@ -400,8 +465,12 @@ def test_influence_matrix_structure():
     assert np.array_equal(S, S.T)
     for i, j in [(0, 1), (0, 7), (3, 20), (8, 34)]:
         pair = influence_matrix(shifted[[i, j]], y[[i, j]], dx, dy, E, NU)
-        assert np.allclose(pair[:3, 3:], S[3 * i:3 * i + 3, 3 * j:3 * j + 3], rtol=1e-12,
-                           atol=1e-14 * np.abs(pair).max())
+        assert np.allclose(
+            pair[:3, 3:],
+            S[3 * i : 3 * i + 3, 3 * j : 3 * j + 3],
+            rtol=1e-12,
+            atol=1e-14 * np.abs(pair).max(),
+        )
 
 
 def test_hertz_type_tangential_traction():
@@ -425,8 +494,12 @@ def test_hertz_type_tangential_traction():
     forces[0::3] = q0 * np.sqrt(np.clip(1 - r2 / a**2, 0.0, None)) * h * h
     U = influence_matrix(x, y, h, h, E, NU) @ forces
     inside = r2 < (0.8 * a) ** 2
-    ux = np.pi * q0 / (32 * G_SHEAR * a) * (4 * (2 - NU) * a * a - (4 - 3 * NU) * x**2
-                                            - (4 - NU) * y**2)
+    ux = (
+        np.pi
+        * q0
+        / (32 * G_SHEAR * a)
+        * (4 * (2 - NU) * a * a - (4 - 3 * NU) * x**2 - (4 - NU) * y**2)
+    )
     uy = np.pi * q0 * NU / (16 * G_SHEAR * a) * x * y
     scale = ux.max()
     assert np.max(np.abs(U[0::3][inside] - ux[inside])) < 5e-3 * scale

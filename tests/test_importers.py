@@ -14,7 +14,6 @@ import pytest
 import scipy.io
 import scipy.sparse as sp
 
-from contactqp.errors import RigidBodyModeError
 from contactqp.compliance.importers import (
     READERS,
     dmig_matrix,
@@ -31,6 +30,7 @@ from contactqp.errors import (
     InvalidInputError,
     MissingDependencyError,
     NotPositiveDefiniteError,
+    RigidBodyModeError,
     UnsupportedProblemError,
 )
 from contactqp.io.problem_file import load_problem_file, read_array
@@ -89,8 +89,16 @@ def make_plate(digits=None):
     inverse[np.ix_(free, free)] = np.linalg.inv(K[np.ix_(free, free)])
     inverse = 0.5 * (inverse + inverse.T)
     numbers = 1000 + 3 * np.arange(n_nodes)  # ANSYS / NASTRAN node numbers
-    return dict(K=K, dof=dof, right=right, left=left, fixed=fixed, inverse=inverse,
-                numbers=numbers, xy=mesh.p.T)
+    return dict(
+        K=K,
+        dof=dof,
+        right=right,
+        left=left,
+        fixed=fixed,
+        inverse=inverse,
+        numbers=numbers,
+        xy=mesh.p.T,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -119,8 +127,13 @@ def write_plate_full(path, plate, storage):
     eq = plate["dof"][storage].ravel()  # node by node, UX then UY
     position = np.empty_like(eq)
     position[eq] = np.arange(eq.size)
-    write_ansys_full(path, plate["K"][np.ix_(eq, eq)], plate["numbers"][storage], dofs=(1, 2),
-                     constrained=position[plate["fixed"]])
+    write_ansys_full(
+        path,
+        plate["K"][np.ix_(eq, eq)],
+        plate["numbers"][storage],
+        dofs=(1, 2),
+        constrained=position[plate["fixed"]],
+    )
 
 
 @pytest.fixture(scope="module")
@@ -136,8 +149,7 @@ def test_ansys_full_spring_chain_is_the_closed_form(tmp_path):
     n = 12
     K = chain_stiffness(n + 1, fixed_first=False)  # node 0 is the wall, constrained in the file
     storage = np.arange(n + 1)[::-1]  # stored backwards: the reader sorts by node number
-    write_ansys_full(path, K[np.ix_(storage, storage)], storage + 1, dofs=(1,),
-                     constrained=[n])
+    write_ansys_full(path, K[np.ix_(storage, storage)], storage + 1, dofs=(1,), constrained=[n])
     chosen = np.array([2, 5, 11])
     model = read_ansys_full(path, chosen + 2, ["UX"])  # node numbers are index + 1
     assert model.given == "flexibility" and model.n_nodes == 3
@@ -169,8 +181,11 @@ def test_ansys_full_selection_errors_name_file_node_and_component(plate, plate_f
     number = int(plate["numbers"][plate["right"][0]])
     with pytest.raises(InvalidInputError, match=r"plate\.full: node 7 is not in the file"):
         read_ansys_full(plate_full, [7])
-    with pytest.raises(InvalidInputError, match=rf"node {number} UZ is not in the file "
-                                                rf"\(node {number} has UX, UY\)"):
+    with pytest.raises(
+        InvalidInputError,
+        match=rf"node {number} UZ is not in the file "
+        rf"\(node {number} has UX, UY\)",
+    ):
         read_ansys_full(plate_full, [number], ("UX", "UZ"))
     clamped = int(plate["numbers"][plate["left"][0]])
     with pytest.raises(InvalidInputError, match=rf"node {clamped} UX is chosen but fixed"):
@@ -190,17 +205,26 @@ def test_ansys_full_node_with_fewer_dofs_is_unsupported(tmp_path):
     path = tmp_path / "mixed.full"
     K = chain_stiffness(5) + np.eye(5)  # nodes 1, 2 with UX, UY; node 3 with UX only
     write_ansys_full(path, K, [1, 2, 3], dofs=(1, 2), counts=[2, 2, 1])
-    np.testing.assert_allclose(read_ansys_full(path, [2], ["UX", "UY"]).flexibility,
-                               np.linalg.inv(K)[2:4, 2:4], rtol=1e-12)
+    np.testing.assert_allclose(
+        read_ansys_full(path, [2], ["UX", "UY"]).flexibility, np.linalg.inv(K)[2:4, 2:4], rtol=1e-12
+    )
     with pytest.raises(UnsupportedProblemError, match="node 3 has 1 of the file's 2 DOF kinds"):
         read_ansys_full(path, [3], ["UX"])
 
 
-@pytest.mark.parametrize("keep_bytes, part", [
-    (0, "only 0 bytes"), (40, "only 40 bytes"), (430, "full-file header"),
-    (1072, "DOF reference record"), (1200, "nodal equivalence table"),
-    (1320, "DOF count record"), (1600, "constraint record"), (-4, "stiffness matrix"),
-])
+@pytest.mark.parametrize(
+    "keep_bytes, part",
+    [
+        (0, "only 0 bytes"),
+        (40, "only 40 bytes"),
+        (430, "full-file header"),
+        (1072, "DOF reference record"),
+        (1200, "nodal equivalence table"),
+        (1320, "DOF count record"),
+        (1600, "constraint record"),
+        (-4, "stiffness matrix"),
+    ],
+)
 def test_ansys_full_truncated_file_is_a_format_error(plate_full, tmp_path, keep_bytes, part):
     """Every record is checked against the file's end before the reader's compiled code reads
     it (it would read past the end). Records of the plate file, in words: standard header
@@ -216,17 +240,26 @@ def test_ansys_full_truncated_file_is_a_format_error(plate_full, tmp_path, keep_
 HEADER = 105  # first word of the full-file header's items (after the standard header record)
 
 
-@pytest.mark.parametrize("word, value, error, message", [
-    (HEADER + 8, 0, FileFormatError, "holds no stiffness matrix"),  # ntermK
-    (HEADER + 8, 10**6, FileFormatError, "stiffness matrix lies beyond its end"),
-    (HEADER + 8, 300, FileFormatError, "stiffness matrix has record lengths that do not add up"),
-    (424, 5, FileFormatError, "record lengths that do not add up to the 514 terms"),  # column 1
-    (312, 3, FileFormatError, "DOF count record does not match the 72 equations"),  # node 1
-    (HEADER + 35, 10**7, FileFormatError, "DOF count record lies beyond its end"),  # ptrDOF
-    (0, 100 << 24, UnsupportedProblemError, "big-endian"),
-])
-def test_ansys_full_corrupt_file_is_a_clear_error(plate_full, tmp_path, word, value, error,
-                                                  message):
+@pytest.mark.parametrize(
+    "word, value, error, message",
+    [
+        (HEADER + 8, 0, FileFormatError, "holds no stiffness matrix"),  # ntermK
+        (HEADER + 8, 10**6, FileFormatError, "stiffness matrix lies beyond its end"),
+        (
+            HEADER + 8,
+            300,
+            FileFormatError,
+            "stiffness matrix has record lengths that do not add up",
+        ),
+        (424, 5, FileFormatError, "record lengths that do not add up to the 514 terms"),  # column 1
+        (312, 3, FileFormatError, "DOF count record does not match the 72 equations"),  # node 1
+        (HEADER + 35, 10**7, FileFormatError, "DOF count record lies beyond its end"),  # ptrDOF
+        (0, 100 << 24, UnsupportedProblemError, "big-endian"),
+    ],
+)
+def test_ansys_full_corrupt_file_is_a_clear_error(
+    plate_full, tmp_path, word, value, error, message
+):
     """Word offsets as in the truncation test; the stiffness starts at word 424."""
     words = np.fromfile(plate_full, dtype="<i4")
     assert words[HEADER + 18] == 424  # ptrSTF: the layout the offsets above assume
@@ -268,14 +301,17 @@ def test_op4_stiffness_condensed_is_the_closed_form(tmp_path, storage):
         write_op4_binary(path, {"KAA": K})
     else:
         data = sp.coo_matrix(K) if storage == "ascii-sparse" else K
-        write_op4(str(path), {"KAA": Matrix("KAA", 6, data=data)}, is_binary=False,
-                  precision="double")
+        write_op4(
+            str(path), {"KAA": Matrix("KAA", 6, data=data)}, is_binary=False, precision="double"
+        )
     whole = read_op4(path, kind="stiffness")
     assert whole.given == "stiffness"
     np.testing.assert_array_equal(whole.stiffness, K)
     chosen = [9, 0, 4]
-    assert_flexibility(read_op4(path, "KAA", kind="stiffness", freedoms=chosen).flexibility,
-                       chain_flexibility(chosen))
+    assert_flexibility(
+        read_op4(path, "KAA", kind="stiffness", freedoms=chosen).flexibility,
+        chain_flexibility(chosen),
+    )
 
 
 @nastran
@@ -305,8 +341,11 @@ def test_op4_errors(tmp_path):
 
     path = tmp_path / "two.op4"
     write_op4_binary(path, {"KAA": chain_stiffness(3), "MAA": np.eye(3)})
-    with pytest.raises(InvalidInputError, match=r"two\.op4: the file holds 2 matrices "
-                                                r"\(KAA, MAA\)"):
+    with pytest.raises(
+        InvalidInputError,
+        match=r"two\.op4: the file holds 2 matrices "
+        r"\(KAA, MAA\)",
+    ):
         read_op4(path, kind="stiffness")
     with pytest.raises(InvalidInputError, match=r"no matrix named 'KGG' .*KAA, MAA"):
         op4_matrix(path, "KGG")
@@ -325,8 +364,12 @@ def test_op4_errors(tmp_path):
     with pytest.raises(FileFormatError, match=r"cut\.op4: not a readable OP4 file"):
         op4_matrix(cut)
     ascii_ = tmp_path / "ascii.op4"
-    write_op4(str(ascii_), {"KAA": Matrix("KAA", 6, data=chain_stiffness(3))}, is_binary=False,
-              precision="double")
+    write_op4(
+        str(ascii_),
+        {"KAA": Matrix("KAA", 6, data=chain_stiffness(3))},
+        is_binary=False,
+        precision="double",
+    )
     cut.write_text("\n".join(ascii_.read_text().splitlines()[:4]) + "\n")  # mid-matrix
     with pytest.raises(FileFormatError, match=r"cut\.op4: not a readable OP4 file"):
         op4_matrix(cut)
@@ -364,8 +407,9 @@ def test_dmig_grids_and_components_with_fixed_freedoms(tmp_path, plate10):
     plate_dmig_model(plate10).write_bdf(str(path), size=16, is_double=True)
     chosen = plate10["right"][[1, 3]]
     fixed = [(int(plate10["numbers"][p]), c) for p in plate10["left"] for c in (1, 2)]
-    model = read_dmig(path, "KAAX", plate10["numbers"][chosen], (2, 1), kind="stiffness",
-                      fixed=fixed)
+    model = read_dmig(
+        path, "KAAX", plate10["numbers"][chosen], (2, 1), kind="stiffness", fixed=fixed
+    )
     assert_flexibility(model.flexibility, plate_truth(plate10, chosen, [1, 0]))
     np.testing.assert_allclose(model.coordinates[:, :2], plate10["xy"][chosen], rtol=1e-9)
     # unconstrained: rounded to 10 digits, the rigid-body modes show either as vanishing pivots
@@ -378,15 +422,17 @@ def test_dmig_grids_and_components_with_fixed_freedoms(tmp_path, plate10):
 def test_dmig_in_a_full_deck_and_the_assembled_matrix(tmp_path, plate10):
     free = np.setdiff1d(np.arange(len(plate10["numbers"])), plate10["left"])
     bulk = tmp_path / "bulk.bdf"
-    plate_dmig_model(plate10, "K2GG", free).write_bdf(str(bulk), size=16, is_double=True,
-                                                  enddata=False)
+    plate_dmig_model(plate10, "K2GG", free).write_bdf(
+        str(bulk), size=16, is_double=True, enddata=False
+    )
     deck = tmp_path / "deck.dat"
     body = [line for line in bulk.read_text().splitlines() if not line.startswith("$")]
     deck.write_text("SOL 101\nCEND\nSUBCASE 1\nBEGIN BULK\n" + "\n".join(body) + "\nENDDATA\n")
     matrix, labels = dmig_matrix(deck, "K2GG")
     eq = plate10["dof"][free].ravel()
-    expected = {(int(plate10["numbers"][p]), c): plate10["dof"][p, c - 1] for p in free
-                for c in (1, 2)}
+    expected = {
+        (int(plate10["numbers"][p]), c): plate10["dof"][p, c - 1] for p in free for c in (1, 2)
+    }
     order = [expected[label] for label in labels]
     assert sorted(order) == sorted(eq)
     np.testing.assert_array_equal(matrix.toarray(), plate10["K"][np.ix_(order, order)])
@@ -406,26 +452,38 @@ def test_dmig_errors(tmp_path, plate10):
     number = int(plate10["numbers"][plate10["right"][0]])
     with pytest.raises(InvalidInputError, match=r"k\.bdf: no DMIG named 'KGG' .*KAAX, PHI"):
         read_dmig(path, "KGG", kind="stiffness")
-    with pytest.raises(InvalidInputError, match=r"k\.bdf: grid 1000 is not in the file "
-                                                r"\(2 grids\)"):
+    with pytest.raises(
+        InvalidInputError,
+        match=r"k\.bdf: grid 1000 is not in the file "
+        r"\(2 grids\)",
+    ):
         read_dmig(path, "KAAX", [1000], (1, 2), kind="stiffness")
-    with pytest.raises(InvalidInputError, match=rf"grid {number} component 3 is not in the "
-                                                rf"file \(grid {number} has 1, 2\)"):
+    with pytest.raises(
+        InvalidInputError,
+        match=rf"grid {number} component 3 is not in the "
+        rf"file \(grid {number} has 1, 2\)",
+    ):
         read_dmig(path, "KAAX", [number], kind="stiffness")
     with pytest.raises(InvalidInputError, match="IFO=2; a square"):
         read_dmig(path, "PHI", kind="flexibility")
     both = tmp_path / "both.bdf"
     twice = BDF(debug=None)
-    twice.add_dmig("K", 6, 2, 2, 0, None, [(1, 1), (1, 1), (2, 1)], [(1, 1), (2, 1), (1, 1)],
-                   [2.0, -1.0, -1.0])
+    twice.add_dmig(
+        "K", 6, 2, 2, 0, None, [(1, 1), (1, 1), (2, 1)], [(1, 1), (2, 1), (1, 1)], [2.0, -1.0, -1.0]
+    )
     twice.write_bdf(str(both))
     with pytest.raises(FileFormatError, match="both above and below the diagonal"):
         dmig_matrix(both, "K")
     bad = tmp_path / "bad.bdf"
-    bad.write_text("BEGIN BULK\nDMIG    K       0       6       2       0\n"
-                   "DMIG    K       1       1               x       1       2.0\nENDDATA\n")
-    with pytest.raises(FileFormatError, match=r"bad\.bdf: not a readable NASTRAN bulk-data "
-                                              r"file \(SyntaxError: Gi = 'x'"):
+    bad.write_text(
+        "BEGIN BULK\nDMIG    K       0       6       2       0\n"
+        "DMIG    K       1       1               x       1       2.0\nENDDATA\n"
+    )
+    with pytest.raises(
+        FileFormatError,
+        match=r"bad\.bdf: not a readable NASTRAN bulk-data "
+        r"file \(SyntaxError: Gi = 'x'",
+    ):
         dmig_matrix(bad, "K")
 
 
@@ -434,10 +492,12 @@ def test_dmig_file_starting_at_begin_bulk(tmp_path):
     """Bulk data opened by BEGIN BULK without executive and case control (a common hand-made
     file) is read; it used to fail for lack of the control decks."""
     path = tmp_path / "k.bdf"
-    path.write_text("$ stiffness\nBEGIN BULK\nDMIG    K       0       6       1       0\n"
-                    "DMIG    K       1       1               1       1       2.0\n"
-                    "DMIG    K       2       1               1       1       -1.0\n"
-                    "        2       1       2.0\nENDDATA\n")
+    path.write_text(
+        "$ stiffness\nBEGIN BULK\nDMIG    K       0       6       1       0\n"
+        "DMIG    K       1       1               1       1       2.0\n"
+        "DMIG    K       2       1               1       1       -1.0\n"
+        "        2       1       2.0\nENDDATA\n"
+    )
     matrix, labels = dmig_matrix(path, "K")
     assert labels == [(1, 1), (2, 1)]
     np.testing.assert_array_equal(matrix.toarray(), [[2.0, -1.0], [-1.0, 2.0]])
@@ -551,7 +611,8 @@ def test_problem_file_takes_an_op4_matrix_by_name(tmp_path):
     (tmp_path / "p.toml").write_text(
         '[model]\nstiffness = { file = "model.op4", key = "KAA" }\n'
         "[loads]\nvalues = [0.0, 0.0, 1.0]\n"
-        '[[obstacle]]\ntype = "gaps"\nnodes = [2]\ngaps = [1.0]\n')
+        '[[obstacle]]\ntype = "gaps"\nnodes = [2]\ngaps = [1.0]\n'
+    )
     spec = load_problem_file(tmp_path / "p.toml")
     np.testing.assert_array_equal(spec.problem.model.stiffness, K)
     np.testing.assert_array_equal(read_array(tmp_path / "model.op4", key="MAA"), np.eye(3))
@@ -560,8 +621,13 @@ def test_problem_file_takes_an_op4_matrix_by_name(tmp_path):
 
 
 def test_load_compliance_knows_every_extension_and_names_the_unknown(tmp_path):
-    assert set(READERS.values()) == {read_ansys_full, read_op4, read_dmig, read_matrix_market,
-                                     read_unit_load_csv}
+    assert set(READERS.values()) == {
+        read_ansys_full,
+        read_op4,
+        read_dmig,
+        read_matrix_market,
+        read_unit_load_csv,
+    }
     with pytest.raises(FileFormatError, match=r"model\.h5: cannot tell the format .*\.full"):
         load_compliance(tmp_path / "model.h5")
     # arguments the chosen reader does not take: InvalidInputError, not a bare TypeError
@@ -574,13 +640,15 @@ def test_load_compliance_knows_every_extension_and_names_the_unknown(tmp_path):
     assert load_compliance(path, kind="stiffness", freedoms=[2]).flexibility.shape == (1, 1)
 
 
-@pytest.mark.parametrize("module, reader, args, extra", [
-    ("ansys.mapdl.reader.full", read_ansys_full, dict(nodes=[1]), "ansys"),
-    ("pyNastran.op4.op4", read_op4, dict(kind="stiffness"), "nastran"),
-    ("pyNastran.bdf.bdf", read_dmig, dict(name="K", kind="stiffness"), "nastran"),
-])
-def test_missing_backend_names_the_pip_install(tmp_path, monkeypatch, module, reader, args,
-                                               extra):
+@pytest.mark.parametrize(
+    "module, reader, args, extra",
+    [
+        ("ansys.mapdl.reader.full", read_ansys_full, dict(nodes=[1]), "ansys"),
+        ("pyNastran.op4.op4", read_op4, dict(kind="stiffness"), "nastran"),
+        ("pyNastran.bdf.bdf", read_dmig, dict(name="K", kind="stiffness"), "nastran"),
+    ],
+)
+def test_missing_backend_names_the_pip_install(tmp_path, monkeypatch, module, reader, args, extra):
     path = tmp_path / "any.file"
     path.write_bytes(b"\0" * 1024)
     monkeypatch.setitem(sys.modules, module, None)  # import of it raises ImportError
@@ -595,17 +663,21 @@ def test_non_numeric_nodes_and_components_are_invalid_input(tmp_path):
 
     path = tmp_path / "k.bdf"
     model = BDF(debug=None)
-    model.add_dmig("K", 6, 2, 2, 0, None, [(1, 1), (1, 1), (2, 1)], [(1, 1), (2, 1), (2, 1)],
-                   [2.0, -1.0, 2.0])
+    model.add_dmig(
+        "K", 6, 2, 2, 0, None, [(1, 1), (1, 1), (2, 1)], [(1, 1), (2, 1), (2, 1)], [2.0, -1.0, 2.0]
+    )
     model.write_bdf(str(path))
     expected = np.linalg.inv([[2.0, -1.0], [-1.0, 2.0]])
-    np.testing.assert_allclose(read_dmig(path, "K", components=[1], kind="stiffness").flexibility,
-                               expected, rtol=1e-14)
-    for kwargs, message in [(dict(components=["x"]), "components must be a list of whole"),
-                            (dict(nodes=["a"], components=[1]), "nodes must be a list of whole"),
-                            (dict(components=[1.5]), "components must be a list of whole"),
-                            (dict(components=[1], fixed=[(1,)]), r"\(grid, component\) pairs"),
-                            (dict(components=[1], fixed=[1]), "fixed must be a list")]:
+    np.testing.assert_allclose(
+        read_dmig(path, "K", components=[1], kind="stiffness").flexibility, expected, rtol=1e-14
+    )
+    for kwargs, message in [
+        (dict(components=["x"]), "components must be a list of whole"),
+        (dict(nodes=["a"], components=[1]), "nodes must be a list of whole"),
+        (dict(components=[1.5]), "components must be a list of whole"),
+        (dict(components=[1], fixed=[(1,)]), r"\(grid, component\) pairs"),
+        (dict(components=[1], fixed=[1]), "fixed must be a list"),
+    ]:
         with pytest.raises(InvalidInputError, match=message):
             read_dmig(path, "K", kind="stiffness", **kwargs)
     rows = tmp_path / "rows.csv"
@@ -631,8 +703,11 @@ def test_ansys_full_file_written_by_mapdl():
     nodes = [22, 23, 40]
     assert not any((n, j) in constrained for n in nodes for j in range(3))
     reference = dof_ref[free]
-    eq = [int(np.flatnonzero((reference[:, 0] == n) & (reference[:, 1] == j))[0])
-          for n in nodes for j in (2, 0)]
+    eq = [
+        int(np.flatnonzero((reference[:, 0] == n) & (reference[:, 1] == j))[0])
+        for n in nodes
+        for j in (2, 0)
+    ]
     expected = np.linalg.inv(K[np.ix_(free, free)])[np.ix_(eq, eq)]
     model = read_ansys_full(examples.fullfile, nodes, ("UZ", "UX"))
     assert_flexibility(model.flexibility, 0.5 * (expected + expected.T))

@@ -31,8 +31,11 @@ def frictional_block(n=6, seed=0):
     """``n`` 3-D nodes with a random SPD stiffness, pressed on a floor and sheared."""
     rng = np.random.default_rng(seed)
     B = rng.standard_normal((3 * n, 3 * n))
-    model = cq.ReducedModel(stiffness=1e6 * (B @ B.T + 3 * n * np.eye(3 * n)), dofs_per_node=3,
-                            coordinates=np.c_[np.arange(n), np.zeros(n), np.zeros(n)])
+    model = cq.ReducedModel(
+        stiffness=1e6 * (B @ B.T + 3 * n * np.eye(3 * n)),
+        dofs_per_node=3,
+        coordinates=np.c_[np.arange(n), np.zeros(n), np.zeros(n)],
+    )
     return model, np.tile([300.0, -200.0, -1000.0], n)
 
 
@@ -40,6 +43,7 @@ FLOOR = cq.PlaneObstacle([0.0, 0.0, 0.0], [0.0, 0.0, -1.0])
 
 
 # 1. overflow and non-finite values -------------------------------------------------------------
+
 
 @pytest.mark.parametrize("factor", [1e300, 1e60])
 def test_a_flexibility_whose_products_overflow_is_refused(factor):
@@ -53,10 +57,13 @@ def test_a_stiffness_too_small_to_multiply_is_refused():
         cq.ReducedModel(stiffness=np.eye(2) * 1e-300)
 
 
-@pytest.mark.parametrize("loads, gaps, match", [
-    ([1e300, 0.0], GAPS, "^loads has an entry of magnitude"),
-    (LOADS, [1e300, 1e-3], "^the gap of node 0 is 1e\\+300 m"),
-])
+@pytest.mark.parametrize(
+    "loads, gaps, match",
+    [
+        ([1e300, 0.0], GAPS, "^loads has an entry of magnitude"),
+        (LOADS, [1e300, 1e-3], "^the gap of node 0 is 1e\\+300 m"),
+    ],
+)
 def test_loads_and_gaps_that_would_overflow_are_refused(loads, gaps, match):
     with pytest.raises(InvalidInputError, match=match):
         cq.solve_gaps(R, loads, gaps)
@@ -65,9 +72,18 @@ def test_loads_and_gaps_that_would_overflow_are_refused(loads, gaps, match):
 @pytest.mark.parametrize("bad", [np.nan, np.inf, 1e300])
 def test_a_non_finite_or_overflowing_answer_fails_the_certificate(bad):
     # was: NaN residuals read as 0 (max(0, nan) is 0): a NaN answer "passed" its certificate
-    problem = cq.ContactProblem(cq.ReducedModel(flexibility=R), LOADS, [cq.GapObstacle([0, 1], GAPS)])
-    result = problem.make_result([bad, 0.0], [bad, 0.0], method="test", converged=True,
-                                 message="done", iterations=1, seconds=0.0)
+    problem = cq.ContactProblem(
+        cq.ReducedModel(flexibility=R), LOADS, [cq.GapObstacle([0, 1], GAPS)]
+    )
+    result = problem.make_result(
+        [bad, 0.0],
+        [bad, 0.0],
+        method="test",
+        converged=True,
+        message="done",
+        iterations=1,
+        seconds=0.0,
+    )
     assert not result.certificate.passed and not result.success and result.status == 2
     assert result.certificate.worst == np.inf
     assert "NaN or inf" in result.message
@@ -79,8 +95,9 @@ def test_a_non_finite_frictional_answer_fails_the_certificate():
     forces = np.zeros(3 * problem.n_contacts)
     forces[0] = 1e300  # finite, but U = R H^T r and the residuals overflow
     for r in (forces, np.where(forces > 0, np.inf, 0.0)):
-        result = problem.make_result(r, method="test", converged=True, message="done", iterations=1,
-                                     seconds=0.0)
+        result = problem.make_result(
+            r, method="test", converged=True, message="done", iterations=1, seconds=0.0
+        )
         assert not result.success and result.status == 2 and "NaN or inf" in result.message
 
 
@@ -113,16 +130,23 @@ def test_the_box_qp_solver_refuses_bad_options(kwargs, name):
 def test_a_bad_certificate_tol_is_refused(certificate_tol):
     model = cq.ReducedModel(flexibility=R)
     with pytest.raises(InvalidInputError, match="^certificate_tol must be a positive"):
-        cq.ContactProblem(model, LOADS, [cq.GapObstacle([0, 1], GAPS)],
-                          certificate_tol=certificate_tol)
+        cq.ContactProblem(
+            model, LOADS, [cq.GapObstacle([0, 1], GAPS)], certificate_tol=certificate_tol
+        )
 
 
-@pytest.mark.parametrize("solver, facets", [("coulomb", None), ("tresca", None),
-                                            ("polygonal", 8)])
-@pytest.mark.parametrize("kwargs, name", [
-    ({"tol": -1.0}, "tol"), ({"tol": 0.0}, "tol"), ({"tol": np.nan}, "tol"),
-    ({"max_iter": 0}, "max_iter"), ({"max_iter": -3}, "max_iter"), ({"max_iter": 2.5}, "max_iter"),
-])
+@pytest.mark.parametrize("solver, facets", [("coulomb", None), ("tresca", None), ("polygonal", 8)])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"tol": -1.0}, "tol"),
+        ({"tol": 0.0}, "tol"),
+        ({"tol": np.nan}, "tol"),
+        ({"max_iter": 0}, "max_iter"),
+        ({"max_iter": -3}, "max_iter"),
+        ({"max_iter": 2.5}, "max_iter"),
+    ],
+)
 def test_frictional_solve_refuses_bad_options(solver, facets, kwargs, name):
     model, loads = frictional_block(2)
     problem = cq.FrictionalProblem(model, loads, [FLOOR], mu=0.3, facets=facets)
@@ -132,6 +156,7 @@ def test_frictional_solve_refuses_bad_options(solver, facets, kwargs, name):
 
 # 3. duplicate contacts -----------------------------------------------------------------------
 
+
 def test_a_node_listed_twice_is_refused():
     # was: accepted, W singular, an arbitrary split of the force between the two copies
     model = cq.ReducedModel(flexibility=R)
@@ -140,12 +165,16 @@ def test_a_node_listed_twice_is_refused():
 
 
 def test_two_obstacles_on_one_node_and_direction_are_refused():
-    model = cq.ReducedModel(flexibility=np.kron(np.eye(2), R), dofs_per_node=2,
-                            coordinates=[[0.0, 0.0], [1.0, 0.0]])
-    obstacles = [cq.GapObstacle([1], [1e-3], [0.0, -1.0]),
-                 cq.PlaneObstacle([0.0, -2e-3], [0.0, -2.0], nodes=[1])]  # same direction
-    with pytest.raises(InvalidInputError, match="^node 1 / plane is constrained twice.*"
-                                                "constraints 0 and 1"):
+    model = cq.ReducedModel(
+        flexibility=np.kron(np.eye(2), R), dofs_per_node=2, coordinates=[[0.0, 0.0], [1.0, 0.0]]
+    )
+    obstacles = [
+        cq.GapObstacle([1], [1e-3], [0.0, -1.0]),
+        cq.PlaneObstacle([0.0, -2e-3], [0.0, -2.0], nodes=[1]),
+    ]  # same direction
+    with pytest.raises(
+        InvalidInputError, match="^node 1 / plane is constrained twice.*constraints 0 and 1"
+    ):
         cq.ContactProblem(model, [0.0, -1500.0, 0.0, -500.0], obstacles)
 
 
@@ -168,15 +197,19 @@ def test_a_node_between_two_walls_or_in_a_corner_is_legitimate():
 
 # 4. complex input ----------------------------------------------------------------------------
 
-@pytest.mark.parametrize("build, name", [
-    (lambda: cq.ReducedModel(flexibility=R + 1e-9j), "flexibility"),
-    (lambda: cq.ReducedModel(stiffness=np.linalg.inv(R).astype(complex)), "stiffness"),
-    (lambda: cq.solve_gaps(R, np.array(LOADS) + 0j, GAPS), "loads"),
-    (lambda: cq.solve_gaps(R, [1500.0 + 1j, 500.0], GAPS), "loads"),
-    (lambda: cq.solve_gaps(R, LOADS, [1e-3 + 0j, 1e-3]), "GapObstacle.gaps"),
-    (lambda: cq.solve_gaps(R, LOADS, GAPS, directions=[1.0 + 0j]), "GapObstacle.directions"),
-    (lambda: cq.FrictionalProblem(*frictional_block(2), [FLOOR], mu=0.3 + 0.1j), "mu"),
-])
+
+@pytest.mark.parametrize(
+    "build, name",
+    [
+        (lambda: cq.ReducedModel(flexibility=R + 1e-9j), "flexibility"),
+        (lambda: cq.ReducedModel(stiffness=np.linalg.inv(R).astype(complex)), "stiffness"),
+        (lambda: cq.solve_gaps(R, np.array(LOADS) + 0j, GAPS), "loads"),
+        (lambda: cq.solve_gaps(R, [1500.0 + 1j, 500.0], GAPS), "loads"),
+        (lambda: cq.solve_gaps(R, LOADS, [1e-3 + 0j, 1e-3]), "GapObstacle.gaps"),
+        (lambda: cq.solve_gaps(R, LOADS, GAPS, directions=[1.0 + 0j]), "GapObstacle.directions"),
+        (lambda: cq.FrictionalProblem(*frictional_block(2), [FLOOR], mu=0.3 + 0.1j), "mu"),
+    ],
+)
 def test_complex_input_is_refused(build, name):
     # was: cast to real with a ComplexWarning (an error here), the imaginary part dropped
     with pytest.raises(InvalidInputError, match=f"^{name} must be real, got complex values"):
@@ -184,6 +217,7 @@ def test_complex_input_is_refused(build, name):
 
 
 # 5. a single obstacle ------------------------------------------------------------------------
+
 
 def test_a_single_obstacle_needs_no_list():
     # was: TypeError: 'GapObstacle' object is not iterable
@@ -196,10 +230,13 @@ def test_a_single_obstacle_needs_no_list():
     assert frictional.success and frictional.forces.shape == (2, 3)
 
 
-@pytest.mark.parametrize("obstacles, match", [
-    (42, "^obstacles must be an obstacle or a sequence of obstacles, got int"),
-    ([cq.GapObstacle([0], [1e-3]), "floor"], r"^obstacles\[1\] is a str, not an obstacle"),
-])
+@pytest.mark.parametrize(
+    "obstacles, match",
+    [
+        (42, "^obstacles must be an obstacle or a sequence of obstacles, got int"),
+        ([cq.GapObstacle([0], [1e-3]), "floor"], r"^obstacles\[1\] is a str, not an obstacle"),
+    ],
+)
 def test_something_that_is_not_an_obstacle_is_refused(obstacles, match):
     with pytest.raises(InvalidInputError, match=match):
         cq.ContactProblem(cq.ReducedModel(flexibility=R), LOADS, obstacles)
@@ -207,8 +244,8 @@ def test_something_that_is_not_an_obstacle_is_refused(obstacles, match):
 
 # 6. an iteration cap caps the work ------------------------------------------------------------
 
-@pytest.mark.parametrize("solver, facets", [("coulomb", None), ("tresca", None),
-                                            ("polygonal", 8)])
+
+@pytest.mark.parametrize("solver, facets", [("coulomb", None), ("tresca", None), ("polygonal", 8)])
 @pytest.mark.parametrize("max_iter", [1, 3])
 def test_the_friction_routes_stop_at_max_iter(solver, facets, max_iter):
     # was, for coulomb: max_iter per Newton run, with up to 6 runs and 200 Gauss-Seidel sweeps
@@ -242,8 +279,9 @@ def test_the_active_set_cap_caps_both_phases():
     n = 30
     K = 2e6 * np.eye(n) - 1e6 * (np.eye(n, k=1) + np.eye(n, k=-1))
     model = cq.ReducedModel(stiffness=K)
-    problem = cq.ContactProblem(model, np.linspace(-1.0, 1.0, n) * 1e3,
-                                [cq.GapObstacle(range(n), np.full(n, 1e-5))])
+    problem = cq.ContactProblem(
+        model, np.linspace(-1.0, 1.0, n) * 1e3, [cq.GapObstacle(range(n), np.full(n, 1e-5))]
+    )
     free = cq.solve(problem)
     assert free.success and free.iterations > 2
     capped = cq.solve(problem, max_iter=2)

@@ -11,12 +11,16 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "contactqp"
 
 def modules_matching(pattern: str) -> set[str]:
     """The package's modules (paths from the package root) whose source matches ``pattern``."""
-    return {path.relative_to(PACKAGE).as_posix() for path in PACKAGE.rglob("*.py")
-            if re.search(pattern, path.read_text(encoding="utf-8"))}
+    return {
+        path.relative_to(PACKAGE).as_posix()
+        for path in PACKAGE.rglob("*.py")
+        if re.search(pattern, path.read_text(encoding="utf-8"))
+    }
 
 
-@pytest.mark.parametrize("pattern", [r"\bmatplotlib\b", r"\bsubplots\(", r"\bsave_figure\(",
-                                     r"\.savefig\("])
+@pytest.mark.parametrize(
+    "pattern", [r"\bmatplotlib\b", r"\bsubplots\(", r"\bsave_figure\(", r"\.savefig\("]
+)
 def test_only_io_plot_draws(pattern):
     assert modules_matching(pattern) == {"io/plot.py"}
 

@@ -40,8 +40,10 @@ except ImportError:  # a build without a C compiler: the oracle has nothing to c
     compiled = None
 
 needs_compiled = pytest.mark.skipif(compiled is None, reason="compiled kernels not built")
-IMPLEMENTATIONS = [pytest.param(compiled, id="compiled", marks=needs_compiled),
-                   pytest.param(pure_numpy, id="pure_numpy")]
+IMPLEMENTATIONS = [
+    pytest.param(compiled, id="compiled", marks=needs_compiled),
+    pytest.param(pure_numpy, id="pure_numpy"),
+]
 RTOL = 1e-12
 
 
@@ -83,8 +85,9 @@ def test_natural_map_rows_agree(seed, n, d):
     R, U, mu, _ = random_rows(seed, n, d)
     expected, actual = np.empty(n), np.empty(n)
     total = compiled.natural_map_rows(R, U, mu, expected)
-    assert pure_numpy.natural_map_rows(R, U, mu, actual) == pytest.approx(total, rel=RTOL,
-                                                                          abs=1e-300)
+    assert pure_numpy.natural_map_rows(R, U, mu, actual) == pytest.approx(
+        total, rel=RTOL, abs=1e-300
+    )
     close(actual, expected)
 
 
@@ -133,17 +136,33 @@ def assembled(kernel, newton, A, B, kept):
     data = np.empty(newton.csc_indices.size)
     indices = np.empty_like(newton.csc_indices)
     indptr = np.empty(n + 1, dtype=np.int64)
-    count = kernel.sparse_newton_matrix(A, B, newton.W_blocks, newton.block_row,
-                                        newton.block_col, newton.csc_entries, newton.csc_indptr,
-                                        newton.csc_indices, renumber, data, indices, indptr)
+    count = kernel.sparse_newton_matrix(
+        A,
+        B,
+        newton.W_blocks,
+        newton.block_row,
+        newton.block_col,
+        newton.csc_entries,
+        newton.csc_indptr,
+        newton.csc_indices,
+        renumber,
+        data,
+        indices,
+        indptr,
+    )
     assert indptr[0] == 0 and indptr[-1] == count and np.all(np.diff(indptr) >= 0)
     return sp.csc_matrix((data[:count], indices[:count], indptr), shape=(n, n)).toarray()
 
 
 @needs_compiled
 @settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), nc=st.integers(1, 12), d=st.sampled_from([2, 3]),
-       density=st.sampled_from([0.0, 0.3, 1.0]), kept_share=st.sampled_from([0.0, 0.5, 1.0]))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    nc=st.integers(1, 12),
+    d=st.sampled_from([2, 3]),
+    density=st.sampled_from([0.0, 0.3, 1.0]),
+    kept_share=st.sampled_from([0.0, 0.5, 1.0]),
+)
 def test_sparse_newton_matrices_agree(seed, nc, d, density, kept_share):
     newton, rng = newton_structure(seed, nc, d, density)
     R, U, mu, rho = random_rows(seed, nc, d)
@@ -160,8 +179,15 @@ def test_rows_the_buffers_cannot_hold_are_refused(kernel):
     with pytest.raises(ValueError, match="2 or 3 components"):
         kernel.natural_map_rows(np.zeros((2, 4)), np.zeros((2, 4)), np.zeros(2), np.zeros(2))
     with pytest.raises(ValueError, match="2 or 3 components"):
-        kernel.alart_curnier_rows(np.zeros((2, 1)), np.zeros((2, 1)), np.zeros(2), np.ones(2),
-                                  np.zeros((2, 1)), np.zeros((2, 1, 1)), np.zeros((2, 1, 1)))
+        kernel.alart_curnier_rows(
+            np.zeros((2, 1)),
+            np.zeros((2, 1)),
+            np.zeros(2),
+            np.ones(2),
+            np.zeros((2, 1)),
+            np.zeros((2, 1, 1)),
+            np.zeros((2, 1, 1)),
+        )
 
 
 @pytest.fixture(params=IMPLEMENTATIONS)
@@ -191,15 +217,15 @@ def test_solver_answers_do_not_depend_on_the_kernels(kernels_of, monkeypatch, di
     problem = random_problem(12, dim, seed=3, sparse=sparse)
     solution = solve_coulomb(problem, tol=1e-12)
     assert solution.success and set(solution.status_labels) == {"open", "stick", "slip"}
-    dense = LocalProblem(problem.W.toarray() if sparse else problem.W, problem.q, problem.mu,
-                         dim)
+    dense = LocalProblem(problem.W.toarray() if sparse else problem.W, problem.q, problem.mu, dim)
     # the reference: measured by numpy alone, whatever the kernels
     monkeypatch.setattr(contactqp.kernels, "natural_map_rows", pure_numpy.natural_map_rows)
     assert natural_map_error(dense, solution.forces) <= 1e-11
 
 
-@pytest.mark.parametrize("name", ["Capsules-i97-269.hdf5",
-                                  "fc2d_granularflowonwall_02020_00213.dat"])
+@pytest.mark.parametrize(
+    "name", ["Capsules-i97-269.hdf5", "fc2d_granularflowonwall_02020_00213.dat"]
+)
 def test_fclib_files_are_solved_with_either_kernels(kernels_of, name):
     from contactqp.io import read_problem
 
@@ -214,8 +240,9 @@ def test_fclib_files_are_solved_with_either_kernels(kernels_of, name):
 
 def python(code, **environment):
     env = {**os.environ, **environment}
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          cwd=ROOT, env=env, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env, timeout=120
+    )
 
 
 SOLVE_ONE_CONTACT = """
@@ -229,14 +256,17 @@ np.testing.assert_allclose(solution.forces, [1.0, -0.3, 0.0], atol=1e-12)
 
 
 def test_the_variable_forces_pure_numpy_without_a_warning():
-    code = ("import warnings; warnings.simplefilter('error')\n"
-            "import contactqp, contactqp.kernels as k\n"
-            "assert k.IMPLEMENTATION == 'pure_numpy', k.IMPLEMENTATION\n" + SOLVE_ONE_CONTACT)
+    code = (
+        "import warnings; warnings.simplefilter('error')\n"
+        "import contactqp, contactqp.kernels as k\n"
+        "assert k.IMPLEMENTATION == 'pure_numpy', k.IMPLEMENTATION\n" + SOLVE_ONE_CONTACT
+    )
     proc = python(code, CONTACTQP_PURE_NUMPY="1")
     assert proc.returncode == 0, proc.stderr
     expected = "pure_numpy" if compiled is None else "compiled"
-    proc = python("import contactqp.kernels as k; print(k.IMPLEMENTATION)",
-                  CONTACTQP_PURE_NUMPY="0")
+    proc = python(
+        "import contactqp.kernels as k; print(k.IMPLEMENTATION)", CONTACTQP_PURE_NUMPY="0"
+    )
     assert proc.returncode == 0 and proc.stdout.strip() == expected, proc.stderr
 
 
@@ -254,34 +284,56 @@ sys.meta_path.insert(0, NoCompiledKernels())
 
 def test_an_absent_extension_falls_back_with_one_warning():
     # the warning is recorded from the first import to the end of a solve: one, not one a call
-    code = WITHOUT_EXTENSION + """
+    code = (
+        WITHOUT_EXTENSION
+        + """
 import warnings
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always")
     import contactqp
     import contactqp.kernels as k
     from contactqp.errors import PureNumpyKernelsWarning
-""" + textwrap.indent(SOLVE_ONE_CONTACT, "    ") + """
+"""
+        + textwrap.indent(SOLVE_ONE_CONTACT, "    ")
+        + """
 said = [w for w in caught if issubclass(w.category, PureNumpyKernelsWarning)]
 assert len(said) == 1, [str(w.message) for w in caught]
 assert "pure-numpy" in str(said[0].message)
 assert k.IMPLEMENTATION == "pure_numpy"
 """
+    )
     proc = python(code, CONTACTQP_PURE_NUMPY="")  # not asked for: chosen, and said
     assert proc.returncode == 0, proc.stderr
 
 
 #: Solver tests run again, in a process whose kernels are the pure-numpy ones.
 SOLVER_TESTS = ["tests/test_coulomb.py", "tests/test_fclib_io.py"]
-SELECTION = ("closed_forms or newton_agrees or dense_and_sparse or jacobian_matches or "
-             "gauss_seidel_rounds or non_convergence or projection or natural_map")
+SELECTION = (
+    "closed_forms or newton_agrees or dense_and_sparse or jacobian_matches or "
+    "gauss_seidel_rounds or non_convergence or projection or natural_map"
+)
 
 
 @needs_compiled
 def test_solver_tests_pass_on_pure_numpy_kernels():
     proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-x", *SOLVER_TESTS,
-         "-k", SELECTION], capture_output=True, text=True, cwd=ROOT, timeout=600,
-        env={**os.environ, "CONTACTQP_PURE_NUMPY": "1"})
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "-x",
+            *SOLVER_TESTS,
+            "-k",
+            SELECTION,
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=600,
+        env={**os.environ, "CONTACTQP_PURE_NUMPY": "1"},
+    )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
     assert " passed" in proc.stdout and " failed" not in proc.stdout

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import contactqp as cq
-from contactqp.core.history import MAX_STEPS
 from contactqp.applications.springs import SpringChain
+from contactqp.core.history import MAX_STEPS
 
 EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "examples" / "cyclic_shear.py"
 
@@ -91,8 +91,9 @@ def test_state_is_carried_over(example):
     history = cq.solve_history(problem, loads)
     assert history.success
     np.testing.assert_allclose(history.displacements[-1, 0], 7.0 - 4.0, atol=1e-10)
-    np.testing.assert_allclose(cq.solve(problem.with_loads(loads[-1])).displacements[0], 0.0,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        cq.solve(problem.with_loads(loads[-1])).displacements[0], 0.0, atol=1e-12
+    )
     np.testing.assert_allclose(history.slip[:, 0, 0], [0.0, 0.0, 3.0, 0.0, 0.0], atol=1e-9)
     assert history.contact_status[:, 0].tolist() == [1, 1, 2, 1, 1]
 
@@ -101,10 +102,10 @@ def coupled_history(solver, cycles=1, steps=12):
     rng = np.random.default_rng(7)
     B = rng.normal(size=(8, 8))
     R = B @ B.T / 8 + np.eye(8)
-    model = cq.ReducedModel(flexibility=R, dofs_per_node=2,
-                            coordinates=np.column_stack([np.arange(4.0), np.zeros(4)]))
-    problem = cq.FrictionalProblem(model, np.zeros(8), [cq.PlaneObstacle([0, 0], [0, -1])],
-                                   mu=0.25)
+    model = cq.ReducedModel(
+        flexibility=R, dofs_per_node=2, coordinates=np.column_stack([np.arange(4.0), np.zeros(4)])
+    )
+    problem = cq.FrictionalProblem(model, np.zeros(8), [cq.PlaneObstacle([0, 0], [0, -1])], mu=0.25)
     points = np.zeros((2 + 2 * cycles, 8))
     points[:, 1::2] = -3.0
     points[1:, 0::2] = np.array([1.0] + [-1.0, 1.0] * cycles)[:, None] * [2.0, 1.0, -0.5, 1.5]
@@ -130,8 +131,9 @@ def test_polygonal_cone_changes_the_loop_by_its_inradius():
     # one 3-D contact sheared along the first tangent, across a side of the polygon: the
     # friction limit is mu N cos(pi / F), the loop shrinks accordingly
     k, mu, N, q_max, facets = 2.0, 0.4, 10.0, 8.0, 6
-    model = cq.ReducedModel(stiffness=np.diag([k, k, 3.0]), dofs_per_node=3,
-                            coordinates=[[0.0, 0.0, 0.0]])
+    model = cq.ReducedModel(
+        stiffness=np.diag([k, k, 3.0]), dofs_per_node=3, coordinates=[[0.0, 0.0, 0.0]]
+    )
     points = [[0, 0, -N], [q_max, 0, -N], [-q_max, 0, -N], [q_max, 0, -N]]
     loads = cq.linear_path(points, 8)
     floor = cq.PlaneObstacle([0, 0, 0], [0, 0, -1])
@@ -139,8 +141,9 @@ def test_polygonal_cone_changes_the_loop_by_its_inradius():
         problem = cq.FrictionalProblem(model, np.zeros(3), [floor], mu=mu, facets=sides)
         history = cq.solve_history(problem, loads)
         assert history.success
-        np.testing.assert_allclose(history.dissipated[9:].sum(), 4 * limit * (q_max - limit) / k,
-                                   rtol=1e-7)
+        np.testing.assert_allclose(
+            history.dissipated[9:].sum(), 4 * limit * (q_max - limit) / k, rtol=1e-7
+        )
 
 
 def test_bad_histories_are_clear_errors(example):
@@ -150,8 +153,9 @@ def test_bad_histories_are_clear_errors(example):
     with pytest.raises(cq.InvalidInputError, match="NaN"):
         cq.solve_history(problem, np.full((2, 4), np.nan))
     with pytest.raises(cq.InvalidInputError, match="FrictionalProblem"):
-        frictionless = cq.ContactProblem(problem.model, np.zeros(4),
-                                         [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0])])
+        frictionless = cq.ContactProblem(
+            problem.model, np.zeros(4), [cq.PlaneObstacle([0.0, 0.0], [0.0, -1.0])]
+        )
         cq.solve_history(frictionless, np.zeros((1, 4)))
     for steps in (0, None, 2.0, [2]):  # None and [2] used to raise TypeError from int()
         with pytest.raises(cq.InvalidInputError, match="steps"):
@@ -166,13 +170,16 @@ def test_a_path_of_more_steps_than_the_cap_is_refused_before_it_is_built():
         cq.linear_path(np.zeros((3, 2)), 4, max_steps=7)
     assert cq.linear_path(np.zeros((3, 2)), 3, max_steps=7).shape == (7, 2)
     assert cq.linear_path(np.zeros((2, 1)), 2 * MAX_STEPS, max_steps=None).shape == (
-        2 * MAX_STEPS + 1, 1)
+        2 * MAX_STEPS + 1,
+        1,
+    )
 
 
 def test_progress_is_reported_after_every_step(example):
     problem = example.chain_problem(2, 1.0, 0.2)
     loads = cq.linear_path([[0.0, -20.0, 0.0, -20.0], [7.0, -20.0, 7.0, -20.0]], 4)
     calls = []
-    history = cq.solve_history(problem, loads,
-                               progress=lambda done, total: calls.append((done, total)))
+    history = cq.solve_history(
+        problem, loads, progress=lambda done, total: calls.append((done, total))
+    )
     assert history.success and calls == [(k, 5) for k in range(1, 6)]

@@ -25,13 +25,16 @@ def test_unit_load_reports_lack_of_reciprocity():
     assert cq.unit_load_compliance(lambda P: M @ P, 2).reciprocity_error == pytest.approx(0.05)
 
 
-@pytest.mark.parametrize("matrix, message", [
-    (np.ones((2, 3)), "square"),
-    (np.array([[1.0, np.nan], [np.nan, 1.0]]), "NaN"),
-    (np.array([[1.0, 0.5], [0.0, 1.0]]), "not symmetric"),
-    (np.zeros((2, 2)), "singular"),
-    (np.array([[1.0, 1.0], [1.0, 1.0 + 1e-16]]), "singular|positive definite"),
-])
+@pytest.mark.parametrize(
+    "matrix, message",
+    [
+        (np.ones((2, 3)), "square"),
+        (np.array([[1.0, np.nan], [np.nan, 1.0]]), "NaN"),
+        (np.array([[1.0, 0.5], [0.0, 1.0]]), "not symmetric"),
+        (np.zeros((2, 2)), "singular"),
+        (np.array([[1.0, 1.0], [1.0, 1.0 + 1e-16]]), "singular|positive definite"),
+    ],
+)
 def test_bad_matrices_are_named(matrix, message):
     with pytest.raises(cq.InvalidInputError, match=message) as info:
         cq.ReducedModel(flexibility=matrix)

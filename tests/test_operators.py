@@ -22,7 +22,8 @@ class GramOperator(Operator):
         super().__init__((A.shape[0], A.shape[0]))
         self.A, self.c = A, c
         self.linear = aslinearoperator(A) @ aslinearoperator(A.T) + c * aslinearoperator(
-            sp.identity(A.shape[0]))
+            sp.identity(A.shape[0])
+        )
         self.blocks_formed = 0
 
     def __matmul__(self, x):

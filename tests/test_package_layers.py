@@ -15,10 +15,14 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "contactqp"
 
 #: Layer of each top-level part of the package; a module may import its own layer and below.
 LAYERS = {
-    "errors": 0, "optional": 0, "kernels": 0,
+    "errors": 0,
+    "optional": 0,
+    "kernels": 0,
     "core": 1,
-    "methods": 2, "compliance": 2,
-    "io": 3, "studies": 3,
+    "methods": 2,
+    "compliance": 2,
+    "io": 3,
+    "studies": 3,
     "applications": 4,
     "cli": 5,
 }
@@ -52,13 +56,15 @@ def _imports(name: str, path: Path) -> set[str]:
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
-                base = base[:len(base) - node.level + 1]
+                base = base[: len(base) - node.level + 1]
                 module = ".".join(base + ([node.module] if node.module else []))
             else:
                 module = node.module or ""
             # `from . import kernels` imports the module contactqp.kernels
-            targets = [f"{module}.{alias.name}" if f"{module}.{alias.name}" in MODULES else module
-                       for alias in node.names]
+            targets = [
+                f"{module}.{alias.name}" if f"{module}.{alias.name}" in MODULES else module
+                for alias in node.names
+            ]
         else:
             continue
         found.update(target for target in targets if target.split(".")[0] == "contactqp")
@@ -86,10 +92,13 @@ def test_the_facade_is_imported_by_nothing_inside_the_package():
 
 
 def test_no_import_runs_from_a_lower_layer_upwards():
-    upward = [f"{name} (layer {_layer(name)}) imports {target} (layer {_layer(target)})"
-              for name, targets in sorted(GRAPH.items()) if _layer(name) is not None
-              for target in sorted(targets)
-              if _layer(target) is not None and _layer(target) > _layer(name)]
+    upward = [
+        f"{name} (layer {_layer(name)}) imports {target} (layer {_layer(target)})"
+        for name, targets in sorted(GRAPH.items())
+        if _layer(name) is not None
+        for target in sorted(targets)
+        if _layer(target) is not None and _layer(target) > _layer(name)
+    ]
     assert not upward, "imports from a lower layer into a higher one:\n" + "\n".join(upward)
 
 
@@ -103,7 +112,7 @@ def _circle() -> list[str] | None:
         path.append(name)
         for target in sorted(GRAPH.get(name, ())):
             if state.get(target) == 1:
-                return path[path.index(target):] + [target]
+                return path[path.index(target) :] + [target]
             if target not in state and (found := visit(target)):
                 return found
         state[name] = 2
@@ -121,10 +130,13 @@ def test_no_import_circle():
     assert circle is None, "import circle: " + " -> ".join(circle)
 
 
-@pytest.mark.parametrize("source, circle", [
-    ({"a": {"b"}, "b": {"c"}, "c": {"a"}}, ["a", "b", "c", "a"]),
-    ({"a": {"b"}, "b": set(), "c": {"b"}}, None),
-])
+@pytest.mark.parametrize(
+    "source, circle",
+    [
+        ({"a": {"b"}, "b": {"c"}, "c": {"a"}}, ["a", "b", "c", "a"]),
+        ({"a": {"b"}, "b": set(), "c": {"b"}}, None),
+    ],
+)
 def test_the_circle_search_finds_circles(monkeypatch, source, circle):
     monkeypatch.setattr(f"{__name__}.GRAPH", source)
     assert _circle() == circle
@@ -132,8 +144,10 @@ def test_the_circle_search_finds_circles(monkeypatch, source, circle):
 
 def test_the_import_reader_sees_lazy_and_relative_imports(tmp_path):
     module = tmp_path / "m.py"
-    module.write_text("from ..errors import InvalidInputError\n"
-                      "def f():\n    from ..methods import registry\n    from .. import kernels\n")
+    module.write_text(
+        "from ..errors import InvalidInputError\n"
+        "def f():\n    from ..methods import registry\n    from .. import kernels\n"
+    )
     found = _imports("contactqp.core.m", module)
     assert {"contactqp.errors", "contactqp.kernels"} <= found
     assert any(name.startswith("contactqp.methods") for name in found)

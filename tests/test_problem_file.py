@@ -25,7 +25,6 @@ import scipy.sparse
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from contactqp.core.status import ContactStatus
 from contactqp import (
     ContactProblem,
     FileFormatError,
@@ -37,9 +36,10 @@ from contactqp import (
     ReducedModel,
     solve,
 )
-from contactqp.errors import SymmetrizedWarning
 from contactqp.core.history import HistoryResult
 from contactqp.core.result import FrictionalResult
+from contactqp.core.status import ContactStatus
+from contactqp.errors import SymmetrizedWarning
 from contactqp.io.problem_file import (
     HISTORY_FILES,
     RESULT_FILES,
@@ -68,8 +68,9 @@ def write_matrix(directory: Path, stem: str, matrix, fmt: str) -> str:
         np.savetxt(directory / name, matrix, delimiter=",", fmt="%.17g")
     elif fmt == "csv-spaces":
         name = f"{stem}.txt"
-        np.savetxt(directory / name, matrix, delimiter=" ", fmt="%.17g",
-                   header="whitespace separated")
+        np.savetxt(
+            directory / name, matrix, delimiter=" ", fmt="%.17g", header="whitespace separated"
+        )
     elif fmt == "npz":
         name = f"{stem}.npz"
         np.savez(directory / name, matrix)
@@ -81,8 +82,12 @@ def write_matrix(directory: Path, stem: str, matrix, fmt: str) -> str:
         scipy.io.mmwrite(str(directory / name), matrix, precision=17)
     elif fmt == "mtx-sparse":
         name = f"{stem}.mtx"
-        scipy.io.mmwrite(str(directory / name), scipy.sparse.coo_matrix(matrix), precision=17,
-                         symmetry="symmetric")
+        scipy.io.mmwrite(
+            str(directory / name),
+            scipy.sparse.coo_matrix(matrix),
+            precision=17,
+            symmetry="symmetric",
+        )
     else:  # pragma: no cover
         raise AssertionError(fmt)
     return name
@@ -112,7 +117,9 @@ def test_single_node_against_closed_form(tmp_path, fmt, gap):
     # U = min(r P, g), contact force F = max(P - g / r, 0).
     r, P = 2e-6, 1000.0
     name = write_matrix(tmp_path, "R", [[r]], fmt)
-    path = write_toml(tmp_path, f"""
+    path = write_toml(
+        tmp_path,
+        f"""
 [model]
 flexibility = "{name}"
 [loads]
@@ -121,7 +128,8 @@ values = [{P}]
 type = "gaps"
 nodes = [0]
 gaps = [{gap}]
-""")
+""",
+    )
     spec = load_problem_file(path)
     result = spec.solve()
     assert result.success
@@ -131,8 +139,7 @@ gaps = [{gap}]
     assert bool(result.contact_status[0] == ContactStatus.CLOSED) == (r * P > gap)
 
     # The same problem built in Python gives the same answer.
-    direct = solve(ContactProblem(ReducedModel(flexibility=[[r]]), [P],
-                                  [GapObstacle([0], [gap])]))
+    direct = solve(ContactProblem(ReducedModel(flexibility=[[r]]), [P], [GapObstacle([0], [gap])]))
     np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
     np.testing.assert_allclose(result.forces, direct.forces, rtol=1e-14, atol=1e-12)
 
@@ -145,7 +152,9 @@ def test_two_node_coupled_problem_by_hand(tmp_path, fmt):
     # u1 = 1e-6 (1000 - 400) + 2e-6 (-200) = 0.2 mm < 1 mm (open), F0 > 0: the guess holds.
     R = np.array([[2e-6, 1e-6], [1e-6, 2e-6]])
     name = write_matrix(tmp_path, "R", R, fmt)
-    path = write_toml(tmp_path, f"""
+    path = write_toml(
+        tmp_path,
+        f"""
 name = "coupled pair"
 [model]
 flexibility = "{name}"
@@ -156,7 +165,8 @@ type = "gaps"
 nodes = [0, 1]
 gaps = [1e-3, 1e-3]
 directions = [[1.0], [1.0]]
-""")
+""",
+    )
     spec = load_problem_file(path)
     assert spec.name == "coupled pair"
     result = spec.solve()
@@ -166,8 +176,11 @@ directions = [[1.0], [1.0]]
     assert result.status_labels == ["closed", "open"]
     np.testing.assert_allclose(result.gaps, [0.0, 8e-4], atol=1e-15)
 
-    direct = solve(ContactProblem(ReducedModel(flexibility=R), [1000.0, -200.0],
-                                  [GapObstacle([0, 1], [1e-3, 1e-3])]))
+    direct = solve(
+        ContactProblem(
+            ReducedModel(flexibility=R), [1000.0, -200.0], [GapObstacle([0, 1], [1e-3, 1e-3])]
+        )
+    )
     np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
 
 
@@ -177,7 +190,9 @@ def test_stiffness_from_npz_key_and_qp_solver(tmp_path):
     R = np.array([[2e-6, 1e-6], [1e-6, 2e-6]])
     np.savez(tmp_path / "model.npz", K=np.linalg.inv(R), R=R)
     np.savetxt(tmp_path / "P.csv", [[1000.0], [-200.0]])
-    path = write_toml(tmp_path, """
+    path = write_toml(
+        tmp_path,
+        """
 [model]
 stiffness = { file = "model.npz", key = "K" }
 [loads]
@@ -192,7 +207,8 @@ backend = "clarabel"
 certificate_tol = 1e-6
 [solver.backend_options]
 max_iter = 300
-""")
+""",
+    )
     spec = load_problem_file(path)
     assert spec.solver == "qp"
     assert spec.options == {"backend": "clarabel", "max_iter": 300}
@@ -209,7 +225,9 @@ def test_node_pairs_by_hand(tmp_path):
     # initial gap g = 0.5 mm. Closed pair: ra (P - F) - rb F = g -> F = (ra P - g)/(ra + rb)
     # = 125 N, u0 = ra (P - F) = 0.875 mm, u1 = rb F = 0.375 mm.
     np.savetxt(tmp_path / "R.csv", np.diag([1e-6, 3e-6]), delimiter=",")
-    path = write_toml(tmp_path, """
+    path = write_toml(
+        tmp_path,
+        """
 [model]
 flexibility = "R.csv"
 [loads]
@@ -219,13 +237,19 @@ type = "pairs"
 pairs = [[0, 1]]
 gaps = [0.5e-3]
 direction = [1.0]
-""")
+""",
+    )
     result = load_problem_file(path).solve()
     assert result.success
     np.testing.assert_allclose(result.forces, [125.0], rtol=RTOL)
     np.testing.assert_allclose(result.displacements, [0.875e-3, 0.375e-3], rtol=RTOL)
-    direct = solve(ContactProblem(ReducedModel(flexibility=np.diag([1e-6, 3e-6])),
-                                  [1000.0, 0.0], [NodePairs([[0, 1]], [0.5e-3])]))
+    direct = solve(
+        ContactProblem(
+            ReducedModel(flexibility=np.diag([1e-6, 3e-6])),
+            [1000.0, 0.0],
+            [NodePairs([[0, 1]], [0.5e-3])],
+        )
+    )
     np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
 
 
@@ -236,7 +260,9 @@ def test_plane_obstacle_by_hand(tmp_path):
     # -> F = 200 N; u_x = R_xy (-300 + 200) = -0.05 mm.
     R = np.array([[2e-6, 0.5e-6], [0.5e-6, 1e-6]])
     scipy.io.mmwrite(str(tmp_path / "R.mtx"), R, precision=17)
-    path = write_toml(tmp_path, """
+    path = write_toml(
+        tmp_path,
+        """
 [model]
 flexibility = "R.mtx"
 dofs_per_node = 2
@@ -247,14 +273,19 @@ values = [0.0, -300.0]
 type = "plane"
 point = [0.0, -1e-4]
 normal = [0.0, -1.0]
-""")
+""",
+    )
     result = load_problem_file(path).solve()
     assert result.success
     np.testing.assert_allclose(result.forces, [200.0], rtol=RTOL)
     np.testing.assert_allclose(result.displacements, [-0.05e-3, -0.1e-3], rtol=RTOL)
-    direct = solve(ContactProblem(ReducedModel(flexibility=R, dofs_per_node=2,
-                                               coordinates=[[0.0, 0.0]]),
-                                  [0.0, -300.0], [PlaneObstacle([0.0, -1e-4], [0.0, -1.0])]))
+    direct = solve(
+        ContactProblem(
+            ReducedModel(flexibility=R, dofs_per_node=2, coordinates=[[0.0, 0.0]]),
+            [0.0, -300.0],
+            [PlaneObstacle([0.0, -1e-4], [0.0, -1.0])],
+        )
+    )
     np.testing.assert_allclose(result.displacements, direct.displacements, rtol=1e-14)
 
 
@@ -269,20 +300,27 @@ def test_example_two_springs_matches_its_derivation():
     np.testing.assert_allclose(result.gaps, [0.0, 0.0], atol=1e-15)
     assert result.status_labels == ["closed", "closed"]
     # Springs: k1 = 2e6 N/m, k2 = 1e6 N/m, so R = [[1/k1, 1/k1], [1/k1, 1/k1 + 1/k2]].
-    np.testing.assert_allclose(spec.problem.model.flexibility,
-                               [[5e-7, 5e-7], [5e-7, 1.5e-6]], rtol=1e-15)
+    np.testing.assert_allclose(
+        spec.problem.model.flexibility, [[5e-7, 5e-7], [5e-7, 1.5e-6]], rtol=1e-15
+    )
 
 
 @settings(max_examples=30, deadline=None)
-@given(r=st.floats(1e-9, 1e-3), P=st.floats(-1e4, 1e4), gap=st.floats(1e-6, 1e-2),
-       interference=st.booleans())
+@given(
+    r=st.floats(1e-9, 1e-3),
+    P=st.floats(-1e4, 1e4),
+    gap=st.floats(1e-6, 1e-2),
+    interference=st.booleans(),
+)
 def test_single_node_property(r, P, gap, interference):
     # Inline matrix, any r > 0, load of either sign, gap of either sign (negative: interference):
     # U = min(r P, g), F = max(P - g / r, 0). A gap of exactly zero has its own test
     # below.
     gap = -gap if interference else gap
     with tempfile.TemporaryDirectory() as directory:
-        path = write_toml(Path(directory), f"""
+        path = write_toml(
+            Path(directory),
+            f"""
 [model]
 flexibility = [[{r!r}]]
 [loads]
@@ -291,20 +329,25 @@ values = [{P!r}]
 type = "gaps"
 nodes = [0]
 gaps = [{gap!r}]
-""")
+""",
+        )
         result = load_problem_file(path).solve()
     assert result.success
     scale_u = max(abs(r * P), abs(gap))
     scale_f = max(abs(P), abs(gap) / r)
-    np.testing.assert_allclose(result.displacements, [min(r * P, gap)], rtol=1e-9,
-                               atol=1e-12 * scale_u)
-    np.testing.assert_allclose(result.forces, [max(P - gap / r, 0.0)], rtol=1e-9,
-                               atol=1e-9 * scale_f)
+    np.testing.assert_allclose(
+        result.displacements, [min(r * P, gap)], rtol=1e-9, atol=1e-12 * scale_u
+    )
+    np.testing.assert_allclose(
+        result.forces, [max(P - gap / r, 0.0)], rtol=1e-9, atol=1e-9 * scale_f
+    )
 
 
 def test_zero_gap_closed_contact_is_certified(tmp_path):
     # U = min(r P, 0) = 0, F = P: a perfectly ordinary answer that the solver finds.
-    path = write_toml(tmp_path, """
+    path = write_toml(
+        tmp_path,
+        """
 [model]
 flexibility = [[5.8196301223351394e-05]]
 [loads]
@@ -313,7 +356,8 @@ values = [1.0]
 type = "gaps"
 nodes = [0]
 gaps = [0.0]
-""")
+""",
+    )
     result = load_problem_file(path).solve()
     assert result.success, result.message
     np.testing.assert_allclose(result.forces, [1.0], rtol=RTOL)
@@ -352,111 +396,213 @@ SPD = "2,1\n1,2\n"
 
 CASES = {
     "missing matrix file": (
-        GOOD, {}, FileFormatError,
-        ["problem.toml: [model].flexibility: file 'R.csv' not found"]),
+        GOOD,
+        {},
+        FileFormatError,
+        ["problem.toml: [model].flexibility: file 'R.csv' not found"],
+    ),
     "malformed TOML": (
-        "[model\nflexibility = 'R.csv'\n", {"R.csv": SPD}, FileFormatError,
-        ["problem.toml: malformed TOML"]),
+        "[model\nflexibility = 'R.csv'\n",
+        {"R.csv": SPD},
+        FileFormatError,
+        ["problem.toml: malformed TOML"],
+    ),
     "unknown top-level key": (
-        GOOD + "\n[solvr]\nname = 'qp'\n", {"R.csv": SPD}, InvalidInputError,
-        ["top level: unknown key 'solvr'", "did you mean 'solver'"]),
+        GOOD + "\n[solvr]\nname = 'qp'\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["top level: unknown key 'solvr'", "did you mean 'solver'"],
+    ),
     "unknown model key": (
-        GOOD.replace("flexibility =", "flexibilty ="), {"R.csv": SPD}, InvalidInputError,
-        ["[model]: unknown key 'flexibilty'"]),
+        GOOD.replace("flexibility =", "flexibilty ="),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[model]: unknown key 'flexibilty'"],
+    ),
     "unknown obstacle key": (
-        GOOD.replace("gaps = [0.1, 0.2]", "gap = [0.1, 0.2]"), {"R.csv": SPD},
-        InvalidInputError, ["[[obstacle]] #1: unknown key 'gap'"]),
+        GOOD.replace("gaps = [0.1, 0.2]", "gap = [0.1, 0.2]"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1: unknown key 'gap'"],
+    ),
     "unknown solver option": (
-        GOOD + "\n[solver]\nmax_iters = 10\n", {"R.csv": SPD}, InvalidInputError,
-        ["[solver].max_iters: not an option of solver 'active-set'", "did you mean 'max_iter'"]),
+        GOOD + "\n[solver]\nmax_iters = 10\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[solver].max_iters: not an option of solver 'active-set'", "did you mean 'max_iter'"],
+    ),
     "unknown loads entry key": (
         BASE_MODEL + "[loads]\nentries = [{ freedom = 0, valeu = 1.0 }]\n" + BASE_OBSTACLE,
-        {"R.csv": SPD}, InvalidInputError, ["[loads].entries #1: unknown key 'valeu'"]),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[loads].entries #1: unknown key 'valeu'"],
+    ),
     "wrong loads length": (
         BASE_MODEL + "[loads]\nvalues = [1.0, 2.0, 3.0, 4.0]\n" + BASE_OBSTACLE,
-        {"R.csv": SPD}, InvalidInputError,
-        ["[loads].values has 4 entries, the model has 2 freedoms"]),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[loads].values has 4 entries, the model has 2 freedoms"],
+    ),
     "unknown obstacle type": (
-        GOOD + "\n[[obstacle]]\ntype = 'sphere'\n", {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]] #2: unknown type 'sphere' (expected gaps, plane or pairs)"]),
+        GOOD + "\n[[obstacle]]\ntype = 'sphere'\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #2: unknown type 'sphere' (expected gaps, plane or pairs)"],
+    ),
     "profile in a file": (
-        GOOD.replace("type = \"gaps\"", "type = \"profile\""), {"R.csv": SPD},
-        InvalidInputError, ["[[obstacle]] #1: type 'profile' cannot be given in a file"]),
+        GOOD.replace('type = "gaps"', 'type = "profile"'),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1: type 'profile' cannot be given in a file"],
+    ),
     "NaN in matrix file": (
-        GOOD, {"R.csv": "2,1\n1,nan\n"}, InvalidInputError,
-        ["[model].flexibility ('R.csv'): contains NaN or inf (first at index [1, 1]"]),
+        GOOD,
+        {"R.csv": "2,1\n1,nan\n"},
+        InvalidInputError,
+        ["[model].flexibility ('R.csv'): contains NaN or inf (first at index [1, 1]"],
+    ),
     "not positive definite": (
-        GOOD, {"R.csv": "1,2\n2,1\n"}, NotPositiveDefiniteError,
-        ["[model].flexibility ('R.csv'):", "not positive definite"]),
+        GOOD,
+        {"R.csv": "1,2\n2,1\n"},
+        NotPositiveDefiniteError,
+        ["[model].flexibility ('R.csv'):", "not positive definite"],
+    ),
     "not a table of numbers": (
-        GOOD, {"R.csv": "a,b\n1,2\n"}, FileFormatError,
-        ["[model].flexibility ('R.csv'): not a table of numbers"]),
+        GOOD,
+        {"R.csv": "a,b\n1,2\n"},
+        FileFormatError,
+        ["[model].flexibility ('R.csv'): not a table of numbers"],
+    ),
     "not square": (
-        GOOD, {"R.csv": "1,2,3\n4,5,6\n"}, InvalidInputError,
-        ["[model].flexibility ('R.csv'): must be a non-empty square matrix"]),
+        GOOD,
+        {"R.csv": "1,2,3\n4,5,6\n"},
+        InvalidInputError,
+        ["[model].flexibility ('R.csv'): must be a non-empty square matrix"],
+    ),
     "unknown file extension": (
-        GOOD.replace("R.csv", "R.xlsx"), {"R.xlsx": SPD}, FileFormatError,
-        ["[model].flexibility ('R.xlsx'): cannot tell the format"]),
+        GOOD.replace("R.csv", "R.xlsx"),
+        {"R.xlsx": SPD},
+        FileFormatError,
+        ["[model].flexibility ('R.xlsx'): cannot tell the format"],
+    ),
     "both matrices": (
-        GOOD.replace("[model]\n", "[model]\nstiffness = 'R.csv'\n"), {"R.csv": SPD},
-        InvalidInputError, ["[model]: give exactly one of flexibility and stiffness (both"]),
+        GOOD.replace("[model]\n", "[model]\nstiffness = 'R.csv'\n"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[model]: give exactly one of flexibility and stiffness (both"],
+    ),
     "dofs_per_node mismatch": (
-        GOOD.replace("[model]\n", "[model]\ndofs_per_node = [1, 2]\n"), {"R.csv": SPD},
-        InvalidInputError, ["[model].dofs_per_node: sums to 3 freedoms, the matrix has 2"]),
+        GOOD.replace("[model]\n", "[model]\ndofs_per_node = [1, 2]\n"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[model].dofs_per_node: sums to 3 freedoms, the matrix has 2"],
+    ),
     "gaps length": (
-        GOOD.replace("gaps = [0.1, 0.2]", "gaps = [0.1]"), {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]] #1.gaps has 1 value for 2 nodes"]),
+        GOOD.replace("gaps = [0.1, 0.2]", "gaps = [0.1]"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1.gaps has 1 value for 2 nodes"],
+    ),
     "node out of range": (
-        GOOD.replace("nodes = [0, 1]", "nodes = [0, 7]"), {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]] #1.nodes: node 7 is outside 0..1"]),
+        GOOD.replace("nodes = [0, 1]", "nodes = [0, 7]"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1.nodes: node 7 is outside 0..1"],
+    ),
     "float node index": (
-        GOOD.replace("nodes = [0, 1]", "nodes = [0, 1.5]"), {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]] #1.nodes: must hold integers"]),
+        GOOD.replace("nodes = [0, 1]", "nodes = [0, 1.5]"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1.nodes: must hold integers"],
+    ),
     "direction with wrong components (library error)": (
-        GOOD + "direction = [1.0, 0.0]\n", {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]] #1 (gaps):", "freedoms but the direction has 2 components"]),
+        GOOD + "direction = [1.0, 0.0]\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1 (gaps):", "freedoms but the direction has 2 components"],
+    ),
     "plane without coordinates": (
         GOOD + "\n[[obstacle]]\ntype = 'plane'\npoint = [0.0]\nnormal = [1.0]\n",
-        {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]] #2: a plane obstacle needs [model].coordinates"]),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #2: a plane obstacle needs [model].coordinates"],
+    ),
     "single-bracket obstacle": (
         BASE_MODEL + BASE_LOADS + "[obstacle]\ntype = 'gaps'\nnodes = [0]\ngaps = [0.1]\n",
-        {"R.csv": SPD}, InvalidInputError, ["[[obstacle]]: write [[obstacle]]"]),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]]: write [[obstacle]]"],
+    ),
     "no obstacle": (
-        BASE_MODEL + BASE_LOADS, {"R.csv": SPD}, InvalidInputError,
-        ["[[obstacle]]: missing"]),
+        BASE_MODEL + BASE_LOADS,
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]]: missing"],
+    ),
     "inline nan gap": (
-        GOOD.replace("gaps = [0.1, 0.2]", "gaps = [0.1, nan]"), {"R.csv": SPD},
-        InvalidInputError, ["[[obstacle]] #1.gaps: contains NaN or inf"]),
+        GOOD.replace("gaps = [0.1, 0.2]", "gaps = [0.1, nan]"),
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[[obstacle]] #1.gaps: contains NaN or inf"],
+    ),
     "boolean in loads": (
-        BASE_MODEL + "[loads]\nvalues = [1.0, true]\n" + BASE_OBSTACLE, {"R.csv": SPD},
-        InvalidInputError, ["[loads].values: must hold numbers only"]),
+        BASE_MODEL + "[loads]\nvalues = [1.0, true]\n" + BASE_OBSTACLE,
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[loads].values: must hold numbers only"],
+    ),
     "duplicate load entry": (
         BASE_MODEL + "[loads]\nentries = [{ freedom = 1, value = 1.0 },"
-        " { node = 1, value = 2.0 }]\n" + BASE_OBSTACLE, {"R.csv": SPD}, InvalidInputError,
-        ["[loads].entries #2: freedom 1 is already loaded by entry #1"]),
+        " { node = 1, value = 2.0 }]\n" + BASE_OBSTACLE,
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[loads].entries #2: freedom 1 is already loaded by entry #1"],
+    ),
     "unknown solver": (
-        GOOD + "\n[solver]\nname = 'simplex'\n", {"R.csv": SPD}, InvalidInputError,
-        ["[solver].name: unknown method 'simplex' for frictionless problems; choose one of "
-         "active-set (default), qp"]),
+        GOOD + "\n[solver]\nname = 'simplex'\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        [
+            "[solver].name: unknown method 'simplex' for frictionless problems; choose one of "
+            "active-set (default), qp"
+        ],
+    ),
     "solver option of the wrong kind": (
-        GOOD + "\n[solver]\ntol = 'small'\n", {"R.csv": SPD}, InvalidInputError,
-        ["[solver].tol: must be a number (default 1e-10), got the string 'small'"]),
+        GOOD + "\n[solver]\ntol = 'small'\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[solver].tol: must be a number (default 1e-10), got the string 'small'"],
+    ),
     "negative tolerance": (
-        GOOD + "\n[solver]\ntol = -1e-8\n", {"R.csv": SPD}, InvalidInputError,
-        ["[solver].tol: must be positive"]),
+        GOOD + "\n[solver]\ntol = -1e-8\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[solver].tol: must be positive"],
+    ),
     "backend options for active-set": (
-        GOOD + "\n[solver]\n[solver.backend_options]\neps_abs = 1e-9\n", {"R.csv": SPD},
-        InvalidInputError, ["[solver].backend_options: not an option of solver 'active-set'"]),
+        GOOD + "\n[solver]\n[solver.backend_options]\neps_abs = 1e-9\n",
+        {"R.csv": SPD},
+        InvalidInputError,
+        ["[solver].backend_options: not an option of solver 'active-set'"],
+    ),
     "npz with several arrays and no key": (
-        GOOD.replace("R.csv", "R.npz"), {"R.npz": "several"}, InvalidInputError,
-        ["[model].flexibility ('R.npz'): ", "the archive holds 2 arrays (A, B)"]),
+        GOOD.replace("R.csv", "R.npz"),
+        {"R.npz": "several"},
+        InvalidInputError,
+        ["[model].flexibility ('R.npz'): ", "the archive holds 2 arrays (A, B)"],
+    ),
     "npz key not found": (
-        GOOD.replace('"R.csv"', '{ file = "R.npz", key = "C" }'), {"R.npz": "several"},
-        InvalidInputError, ["[model].flexibility ('R.npz'): ", "the archive has no array 'C'"]),
+        GOOD.replace('"R.csv"', '{ file = "R.npz", key = "C" }'),
+        {"R.npz": "several"},
+        InvalidInputError,
+        ["[model].flexibility ('R.npz'): ", "the archive has no array 'C'"],
+    ),
     "missing loads file": (
-        BASE_MODEL + "[loads]\nvalues = 'P.csv'\n" + BASE_OBSTACLE, {"R.csv": SPD},
-        FileFormatError, ["[loads].values: file 'P.csv' not found"]),
+        BASE_MODEL + "[loads]\nvalues = 'P.csv'\n" + BASE_OBSTACLE,
+        {"R.csv": SPD},
+        FileFormatError,
+        ["[loads].values: file 'P.csv' not found"],
+    ),
 }
 
 
@@ -527,8 +673,9 @@ def test_write_results_round_trip(tmp_path):
     assert [r["status"] for r in rows] == ["closed", "closed"]
 
     with np.load(out / "result.npz") as data:
-        assert sorted(data.files) == sorted(["displacements", "forces", "nodal_forces", "gaps",
-                                             "contact_status"])
+        assert sorted(data.files) == sorted(
+            ["displacements", "forces", "nodal_forces", "gaps", "contact_status"]
+        )
         np.testing.assert_array_equal(data["displacements"], result.displacements)
         np.testing.assert_array_equal(data["forces"], result.forces)
         np.testing.assert_array_equal(data["nodal_forces"], result.nodal_forces)
@@ -553,15 +700,18 @@ def test_write_results_non_finite_summary_is_valid_json(tmp_path):
     result = spec.solve()
     result.energy = math.nan
     write_results(spec, result, tmp_path)
-    summary = json.loads((tmp_path / "summary.json").read_text(),
-                         parse_constant=lambda name: pytest.fail(f"non-JSON constant {name}"))
+    summary = json.loads(
+        (tmp_path / "summary.json").read_text(),
+        parse_constant=lambda name: pytest.fail(f"non-JSON constant {name}"),
+    )
     assert summary["result"]["energy"] is None
 
 
 def test_write_results_rejects_mismatched_result(tmp_path):
     spec = load_problem_file(EXAMPLE)
-    other = ProblemSpec(problem=ContactProblem(ReducedModel(flexibility=[[1.0]]), [1.0],
-                                               [GapObstacle([0], [0.5])]))
+    other = ProblemSpec(
+        problem=ContactProblem(ReducedModel(flexibility=[[1.0]]), [1.0], [GapObstacle([0], [0.5])])
+    )
     with pytest.raises(InvalidInputError, match="the problem has 2 freedoms"):
         write_results(spec, solve(other.problem), tmp_path)
 
@@ -598,13 +748,13 @@ def test_example_block_on_floor_matches_its_derivation():
     spec = load_problem_file(BLOCKS)
     assert spec.frictional and spec.solver == "coulomb" and spec.options == {"tol": 1e-12}
     kx, ky, T, P_y = block_parameters(spec)
-    gap = 2e-6                                           # floor at y = -2e-6, blocks at y = 0
+    gap = 2e-6  # floor at y = -2e-6, blocks at y = 0
     np.testing.assert_allclose(spec.problem.constraints.gaps, [gap, gap], rtol=1e-15)
     mu = spec.problem.law.mu
     np.testing.assert_array_equal(mu, [0.3, 0.3])
     N = -P_y - ky * gap
     limit = mu * N
-    assert T[0] <= limit[0] and T[1] > limit[1]          # the example covers stick and slip
+    assert T[0] <= limit[0] and T[1] > limit[1]  # the example covers stick and slip
     u_x = np.maximum(T - limit, 0.0) / kx
     result = spec.solve()
     assert isinstance(result, FrictionalResult) and result.success, result.message
@@ -614,11 +764,13 @@ def test_example_block_on_floor_matches_its_derivation():
     np.testing.assert_allclose(result.displacements[0::2], u_x, rtol=1e-9, atol=1e-9 * u_x.max())
     np.testing.assert_allclose(result.displacements[1::2], [-gap, -gap], rtol=1e-9)
     np.testing.assert_allclose(result.slip[:, 0], u_x, rtol=1e-9, atol=1e-9 * u_x.max())
-    np.testing.assert_allclose(result.dissipation, limit * u_x, rtol=1e-9,
-                               atol=1e-9 * float(np.max(limit * u_x)))
+    np.testing.assert_allclose(
+        result.dissipation, limit * u_x, rtol=1e-9, atol=1e-9 * float(np.max(limit * u_x))
+    )
     # elastic energy: springs kx stretched by u_x, ky by the gap
-    np.testing.assert_allclose(result.elastic_energy,
-                               0.5 * kx * np.sum(u_x ** 2) + ky * gap ** 2, rtol=1e-9)
+    np.testing.assert_allclose(
+        result.elastic_energy, 0.5 * kx * np.sum(u_x**2) + ky * gap**2, rtol=1e-9
+    )
 
 
 def masing(force, amplitude, limit, stiffness, segment):
@@ -627,6 +779,7 @@ def masing(force, amplitude, limit, stiffness, segment):
     ``segment`` 0: loading from rest; odd: unloading from ``+amplitude``; even > 0: reloading
     from ``-amplitude``.
     """
+
     def virgin(f):
         return np.maximum(f - limit, 0.0) / stiffness
 
@@ -639,7 +792,7 @@ def masing(force, amplitude, limit, stiffness, segment):
 def cyclic_closed_form(spec, steps_per_segment=4):
     """Per-step displacements (K, 2) and dissipation (K,) of the cyclic example, by hand."""
     kx, ky, A, _ = block_parameters(spec)
-    N = ky * 1e-5                                       # interference 10 um, no vertical load
+    N = ky * 1e-5  # interference 10 um, no vertical load
     limit = spec.problem.law.mu * N
     factors = spec.factors
     K = len(factors)
@@ -655,8 +808,9 @@ def test_example_cyclic_block_matches_masing():
     # each step dissipates L times the distance slid (the friction force is L while sliding).
     spec = load_problem_file(CYCLIC)
     assert spec.history.shape == (13, 4)
-    np.testing.assert_allclose(spec.factors, [0, .25, .5, .75, 1, .5, 0, -.5, -1, -.5, 0, .5, 1],
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        spec.factors, [0, 0.25, 0.5, 0.75, 1, 0.5, 0, -0.5, -1, -0.5, 0, 0.5, 1], atol=1e-15
+    )
     x, dissipated, limit, force = cyclic_closed_form(spec)
     history = spec.solve()
     assert isinstance(history, HistoryResult) and history.success
@@ -669,8 +823,9 @@ def test_example_cyclic_block_matches_masing():
     slipping = np.abs(np.diff(np.vstack([np.zeros((1, 2)), x]), axis=0)) > 1e-9 * scale
     np.testing.assert_array_equal(history.contact_status, np.where(slipping, 2, 1))
     # friction force: -F while sticking from rest, +-L while sliding
-    np.testing.assert_allclose(history.forces[:, :, 1], x * 1e6 - force,
-                               rtol=1e-9, atol=1e-9 * limit.max())
+    np.testing.assert_allclose(
+        history.forces[:, :, 1], x * 1e6 - force, rtol=1e-9, atol=1e-9 * limit.max()
+    )
     summary = spec.summary(history)
     assert summary["steps"] == 13 and summary["failed_steps"] == []
     assert [r["step"] for r in summary["records"]] == list(range(13))
@@ -708,8 +863,11 @@ def test_coupled_node_stick_and_slip_by_hand(tmp_path, route, T):
     # u_x = (T + kxy g - mu (W - kyy g)) / (kxx + mu kxy), r_N = kxy u_x - kyy g + W.
     # Numbers: W - kyy g = 800 N, limit 200 N: T = 150 -> 180 N (stick); T = 300 -> slip.
     kxx, kxy, kyy, W, g, mu = 1e6, 3e5, 2e6, 1000.0, 1e-4, 0.25
-    extra = {"coulomb": 'solver = "coulomb"\ntol = 1e-12', "tresca": 'solver = "tresca"',
-             "polygonal": "facets = 4"}[route]
+    extra = {
+        "coulomb": 'solver = "coulomb"\ntol = 1e-12',
+        "tresca": 'solver = "tresca"',
+        "polygonal": "facets = 4",
+    }[route]
     spec = load_problem_file(write_toml(tmp_path, COUPLED.format(T=T, extra=extra)))
     assert spec.solver == route
     result = spec.solve()
@@ -733,7 +891,7 @@ def test_per_contact_mu_and_cohesion_from_files(tmp_path):
     # cohesion [0, 50] N: limits mu N + c = 300 N and 150 N. Block 0 sticks (r_T = -200 N);
     # block 1 slips: r_T = -150 N, u_x = (400 - 150) / kx.
     text = BLOCKS.read_text().replace("point = [0.0, -2e-6]", "point = [0.0, 0.0]")
-    text = text.replace('\nmu = 0.3\n', '\nmu = "mu.csv"\ncohesion = [0.0, 50.0]\n')
+    text = text.replace("\nmu = 0.3\n", '\nmu = "mu.csv"\ncohesion = [0.0, 50.0]\n')
     np.savetxt(tmp_path / "mu.csv", [[0.3], [0.1]])
     spec = load_problem_file(write_toml(tmp_path, text))
     np.testing.assert_array_equal(spec.problem.law.mu, [0.3, 0.1])
@@ -772,12 +930,13 @@ def test_three_d_exact_cone_slips_along_the_push(tmp_path):
     kt, N, mu, T = 1e6, 1000.0, 0.3, 500.0
     direction = np.array([np.cos(np.pi / 6), np.sin(np.pi / 6)])
     Tx, Ty = map(float, T * direction)  # plain floats: repr(np.float64) is not TOML
-    spec = load_problem_file(write_toml(tmp_path, THREE_D.format(Tx=Tx, Ty=Ty,
-                                                                 extra="tol = 1e-12")))
+    spec = load_problem_file(
+        write_toml(tmp_path, THREE_D.format(Tx=Tx, Ty=Ty, extra="tol = 1e-12"))
+    )
     result = spec.solve()
     assert result.success, result.message
-    tangents = spec.problem.frames.tangents[0]                     # (2, 3)
-    friction = result.tangential_forces[0] @ tangents               # global force vector
+    tangents = spec.problem.frames.tangents[0]  # (2, 3)
+    friction = result.tangential_forces[0] @ tangents  # global force vector
     np.testing.assert_allclose(friction[:2], -mu * N * direction, rtol=1e-9)
     np.testing.assert_allclose(result.displacements[:2], (T - mu * N) / kt * direction, rtol=1e-9)
     assert result.status_labels == ["slip"]
@@ -800,10 +959,12 @@ def test_three_d_square_cone_slips_below_the_round_one(tmp_path, facets):
     assert result.success, result.message
     bound = mu * N * (1.0 if facets is None else np.cos(np.pi / facets))
     expected = max(T - bound, 0.0) / kt
-    np.testing.assert_allclose(result.displacements[:2], expected * t1[:2], rtol=1e-7,
-                               atol=1e-7 * T / kt)
-    np.testing.assert_allclose(result.tangential_forces[0], [-min(T, bound), 0.0], rtol=1e-7,
-                               atol=1e-7 * T)
+    np.testing.assert_allclose(
+        result.displacements[:2], expected * t1[:2], rtol=1e-7, atol=1e-7 * T / kt
+    )
+    np.testing.assert_allclose(
+        result.tangential_forces[0], [-min(T, bound), 0.0], rtol=1e-7, atol=1e-7 * T
+    )
     assert result.status_labels == ["stick" if facets is None else "slip"]
 
 
@@ -816,18 +977,21 @@ def test_points_history_equals_the_factors_history(tmp_path):
     np.save(tmp_path / "P2.npy", turning[2])
     np.savetxt(tmp_path / "points.csv", turning, delimiter=",")
     base = CYCLIC.read_text()
-    base = base[:base.index("\n[loads]")] + base[base.index("\n[[obstacle]]"):]
+    base = base[: base.index("\n[loads]")] + base[base.index("\n[[obstacle]]") :]
     x, dissipated, _, _ = cyclic_closed_form(reference)
-    for points in (f'[{toml_list(turning[0])}, "P1.csv", {{ file = "P2.npy" }}, '
-                   f'{toml_list(turning[3])}]', '"points.csv"'):
+    for points in (
+        f'[{toml_list(turning[0])}, "P1.csv", {{ file = "P2.npy" }}, {toml_list(turning[3])}]',
+        '"points.csv"',
+    ):
         text = base.replace("factors = [0.0, 1.0, -1.0, 1.0]", f"points = {points}")
         spec = load_problem_file(write_toml(tmp_path, text))
         assert spec.factors is None
         np.testing.assert_allclose(spec.history, reference.history, rtol=1e-15, atol=1e-12)
         history = spec.solve()
         assert history.success
-        np.testing.assert_allclose(history.displacements[:, 0::2], x, rtol=1e-9,
-                                   atol=1e-9 * np.abs(x).max())
+        np.testing.assert_allclose(
+            history.displacements[:, 0::2], x, rtol=1e-9, atol=1e-9 * np.abs(x).max()
+        )
         np.testing.assert_allclose(history.dissipated, dissipated, atol=1e-9 * dissipated.max())
         assert all(r["factor"] is None for r in spec.summary(history)["records"])
 
@@ -847,20 +1011,44 @@ def test_write_friction_results(tmp_path):
     paths = write_results(spec, result, tmp_path)
     assert paths == [tmp_path / name for name in RESULT_FILES]
     rows = read_rows(tmp_path / "contacts.csv")
-    assert list(rows[0]) == ["row", "node", "label", "gap0", "gap", "normal_force",
-                             "tangential_force", "slip", "tangential_displacement", "dissipated",
-                             "status"]
+    assert list(rows[0]) == [
+        "row",
+        "node",
+        "label",
+        "gap0",
+        "gap",
+        "normal_force",
+        "tangential_force",
+        "slip",
+        "tangential_displacement",
+        "dissipated",
+        "status",
+    ]
     assert [r["status"] for r in rows] == ["stick", "slip"]
-    for name, values in (("normal_force", result.normal_forces),
-                         ("tangential_force", result.tangential_forces[:, 0]),
-                         ("slip", result.slip[:, 0]), ("dissipated", result.dissipation),
-                         ("tangential_displacement", result.tangential_displacements[:, 0]),
-                         ("gap", result.gaps)):
+    for name, values in (
+        ("normal_force", result.normal_forces),
+        ("tangential_force", result.tangential_forces[:, 0]),
+        ("slip", result.slip[:, 0]),
+        ("dissipated", result.dissipation),
+        ("tangential_displacement", result.tangential_displacements[:, 0]),
+        ("gap", result.gaps),
+    ):
         np.testing.assert_array_equal([float(r[name]) for r in rows], values, err_msg=name)
     with np.load(tmp_path / "result.npz") as data:
-        assert sorted(data.files) == sorted([
-            "displacements", "forces", "nodal_forces", "gaps", "slip",
-            "tangential_displacements", "contact_status", "dissipation", "normals", "tangents"])
+        assert sorted(data.files) == sorted(
+            [
+                "displacements",
+                "forces",
+                "nodal_forces",
+                "gaps",
+                "slip",
+                "tangential_displacements",
+                "contact_status",
+                "dissipation",
+                "normals",
+                "tangents",
+            ]
+        )
         np.testing.assert_array_equal(data["forces"], result.forces)
         np.testing.assert_array_equal(data["contact_status"], [1, 2])
         # floor normal (0, -1) from the file; tangent: the normal turned by +90 degrees
@@ -886,17 +1074,31 @@ def test_write_history_results(tmp_path):
     assert list(rows[0])[:2] == ["step", "row"] and len(rows) == K * k
     np.testing.assert_array_equal(
         np.array([float(r["tangential_force"]) for r in rows]).reshape(K, k),
-        history.forces[:, :, 1])
+        history.forces[:, :, 1],
+    )
     rows = read_rows(tmp_path / "steps.csv")
-    assert list(rows[0]) == ["step", "factor", "open", "stick", "slip", "dissipated",
-                             "cumulative_dissipated", "iterations", "certificate_worst",
-                             "success"]
+    assert list(rows[0]) == [
+        "step",
+        "factor",
+        "open",
+        "stick",
+        "slip",
+        "dissipated",
+        "cumulative_dissipated",
+        "iterations",
+        "certificate_worst",
+        "success",
+    ]
     np.testing.assert_array_equal([float(r["factor"]) for r in rows], spec.factors)
-    np.testing.assert_array_equal([int(r["slip"]) for r in rows],
-                                  (history.contact_status == 2).sum(axis=1))
+    np.testing.assert_array_equal(
+        [int(r["slip"]) for r in rows], (history.contact_status == 2).sum(axis=1)
+    )
     _, dissipated, _, _ = cyclic_closed_form(spec)
-    np.testing.assert_allclose([float(r["cumulative_dissipated"]) for r in rows],
-                               np.cumsum(dissipated), atol=1e-9 * dissipated.sum())
+    np.testing.assert_allclose(
+        [float(r["cumulative_dissipated"]) for r in rows],
+        np.cumsum(dissipated),
+        atol=1e-9 * dissipated.sum(),
+    )
     with np.load(tmp_path / "result.npz") as data:
         assert data["displacements"].shape == (K, n) and data["forces"].shape == (K, k, 2)
         assert data["slip"].shape == (K, k, 1) and data["contact_status"].shape == (K, k)
@@ -940,98 +1142,158 @@ LOADING = FRICTION + "\n[loading]\nfactors = [0.0, 1.0, -1.0]\nsteps = 2\n"
 FRICTION_CASES = {
     "unknown friction key": (
         FRICTION + "muu = 0.2\n",
-        ["[friction].muu: not an option of friction solver 'coulomb'", "did you mean 'mu'"]),
+        ["[friction].muu: not an option of friction solver 'coulomb'", "did you mean 'mu'"],
+    ),
     "misspelt friction option": (
-        FRICTION + "max_iters = 5\n", ["[friction].max_iters:", "did you mean 'max_iter'"]),
+        FRICTION + "max_iters = 5\n",
+        ["[friction].max_iters:", "did you mean 'max_iter'"],
+    ),
     "mu missing": (FRICTION.replace("mu = 0.3", "cohesion = 1.0"), ["[friction]: missing 'mu'"]),
-    "negative mu": (FRICTION.replace("mu = 0.3", "mu = -0.1"),
-                    ["[friction].mu: mu must be >= 0, got -0.1"]),
+    "negative mu": (
+        FRICTION.replace("mu = 0.3", "mu = -0.1"),
+        ["[friction].mu: mu must be >= 0, got -0.1"],
+    ),
     "mu per contact of the wrong length": (
         FRICTION.replace("mu = 0.3", "mu = [0.3, 0.2, 0.1]"),
-        ["[friction].mu:", "one value per contact (2), got shape (3,)"]),
-    "mu not a number": (FRICTION.replace("mu = 0.3", "mu = true"),
-                        ["[friction].mu: must be an array of numbers or a file reference"]),
-    "negative cohesion": (FRICTION + "cohesion = [1.0, -2.0]\n",
-                          ["[friction].cohesion: cohesion must be >= 0"]),
-    "cohesion without mu": (FRICTION.replace("mu = 0.3", "mu = [0.3, 0.0]") + "cohesion = 5.0\n",
-                            ["[friction].cohesion: cohesion > 0 needs mu > 0", "contact 1"]),
+        ["[friction].mu:", "one value per contact (2), got shape (3,)"],
+    ),
+    "mu not a number": (
+        FRICTION.replace("mu = 0.3", "mu = true"),
+        ["[friction].mu: must be an array of numbers or a file reference"],
+    ),
+    "negative cohesion": (
+        FRICTION + "cohesion = [1.0, -2.0]\n",
+        ["[friction].cohesion: cohesion must be >= 0"],
+    ),
+    "cohesion without mu": (
+        FRICTION.replace("mu = 0.3", "mu = [0.3, 0.0]") + "cohesion = 5.0\n",
+        ["[friction].cohesion: cohesion > 0 needs mu > 0", "contact 1"],
+    ),
     "cohesion on a gapped contact": (
         FRICTION.replace("gaps = [0.0, 0.0]", "gaps = [0.0, 1e-6]") + "cohesion = 5.0\n",
-        ["[friction]: cohesion models a bonded interface", "contact 1"]),
-    "facets below 3": (FRICTION + "facets = 2\n",
-                       ["[friction].facets: facets must be an integer from 3 to 1024", "got 2"]),
-    "facets not an integer": (FRICTION + "facets = 6.5\n",
-                              ["[friction].facets: facets must be an integer from 3"]),
+        ["[friction]: cohesion models a bonded interface", "contact 1"],
+    ),
+    "facets below 3": (
+        FRICTION + "facets = 2\n",
+        ["[friction].facets: facets must be an integer from 3 to 1024", "got 2"],
+    ),
+    "facets not an integer": (
+        FRICTION + "facets = 6.5\n",
+        ["[friction].facets: facets must be an integer from 3"],
+    ),
     "facets with the coulomb route": (
         FRICTION + "facets = 8\nsolver = 'coulomb'\n",
-        ["[friction].solver: method 'coulomb' does not solve frictional-polygonal problems",
-         "methods for frictional-polygonal problems: polygonal (default)"]),
-    "polygonal without facets": (FRICTION + "solver = 'polygonal'\n",
-                                 ["[friction].solver: method 'polygonal' does not solve "
-                                  "frictional problems", "coulomb (default)"]),
-    "unknown friction route": (FRICTION + "solver = 'newton'\n",
-                               ["[friction].solver: unknown method 'newton' for frictional "
-                                "problems; choose one of coulomb (default), tresca"]),
-    "friction tolerance not positive": (FRICTION + "tol = 0.0\n",
-                                        ["[friction].tol: must be positive"]),
+        [
+            "[friction].solver: method 'coulomb' does not solve frictional-polygonal problems",
+            "methods for frictional-polygonal problems: polygonal (default)",
+        ],
+    ),
+    "polygonal without facets": (
+        FRICTION + "solver = 'polygonal'\n",
+        [
+            "[friction].solver: method 'polygonal' does not solve frictional problems",
+            "coulomb (default)",
+        ],
+    ),
+    "unknown friction route": (
+        FRICTION + "solver = 'newton'\n",
+        [
+            "[friction].solver: unknown method 'newton' for frictional "
+            "problems; choose one of coulomb (default), tresca"
+        ],
+    ),
+    "friction tolerance not positive": (
+        FRICTION + "tol = 0.0\n",
+        ["[friction].tol: must be positive"],
+    ),
     "frictionless solver name with friction": (
         FRICTION + "\n[solver]\nname = 'active-set'\n",
-        ["[solver].name: solver 'active-set' is frictionless but [friction] is given",
-         "[friction].solver"]),
+        [
+            "[solver].name: solver 'active-set' is frictionless but [friction] is given",
+            "[friction].solver",
+        ],
+    ),
     "frictionless solver option with friction": (
         FRICTION + "\n[solver]\ntol = 1e-9\n",
-        ["[solver].tol: with [friction], [solver] holds only certificate_tol"]),
+        ["[solver].tol: with [friction], [solver] holds only certificate_tol"],
+    ),
     "friction on one-freedom nodes": (
         "[model]\nflexibility = [[1e-6]]\n[loads]\nvalues = [1.0]\n[[obstacle]]\n"
         "type = 'gaps'\nnodes = [0]\ngaps = [0.0]\n[friction]\nmu = 0.3\n",
-        ["[friction]: friction needs contact nodes with 2 or 3 freedoms",
-         "node 0 of [[obstacle]] #1 has 1"]),
+        [
+            "[friction]: friction needs contact nodes with 2 or 3 freedoms",
+            "node 0 of [[obstacle]] #1 has 1",
+        ],
+    ),
     "friction on nodes with 2 and 3 freedoms": (
         "[model]\nflexibility = [[1e-6, 0, 0, 0, 0], [0, 1e-6, 0, 0, 0], [0, 0, 1e-6, 0, 0],"
         " [0, 0, 0, 1e-6, 0], [0, 0, 0, 0, 1e-6]]\ndofs_per_node = [2, 3]\n[loads]\n"
         "values = [0.0, 0.0, 0.0, 0.0, 0.0]\n[[obstacle]]\ntype = 'gaps'\nnodes = [0]\n"
         "gaps = [0.0]\ndirection = [0.0, -1.0]\n[[obstacle]]\ntype = 'gaps'\nnodes = [1]\n"
         "gaps = [0.0]\ndirection = [0.0, 0.0, -1.0]\n[friction]\nmu = 0.3\n",
-        ["[friction]: local frames need contact nodes with one number of freedoms"]),
-    "friction as a value": ("friction = 0.3\n" + FRICTION_BASE,
-                            ["[friction]: must be a table, got the number 0.3"]),
+        ["[friction]: local frames need contact nodes with one number of freedoms"],
+    ),
+    "friction as a value": (
+        "friction = 0.3\n" + FRICTION_BASE,
+        ["[friction]: must be a table, got the number 0.3"],
+    ),
     "loading without friction": (
         FRICTION_BASE + "\n[loading]\nfactors = [0.0, 1.0]\n",
-        ["[loading]: a load history needs [friction]"]),
-    "unknown loading key": (LOADING.replace("steps = 2", "step = 2"),
-                            ["[loading]: unknown key 'step'", "did you mean 'steps'"]),
+        ["[loading]: a load history needs [friction]"],
+    ),
+    "unknown loading key": (
+        LOADING.replace("steps = 2", "step = 2"),
+        ["[loading]: unknown key 'step'", "did you mean 'steps'"],
+    ),
     "loading with both factors and points": (
         LOADING + "points = [[0.0, 0.0, 0.0, 0.0]]\n",
-        ["[loading]: give exactly one of factors and points (both given)"]),
-    "loading with neither": (LOADING.replace("factors = [0.0, 1.0, -1.0]\n", ""),
-                             ["[loading]: give exactly one of factors and points (neither"]),
-    "steps zero": (LOADING.replace("steps = 2", "steps = 0"),
-                   ["[loading].steps: steps must be an integer >= 1, got 0"]),
-    "steps not an integer": (LOADING.replace("steps = 2", "steps = 1.5"),
-                             ["[loading].steps: must be an integer (default 1)"]),
-    "factors as a matrix": (LOADING.replace("[0.0, 1.0, -1.0]", "[[0.0, 1.0], [1.0, 0.0]]"),
-                            ["[loading].factors: must be a list of numbers (1-D)"]),
+        ["[loading]: give exactly one of factors and points (both given)"],
+    ),
+    "loading with neither": (
+        LOADING.replace("factors = [0.0, 1.0, -1.0]\n", ""),
+        ["[loading]: give exactly one of factors and points (neither"],
+    ),
+    "steps zero": (
+        LOADING.replace("steps = 2", "steps = 0"),
+        ["[loading].steps: steps must be an integer >= 1, got 0"],
+    ),
+    "steps not an integer": (
+        LOADING.replace("steps = 2", "steps = 1.5"),
+        ["[loading].steps: must be an integer (default 1)"],
+    ),
+    "factors as a matrix": (
+        LOADING.replace("[0.0, 1.0, -1.0]", "[[0.0, 1.0], [1.0, 0.0]]"),
+        ["[loading].factors: must be a list of numbers (1-D)"],
+    ),
     "empty factors": (LOADING.replace("[0.0, 1.0, -1.0]", "[]"), ["[loading].factors: is empty"]),
-    "NaN factor": (LOADING.replace("[0.0, 1.0, -1.0]", "[0.0, nan]"),
-                   ["[loading].factors: contains NaN or inf"]),
+    "NaN factor": (
+        LOADING.replace("[0.0, 1.0, -1.0]", "[0.0, nan]"),
+        ["[loading].factors: contains NaN or inf"],
+    ),
     "points rows of the wrong length": (
         FRICTION_MODEL + FRICTION_OBSTACLE + "[friction]\nmu = 0.3\n[loading]\n"
         "points = [[0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 3.0]]\n",
-        ["[loading].points: rows have different lengths"]),
+        ["[loading].points: rows have different lengths"],
+    ),
     "points with too few freedoms": (
         FRICTION_MODEL + FRICTION_OBSTACLE + "[friction]\nmu = 0.3\n[loading]\n"
         "points = [[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]]\n",
-        ["[loading].points: must have rows of 4 values (one per freedom), got shape (2, 3)"]),
+        ["[loading].points: must have rows of 4 values (one per freedom), got shape (2, 3)"],
+    ),
     "points file entry of the wrong length": (
         FRICTION_MODEL + FRICTION_OBSTACLE + "[friction]\nmu = 0.3\n[loading]\n"
         "points = [[0.0, 0.0, 0.0, 0.0], 'P.csv']\n",
-        ["[loading].points #2 has 3 values, the model has 4 freedoms"]),
+        ["[loading].points #2 has 3 values, the model has 4 freedoms"],
+    ),
     "points and [loads]": (
         FRICTION + "\n[loading]\npoints = [[0.0, 0.0, 0.0, 0.0]]\n",
-        ["[loading].points: give the loads here or in [loads], not both"]),
+        ["[loading].points: give the loads here or in [loads], not both"],
+    ),
     "factors without [loads]": (
         FRICTION_MODEL + FRICTION_OBSTACLE + "[friction]\nmu = 0.3\n[loading]\n"
-        "factors = [0.0, 1.0]\n", ["[loads]: missing"]),
+        "factors = [0.0, 1.0]\n",
+        ["[loads]: missing"],
+    ),
 }
 
 
@@ -1051,8 +1313,10 @@ def test_friction_and_loading_errors_name_the_key(tmp_path, case):
 def test_friction_solver_options_reach_the_route(tmp_path):
     # max_iter and backend are checked against the polygonal route's signature; backend
     # settings are passed on verbatim.
-    text = FRICTION + ("facets = 6\nmax_iter = 30\nbackend = 'clarabel'\n"
-                       "[friction.backend_options]\ntol_feas = 1e-9\n")
+    text = FRICTION + (
+        "facets = 6\nmax_iter = 30\nbackend = 'clarabel'\n"
+        "[friction.backend_options]\ntol_feas = 1e-9\n"
+    )
     spec = load_problem_file(write_toml(tmp_path, text))
     assert spec.solver == "polygonal"
     assert spec.options == {"max_iter": 30, "backend": "clarabel", "tol_feas": 1e-9}

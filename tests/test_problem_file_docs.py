@@ -24,12 +24,18 @@ FRICTION_ROUTES = ("coulomb", "tresca", "polygonal")
 UNKNOWN = "not_a_key"
 
 BASE = {
-    "model": {"flexibility": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0],
-                              [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-              "dofs_per_node": 2, "coordinates": [[0.0, 0.0], [1.0, 0.0]]},
+    "model": {
+        "flexibility": [
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ],
+        "dofs_per_node": 2,
+        "coordinates": [[0.0, 0.0], [1.0, 0.0]],
+    },
     "loads": {"entries": [{"freedom": 1, "value": -1.0}]},
-    "obstacle": [{"type": "plane", "point": [0.0, -0.001], "normal": [0.0, -1.0],
-                  "nodes": [0]}],
+    "obstacle": [{"type": "plane", "point": [0.0, -0.001], "normal": [0.0, -1.0], "nodes": [0]}],
 }
 OBSTACLES = {
     "gaps": {"type": "gaps", "nodes": [1], "gaps": [0.001], "direction": [0.0, -1.0]},
@@ -47,7 +53,7 @@ def documented_tables() -> dict[tuple[str, str], set[str]]:
         if not marker:
             continue
         rows = []
-        for row in lines[number + 1:]:
+        for row in lines[number + 1 :]:
             if not row.startswith("|"):
                 break
             rows.append(row)
@@ -67,6 +73,7 @@ DOCUMENTED = documented_tables()
 
 def toml_text(doc: dict) -> str:
     """``doc`` as TOML (tables, arrays of tables, inline tables in arrays)."""
+
     def value(item):
         if isinstance(item, dict):
             return "{ " + ", ".join(f"{k} = {value(v)}" for k, v in item.items()) + " }"
@@ -138,11 +145,18 @@ def test_the_page_documents_every_table_the_schema_has():
     assert documented == set(fixed_keys())
     assert {name for kind, name in DOCUMENTED if kind == "options"} == {
         *(f"[solver] {name}" for name in (method.name for method in methods_for("frictionless"))),
-        *(f"[friction] {route}" for route in FRICTION_ROUTES)}
+        *(f"[friction] {route}" for route in FRICTION_ROUTES),
+    }
 
 
-@pytest.mark.parametrize("section", [name for kind, name in DOCUMENTED if kind == "keys"
-                                     and name not in ("[solver]", "[friction]")])
+@pytest.mark.parametrize(
+    "section",
+    [
+        name
+        for kind, name in DOCUMENTED
+        if kind == "keys" and name not in ("[solver]", "[friction]")
+    ],
+)
 def test_documented_keys_are_the_accepted_keys(tmp_path, section):
     accepted = accepted_keys(tmp_path, section)
     documented = DOCUMENTED["keys", section]

@@ -23,17 +23,20 @@ def contact_problem(seed=0, n=8):
     B = rng.standard_normal((n, n))
     model = cq.ReducedModel(flexibility=1e-6 * (B @ B.T / n + np.eye(n)))
     gaps = 1e-4 * rng.uniform(0.0, 1.0, n)
-    return cq.ContactProblem(model, 300.0 * rng.uniform(0.5, 1.5, n),
-                             [cq.GapObstacle(list(range(n)), gaps)])
+    return cq.ContactProblem(
+        model, 300.0 * rng.uniform(0.5, 1.5, n), [cq.GapObstacle(list(range(n)), gaps)]
+    )
 
 
 def frictional_problem(mu=0.3, facets=None, n=3, seed=1, previous=None):
     """``n`` 3-D nodes on a floor, pressed and sheared, a random SPD compliance."""
     rng = np.random.default_rng(seed)
     B = rng.standard_normal((3 * n, 3 * n))
-    model = cq.ReducedModel(flexibility=1e-6 * (B @ B.T / (3 * n) + np.eye(3 * n)),
-                            dofs_per_node=3,
-                            coordinates=np.c_[np.arange(n), np.zeros(n), np.zeros(n)])
+    model = cq.ReducedModel(
+        flexibility=1e-6 * (B @ B.T / (3 * n) + np.eye(3 * n)),
+        dofs_per_node=3,
+        coordinates=np.c_[np.arange(n), np.zeros(n), np.zeros(n)],
+    )
     floor = cq.PlaneObstacle([0.0, 0.0, 0.0], [0.0, 0.0, -1.0])
     loads = np.tile([200.0, -100.0, -1000.0], n) + 50.0 * rng.standard_normal(3 * n)
     return cq.FrictionalProblem(model, loads, [floor], mu=mu, facets=facets, previous=previous)
@@ -68,13 +71,15 @@ def fastened_problem(k=6, seed=4):
         blocks.append(1e-6 * (B @ B.T / k + np.eye(k)))
     R = np.block([[blocks[0], np.zeros((k, k))], [np.zeros((k, k)), blocks[1]]])
     model = cq.ReducedModel(flexibility=R)
-    pairs = cq.NodePairs(np.column_stack([np.arange(k), k + np.arange(k)]),
-                         2e-4 + 1e-4 * rng.standard_normal(k))
+    pairs = cq.NodePairs(
+        np.column_stack([np.arange(k), k + np.arange(k)]), 2e-4 + 1e-4 * rng.standard_normal(k)
+    )
     problem = cq.ContactProblem(model, np.zeros(2 * k), [pairs])
     return cq.FastenedProblem(problem, [0, 3])
 
 
 # --- solve() on every kind, default methods ------------------------------------------------
+
 
 def test_every_problem_class_carries_its_kind():
     assert contact_problem().kind == "frictionless"
@@ -82,18 +87,32 @@ def test_every_problem_class_carries_its_kind():
     assert frictional_problem(facets=8).kind == "frictional-polygonal"
     assert local_problem().kind == "local" and global_problem().kind == "global"
     assert fastened_problem().kind == "fastened"
-    assert set(registry.KINDS) == {"frictionless", "frictional", "frictional-polygonal", "local",
-                                   "global", "fastened"}
+    assert set(registry.KINDS) == {
+        "frictionless",
+        "frictional",
+        "frictional-polygonal",
+        "local",
+        "global",
+        "fastened",
+    }
 
 
-@pytest.mark.parametrize("make, kind, default, result_type", [
-    (contact_problem, "frictionless", "active-set", cq.ContactResult),
-    (frictional_problem, "frictional", "coulomb", FrictionalResult),
-    (lambda: frictional_problem(facets=8), "frictional-polygonal", "polygonal", FrictionalResult),
-    (local_problem, "local", "coulomb", LocalResult),
-    (global_problem, "global", "coulomb", LocalResult),
-    (fastened_problem, "fastened", "lawson-hanson", cq.FastenedResult),
-])
+@pytest.mark.parametrize(
+    "make, kind, default, result_type",
+    [
+        (contact_problem, "frictionless", "active-set", cq.ContactResult),
+        (frictional_problem, "frictional", "coulomb", FrictionalResult),
+        (
+            lambda: frictional_problem(facets=8),
+            "frictional-polygonal",
+            "polygonal",
+            FrictionalResult,
+        ),
+        (local_problem, "local", "coulomb", LocalResult),
+        (global_problem, "global", "coulomb", LocalResult),
+        (fastened_problem, "fastened", "lawson-hanson", cq.FastenedResult),
+    ],
+)
 def test_solve_takes_every_kind_with_its_default_method(make, kind, default, result_type):
     assert cq.default_method(kind) == default
     assert cq.methods_for(kind)[0].name == default  # the default is listed first
@@ -122,8 +141,9 @@ def test_frictional_problem_by_name_and_its_cross_check():
     problem = frictional_problem()
     exact, check = cq.solve(problem, "coulomb"), cq.solve(problem, "tresca")
     assert exact.success and check.success and check.method == "tresca"
-    np.testing.assert_allclose(check.forces, exact.forces, rtol=0,
-                               atol=1e-6 * np.abs(exact.forces).max())
+    np.testing.assert_allclose(
+        check.forces, exact.forces, rtol=0, atol=1e-6 * np.abs(exact.forces).max()
+    )
 
 
 def test_global_problem_is_certified_on_its_own_equations():
@@ -140,8 +160,9 @@ def test_previous_state_is_part_of_the_frictional_problem():
     # the same loads from the state they lead to: nothing slips, the forces stay
     second = cq.solve(again)
     assert second.success
-    np.testing.assert_allclose(second.forces, first.forces, rtol=0,
-                               atol=1e-8 * np.abs(first.forces).max())
+    np.testing.assert_allclose(
+        second.forces, first.forces, rtol=0, atol=1e-8 * np.abs(first.forces).max()
+    )
     np.testing.assert_allclose(second.slip, 0.0, atol=1e-12)
     twin = again.with_loads(again.loads)
     assert twin.previous is None  # with_loads starts from rest unless told
@@ -163,48 +184,76 @@ def test_solve_history_checks_method_and_options_before_the_first_step():
 
 # --- errors: unknown or unfitting method, unknown option -------------------------------------
 
-@pytest.mark.parametrize("make, method, match", [
-    (frictional_problem, "magic",
-     r"unknown method 'magic' for frictional problems; choose one of coulomb \(default\), "
-     r"tresca, normal-qp"),
-    (frictional_problem, "qp",
-     r"method 'qp' does not solve frictional problems \(it solves frictionless\); methods for "
-     r"frictional problems: coulomb \(default\), tresca, normal-qp"),
-    (lambda: frictional_problem(facets=8), "coulomb",
-     r"method 'coulomb' does not solve frictional-polygonal problems .*: polygonal \(default\), "
-     r"normal-qp"),
-    (contact_problem, "coulomb",
-     r"does not solve frictionless problems .*: active-set \(default\), qp$"),
-    (local_problem, "lawson-hanson", r"methods for local problems: coulomb \(default\)"),
-    (fastened_problem, "qp",
-     r"methods for fastened problems: lawson-hanson \(default\), active-set, nnls"),
-])
+
+@pytest.mark.parametrize(
+    "make, method, match",
+    [
+        (
+            frictional_problem,
+            "magic",
+            r"unknown method 'magic' for frictional problems; choose one of coulomb \(default\), "
+            r"tresca, normal-qp",
+        ),
+        (
+            frictional_problem,
+            "qp",
+            r"method 'qp' does not solve frictional problems \(it solves frictionless\); methods for "
+            r"frictional problems: coulomb \(default\), tresca, normal-qp",
+        ),
+        (
+            lambda: frictional_problem(facets=8),
+            "coulomb",
+            r"method 'coulomb' does not solve frictional-polygonal problems .*: polygonal \(default\), "
+            r"normal-qp",
+        ),
+        (
+            contact_problem,
+            "coulomb",
+            r"does not solve frictionless problems .*: active-set \(default\), qp$",
+        ),
+        (local_problem, "lawson-hanson", r"methods for local problems: coulomb \(default\)"),
+        (
+            fastened_problem,
+            "qp",
+            r"methods for fastened problems: lawson-hanson \(default\), active-set, nnls",
+        ),
+    ],
+)
 def test_unknown_or_unfitting_method_lists_the_methods_of_the_kind(make, method, match):
     with pytest.raises(cq.InvalidInputError, match=match):
         cq.solve(make(), method)
 
 
-@pytest.mark.parametrize("make, method, option, valid", [
-    (contact_problem, None, "forces0", "r0, tol, max_iter"),
-    (frictional_problem, "tresca", "check_psd", "r0, tol, max_iter, per_contact"),
-    (local_problem, None, "tols", "r0, tol, max_iter, check_psd, per_contact"),
-    (fastened_problem, "nnls", "tol", "none"),
-])
+@pytest.mark.parametrize(
+    "make, method, option, valid",
+    [
+        (contact_problem, None, "forces0", "r0, tol, max_iter"),
+        (frictional_problem, "tresca", "check_psd", "r0, tol, max_iter, per_contact"),
+        (local_problem, None, "tols", "r0, tol, max_iter, check_psd, per_contact"),
+        (fastened_problem, "nnls", "tol", "none"),
+    ],
+)
 def test_unknown_option_is_named_with_the_valid_ones(make, method, option, valid):
-    with pytest.raises(cq.InvalidInputError,
-                       match=f"unknown option '{option}' for method '.*'; its options: {valid}$"):
+    with pytest.raises(
+        cq.InvalidInputError,
+        match=f"unknown option '{option}' for method '.*'; its options: {valid}$",
+    ):
         cq.solve(make(), method, **{option: 1.0})
 
 
 def test_options_set_by_the_problem_are_refused():
-    with pytest.raises(cq.InvalidInputError, match="option 'facets' is set by the "
-                                                   "FrictionalProblem with facets itself"):
+    with pytest.raises(
+        cq.InvalidInputError,
+        match="option 'facets' is set by the FrictionalProblem with facets itself",
+    ):
         cq.solve(frictional_problem(facets=8), facets=6)
 
 
 def test_a_non_problem_is_refused():
-    with pytest.raises(cq.InvalidInputError, match="cannot solve a ndarray: give one of "
-                                                   "ContactProblem, FrictionalProblem"):
+    with pytest.raises(
+        cq.InvalidInputError,
+        match="cannot solve a ndarray: give one of ContactProblem, FrictionalProblem",
+    ):
         cq.solve(np.eye(3))
 
 
@@ -215,6 +264,7 @@ def test_options_are_keyword_only():
 
 # --- the warm start r0 of every method -------------------------------------------------------
 
+
 def _answer(result):
     if isinstance(result, LocalResult):
         return result.forces, result.iterations
@@ -223,20 +273,23 @@ def _answer(result):
     return result.forces, result.iterations
 
 
-@pytest.mark.parametrize("make, method", [
-    (contact_problem, "active-set"),
-    (frictional_problem, "coulomb"),
-    (frictional_problem, "tresca"),
-    (lambda: frictional_problem(facets=8), "polygonal"),
-    (lambda: frictional_problem(mu=0.0), "normal-qp"),
-    (local_problem, "coulomb"),
-    (local_problem, "tresca"),
-    (local_problem, "polygonal"),
-    (lambda: local_problem(mu=0.0), "normal-qp"),
-    (global_problem, "coulomb"),
-    (fastened_problem, "lawson-hanson"),
-    (fastened_problem, "active-set"),
-])
+@pytest.mark.parametrize(
+    "make, method",
+    [
+        (contact_problem, "active-set"),
+        (frictional_problem, "coulomb"),
+        (frictional_problem, "tresca"),
+        (lambda: frictional_problem(facets=8), "polygonal"),
+        (lambda: frictional_problem(mu=0.0), "normal-qp"),
+        (local_problem, "coulomb"),
+        (local_problem, "tresca"),
+        (local_problem, "polygonal"),
+        (lambda: local_problem(mu=0.0), "normal-qp"),
+        (global_problem, "coulomb"),
+        (fastened_problem, "lawson-hanson"),
+        (fastened_problem, "active-set"),
+    ],
+)
 def test_r0_warm_starts_every_method(make, method):
     assert "r0" in registry.get_method(method).option_names
     problem = make()
@@ -244,10 +297,12 @@ def test_r0_warm_starts_every_method(make, method):
     solution, cold_iterations = _answer(cold)
     warm = cq.solve(problem, method, r0=solution)
     answer, warm_iterations = _answer(warm)
-    assert warm_iterations <= cold_iterations and (warm_iterations < cold_iterations
-                                                   or cold_iterations <= 1)
-    np.testing.assert_allclose(answer, solution, rtol=0,
-                               atol=1e-6 * max(np.abs(solution).max(), 1e-300))
+    assert warm_iterations <= cold_iterations and (
+        warm_iterations < cold_iterations or cold_iterations <= 1
+    )
+    np.testing.assert_allclose(
+        answer, solution, rtol=0, atol=1e-6 * max(np.abs(solution).max(), 1e-300)
+    )
     with pytest.raises(cq.InvalidInputError, match="r0"):
         cq.solve(problem, method, r0=np.ones(np.size(solution) + 1))
 
@@ -263,6 +318,7 @@ def test_the_default_warm_start_of_a_frictional_step_is_its_previous_state():
 
 # --- mu = 0 goes to the frictionless method --------------------------------------------------
 
+
 @pytest.mark.parametrize("facets", [None, 8])
 @pytest.mark.parametrize("method", [None, "default"])
 def test_frictional_problem_without_friction_is_solved_frictionless(facets, method):
@@ -273,11 +329,13 @@ def test_frictional_problem_without_friction_is_solved_frictionless(facets, meth
     assert result.method == "normal-qp" and result.certificate.passed
     assert np.all(result.forces[:, 1:] == 0.0)
     # the frictionless problem on the same contacts gives the same normal forces
-    frictionless = cq.ContactProblem(problem.model, problem.loads,
-                                     [cq.PlaneObstacle([0.0, 0.0, 0.0], [0.0, 0.0, -1.0])])
+    frictionless = cq.ContactProblem(
+        problem.model, problem.loads, [cq.PlaneObstacle([0.0, 0.0, 0.0], [0.0, 0.0, -1.0])]
+    )
     reference = cq.solve(frictionless)
-    np.testing.assert_allclose(result.forces[:, 0], reference.forces, rtol=1e-7,
-                               atol=1e-9 * reference.forces.max())
+    np.testing.assert_allclose(
+        result.forces[:, 0], reference.forces, rtol=1e-7, atol=1e-9 * reference.forces.max()
+    )
 
 
 def test_local_and_global_problems_without_friction_take_the_frictionless_route():
@@ -345,14 +403,16 @@ mu = 0.3
 
 # --- the registry against the functions ------------------------------------------------------
 
+
 @pytest.mark.parametrize("name", list(registry.METHODS))
 def test_registry_options_match_the_function_signature(name):
     method = registry.METHODS[name]
     parameters = list(inspect.signature(method.function).parameters.values())[1:]
     keyword = [p for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY]
     others = [p for p in parameters if p.kind is not inspect.Parameter.KEYWORD_ONLY]
-    assert [p.kind for p in others] == ([inspect.Parameter.VAR_KEYWORD]
-                                        if method.backend_settings else [])
+    assert [p.kind for p in others] == (
+        [inspect.Parameter.VAR_KEYWORD] if method.backend_settings else []
+    )
     assert [p.name for p in keyword] == list(method.option_names)
     for parameter, option in zip(keyword, method.options):
         assert parameter.default == option.default, (name, option.name)
@@ -383,13 +443,17 @@ def test_problem_files_take_their_options_from_the_registry(monkeypatch):
     assert "facets" not in named and "r0" not in named and extra
     # what a function's signature says does not change what files accept
     function = registry.METHODS["active-set"].function
-    monkeypatch.setattr(function, "__signature__",
-                        inspect.signature(lambda problem, *, tolerance=1e-10: None),
-                        raising=False)
+    monkeypatch.setattr(
+        function,
+        "__signature__",
+        inspect.signature(lambda problem, *, tolerance=1e-10: None),
+        raising=False,
+    )
     assert solver_options("active-set", "frictionless")[0] == {"tol": 1e-10, "max_iter": 500}
 
 
 # --- contactqp methods -----------------------------------------------------------------------
+
 
 def test_methods_command_lists_every_method_as_json(capsys):
     assert main(["methods", "--json"]) == 0
@@ -402,9 +466,11 @@ def test_methods_command_lists_every_method_as_json(capsys):
         assert described["role"] == method.role and described["extra"] == method.extra
         assert described["installed"] == cq.is_installed(name)
         assert [(o["name"], o["type"], o["default"], o["doc"]) for o in described["options"]] == [
-            (o.name, o.type.__name__, o.default, o.doc) for o in method.options]
+            (o.name, o.type.__name__, o.default, o.doc) for o in method.options
+        ]
     assert {k["name"]: k["default"] for k in listing["kinds"]} == {
-        k.name: k.default for k in registry.KINDS.values()}
+        k.name: k.default for k in registry.KINDS.values()
+    }
     assert by_name["qp"]["extra"] == "qp" and by_name["qp"]["installed"]  # the test env has it
 
 
@@ -421,7 +487,8 @@ def test_is_installed_looks_for_the_modules_of_the_extra(monkeypatch):
     import importlib.util
 
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",
-                        lambda name, *a: None if name == "clarabel" else real(name, *a))
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "clarabel" else real(name, *a)
+    )
     assert not cq.is_installed("tresca") and not cq.is_installed("qp")
     assert cq.is_installed("coulomb") and cq.is_installed("active-set")

@@ -24,8 +24,9 @@ def frictionless():
 
 
 def frictional():
-    block = cq.ReducedModel(stiffness=np.diag([2.0e6, 5.0e6]), dofs_per_node=2,
-                            coordinates=[[0.0, 0.0]])
+    block = cq.ReducedModel(
+        stiffness=np.diag([2.0e6, 5.0e6]), dofs_per_node=2, coordinates=[[0.0, 0.0]]
+    )
     floor = cq.PlaneObstacle(point=[0.0, 0.0], normal=[0.0, -1.0])
     return cq.solve(cq.FrictionalProblem(block, [400.0, -1000.0], [floor], mu=0.3))
 
@@ -46,15 +47,26 @@ def fastened():
     flexibility = np.block([[lower, np.zeros((k, k))], [np.zeros((k, k)), 2 * lower]])
     model = cq.ReducedModel(flexibility=flexibility, dofs_per_node=1)
     pairs = np.column_stack([np.arange(k), k + np.arange(k)])
-    problem = cq.ContactProblem(model, np.zeros(2 * k),
-                                [cq.NodePairs(pairs, [1e-4, 2e-4, 1e-4, 3e-4])])
+    problem = cq.ContactProblem(
+        model, np.zeros(2 * k), [cq.NodePairs(pairs, [1e-4, 2e-4, 1e-4, 3e-4])]
+    )
     return cq.solve(cq.FastenedProblem(problem, [1]))
 
 
-KINDS = {"frictionless": frictionless, "frictional": frictional, "local": local,
-         "global": global_, "fastened": fastened}
-CLASSES = {"frictionless": ContactResult, "frictional": cq.FrictionalResult,
-           "local": cq.LocalResult, "global": cq.LocalResult, "fastened": cq.FastenedResult}
+KINDS = {
+    "frictionless": frictionless,
+    "frictional": frictional,
+    "local": local,
+    "global": global_,
+    "fastened": fastened,
+}
+CLASSES = {
+    "frictionless": ContactResult,
+    "frictional": cq.FrictionalResult,
+    "local": cq.LocalResult,
+    "global": cq.LocalResult,
+    "fastened": cq.FastenedResult,
+}
 
 
 @pytest.fixture(scope="module", params=sorted(KINDS))
@@ -98,7 +110,8 @@ def test_summary_and_as_dict_agree(kind_and_result):
     assert summary["contacts"] == result.n_contacts == len(result.status_labels)
     counts = status_counts(result.contact_status)
     assert {s.label: summary[s.label] for s in type(result).STATUSES} == {
-        s.label: counts[s.label] for s in type(result).STATUSES}
+        s.label: counts[s.label] for s in type(result).STATUSES
+    }
     assert sum(summary[s.label] for s in type(result).STATUSES) == result.n_contacts
     assert set(result.status_labels) <= set(STATUS_LABELS)
     assert repr(result).startswith(type(result).__name__ + "(success=True")
@@ -118,8 +131,17 @@ def test_one_label_set_and_codes_as_the_files_have_them():
     assert all(STATUS_LABELS[s] == s.label for s in ContactStatus)
 
 
-_WATCHED = {"open", "stick", "slip", "closed", "fastened", "contact", "fastener", "sliding",
-            "sticking"}
+_WATCHED = {
+    "open",
+    "stick",
+    "slip",
+    "closed",
+    "fastened",
+    "contact",
+    "fastener",
+    "sliding",
+    "sticking",
+}
 
 
 def test_no_module_defines_a_second_status_label_set():
@@ -131,8 +153,11 @@ def test_no_module_defines_a_second_status_label_set():
             continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
-                words = {e.value for e in node.elts
-                         if isinstance(e, ast.Constant) and isinstance(e.value, str)}
+                words = {
+                    e.value
+                    for e in node.elts
+                    if isinstance(e, ast.Constant) and isinstance(e.value, str)
+                }
                 if len(words & _WATCHED) >= 2:
                     found.append(f"{path.relative_to(SOURCE)}:{node.lineno} {sorted(words)}")
     assert not found, found

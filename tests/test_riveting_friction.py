@@ -56,13 +56,16 @@ def test_frictionless_sequence_equals_one_solve_of_all_fasteners(assembly):
         assert all(step.result.success for step in steps)
         final = steps[-1]
         assert _relative_difference(final.result.displacements, truth.displacements) < 1e-6
-        assert (np.max(np.abs(final.result.normal_forces - truth.forces))
-                < 1e-6 * np.max(truth.forces))
+        assert np.max(np.abs(final.result.normal_forces - truth.forces)) < 1e-6 * np.max(
+            truth.forces
+        )
         assert np.max(np.abs(final.result.gaps - truth.gaps)) < 1e-6 * np.max(gaps)
         finals.append(steps)
     # the intermediate states do depend on the order (the first fastener differs)
-    assert _relative_difference(finals[0][0].result.displacements,
-                                finals[1][0].result.displacements) > 1e-2
+    assert (
+        _relative_difference(finals[0][0].result.displacements, finals[1][0].result.displacements)
+        > 1e-2
+    )
 
 
 @pytest.mark.parametrize("mu", [0.3, 100.0])
@@ -98,8 +101,9 @@ def test_dissipation_is_non_negative_at_every_step(assembly):
     assert np.min(dissipation) > -1e-12
     slipping = np.array([step.result.contact_status == ContactStatus.SLIP for step in steps])
     assert slipping.any()
-    assert all(step.result.dissipation.sum() > 1e-9 for step, slips in zip(steps, slipping)
-               if slips.any())
+    assert all(
+        step.result.dissipation.sum() > 1e-9 for step, slips in zip(steps, slipping) if slips.any()
+    )
     assert np.all(dissipation[~slipping] < 1e-12)
 
 
@@ -115,22 +119,28 @@ def test_shear_load_and_removal_hysteresis(assembly):
     shear = 1000.0
     bonded = model.fasten(gaps, FASTENERS, 100.0, clamp=CLAMP, shear=shear)
     fastened, released = bonded[len(FASTENERS) - 1], bonded[-1]
-    assert [step.label for step in bonded[len(FASTENERS):]] == [
-        "shear 500 N", "shear 1000 N", "shear 500 N", "shear 0 N"]
+    assert [step.label for step in bonded[len(FASTENERS) :]] == [
+        "shear 500 N",
+        "shear 1000 N",
+        "shear 500 N",
+        "shear 0 N",
+    ]
     assert all(step.result.success for step in bonded)
-    assert _relative_difference(released.result.displacements,
-                                fastened.result.displacements) < 1e-8
+    assert _relative_difference(released.result.displacements, fastened.result.displacements) < 1e-8
     assert sum(step.result.dissipation.sum() for step in bonded) < 1e-12
     dissipated = []
     for order in ORDERS.values():
         steps = model.fasten(gaps, order, 0.3, clamp=CLAMP, shear=shear)
         assert all(step.result.success for step in steps)
         fastened, released = steps[len(order) - 1], steps[-1]
-        assert _relative_difference(released.result.displacements,
-                                    fastened.result.displacements) > 1e-3
-        assert np.any([step.result.contact_status == ContactStatus.SLIP
-                       for step in steps[len(order):]])
-        dissipated.append(sum(step.result.dissipation.sum() for step in steps[len(order):]))
+        assert (
+            _relative_difference(released.result.displacements, fastened.result.displacements)
+            > 1e-3
+        )
+        assert np.any(
+            [step.result.contact_status == ContactStatus.SLIP for step in steps[len(order) :]]
+        )
+        dissipated.append(sum(step.result.dissipation.sum() for step in steps[len(order) :]))
     assert min(dissipated) > 0
     assert abs(dissipated[0] - dissipated[1]) > 1e-2 * max(dissipated)
 
@@ -150,9 +160,9 @@ def test_full_finite_element_analysis_reproduces_the_assembled_state(assembly):
     applied = (final.loads + final.nodal_forces).reshape(2 * k, 3)
     for side, (body, nodes) in enumerate(model.parts):
         nodal = np.zeros((body.n_nodes, 3))
-        nodal[nodes] = applied[side * k:(side + 1) * k]
+        nodal[nodes] = applied[side * k : (side + 1) * k]
         full = body.solve(nodal)[nodes]
-        reduced = final.displacements.reshape(2 * k, 3)[side * k:(side + 1) * k]
+        reduced = final.displacements.reshape(2 * k, 3)[side * k : (side + 1) * k]
         assert np.max(np.abs(full - reduced)) < 1e-8 * np.max(np.abs(reduced))
     total = final.normal_forces.sum()
     assert 0.5 * len(FASTENERS) * CLAMP < total < len(FASTENERS) * CLAMP

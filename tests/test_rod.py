@@ -16,12 +16,20 @@ import meshio
 import numpy as np
 import pytest
 
-from contactqp.core.status import ContactStatus
+from contactqp.applications.rod import (
+    ABSOLUTE_BELOW,
+    DEFAULT_CASES,
+    MAX_ELEMENTS,
+    Rod,
+    RodLoad,
+    RodLoadCase,
+    compare,
+    deviations,
+    solve_full,
+)
 from contactqp.compliance.beam import Frame2D, frame_element_stiffness
-from contactqp.errors import RigidBodyModeError
-from contactqp.errors import InvalidInputError
-from contactqp.applications.rod import (ABSOLUTE_BELOW, DEFAULT_CASES, MAX_ELEMENTS, Rod, RodLoad,
-                           RodLoadCase, compare, deviations, solve_full)
+from contactqp.core.status import ContactStatus
+from contactqp.errors import InvalidInputError, RigidBodyModeError
 
 ROOT = Path(__file__).resolve().parents[1]
 E, A, L = 1e12, 0.2e-6, 0.04
@@ -125,11 +133,16 @@ def test_reduced_model_is_exact_against_contact_at_the_same_nodes(table):
     for comparison in table:
         assert comparison.reduced.success
         assert comparison.max_eps_same_nodes < 1e-6  # percent: 1e-8 relative
-        np.testing.assert_allclose(comparison.reduced.forces, comparison.same_nodes.forces,
-                                   rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(
+            comparison.reduced.forces, comparison.same_nodes.forces, rtol=1e-8, atol=1e-10
+        )
         u = comparison.same_nodes.displacements[rod.node_indices, :2]
-        np.testing.assert_allclose(comparison.reduced.displacements.reshape(-1, 2), u, rtol=1e-8,
-                                   atol=1e-8 * np.abs(u).max())
+        np.testing.assert_allclose(
+            comparison.reduced.displacements.reshape(-1, 2),
+            u,
+            rtol=1e-8,
+            atol=1e-8 * np.abs(u).max(),
+        )
 
 
 def test_method_bar_against_contact_at_every_mesh_node(table):
@@ -148,8 +161,15 @@ def test_method_bar_against_contact_at_every_mesh_node(table):
 def test_contact_between_nodes_is_seen_and_breaks_the_bar():
     """Obstacle reversed (5 mm under the free end): the rod touches near 7 mm, between nodes."""
     rod = Rod(gap_free=5e-3, gap_clamped=1e-3)
-    case = RodLoadCase("between nodes", (RodLoad(0.0, 0.0, -1.0), RodLoad(0.01, 0.0, -4.0),
-                                         RodLoad(0.02, 0.0, -4.0), RodLoad(0.03, 0.0, -4.0)))
+    case = RodLoadCase(
+        "between nodes",
+        (
+            RodLoad(0.0, 0.0, -1.0),
+            RodLoad(0.01, 0.0, -4.0),
+            RodLoad(0.02, 0.0, -4.0),
+            RodLoad(0.03, 0.0, -4.0),
+        ),
+    )
     (comparison,) = compare(rod, [case], repeat=1)
     touching = comparison.reference.contact_nodes[comparison.reference.forces > 0]
     assert not set(touching) <= set(rod.node_indices)
@@ -172,8 +192,12 @@ def test_rod_rejects_nodes_off_the_mesh_and_loads_off_the_nodes():
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "contactqp.cli", "rod", *args],
-                          capture_output=True, text=True, cwd=ROOT)
+    return subprocess.run(
+        [sys.executable, "-m", "contactqp.cli", "rod", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
 
 
 def test_cli_json_schema_and_values():
@@ -213,16 +237,27 @@ def test_cli_writes_a_figure_and_a_readable_vtu(tmp_path):
     assert mesh.cells[0].type == "line" and len(mesh.cells[0].data) == rod.n_elements
     np.testing.assert_allclose(mesh.point_data["gap"], rod.gap(mesh.points[:, 0]))
     reference = compare(rod, DEFAULT_CASES[:1], repeat=1)[0]
-    np.testing.assert_allclose(mesh.point_data["one_force_displacement"][:, :2],
-                               reference.reference.displacements[:, :2], rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(
+        mesh.point_data["one_force_displacement"][:, :2],
+        reference.reference.displacements[:, :2],
+        rtol=1e-9,
+        atol=1e-15,
+    )
     force = mesh.point_data["one_force_contact_force_reduced"]
     assert force[0, 1] == pytest.approx(reference.reduced.forces[0] / np.hypot(1, rod.slope))
     np.testing.assert_array_equal(force[1:], 0.0)
 
 
-@pytest.mark.parametrize("args", [["--elements", "12"], ["--elements", "0"],
-                                  ["--elements", "4000"], ["--elements", "1608"],
-                                  ["--vtu", "/proc/forbidden/rod.vtu"]])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--elements", "12"],
+        ["--elements", "0"],
+        ["--elements", "4000"],
+        ["--elements", "1608"],
+        ["--vtu", "/proc/forbidden/rod.vtu"],
+    ],
+)
 def test_cli_bad_input_is_one_line_and_exit_2(args):
     proc = run(*args)
     assert proc.returncode == 2, proc.stderr
@@ -246,20 +281,24 @@ def test_a_fractional_node_is_refused_not_truncated():
         frame.load_vector([(1.5, 0.0, -1.0)])
     with pytest.raises(InvalidInputError, match="whole node index, got 1.5"):
         frame.compliance([1.5])
-    np.testing.assert_array_equal(frame.load_vector(np.array([[1.0, 0.0, -1.0]])),
-                                  frame.load_vector([(1, 0.0, -1.0)]))
+    np.testing.assert_array_equal(
+        frame.load_vector(np.array([[1.0, 0.0, -1.0]])), frame.load_vector([(1, 0.0, -1.0)])
+    )
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: Rod(length="40 mm"), "length must be finite and > 0"),
-    (lambda: Rod(n_elements=None), "n_elements must be a whole number"),
-    (lambda: Rod(nodes=("a",)), "nodes must be a non-empty list"),
-    (lambda: Frame2D.straight("1 m", 4, E, A, I), "length must be > 0"),
-    (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={"a": "xy"}), "fixed node"),
-    (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={0: 1}), "letters among"),
-    (lambda: cantilever(2).load_vector([5]), "a load must be"),
-    (lambda: cantilever(2).index(-1, "ux"), "outside 0..2"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: Rod(length="40 mm"), "length must be finite and > 0"),
+        (lambda: Rod(n_elements=None), "n_elements must be a whole number"),
+        (lambda: Rod(nodes=("a",)), "nodes must be a non-empty list"),
+        (lambda: Frame2D.straight("1 m", 4, E, A, I), "length must be > 0"),
+        (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={"a": "xy"}), "fixed node"),
+        (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={0: 1}), "letters among"),
+        (lambda: cantilever(2).load_vector([5]), "a load must be"),
+        (lambda: cantilever(2).index(-1, "ux"), "outside 0..2"),
+    ],
+)
 def test_bad_rod_and_frame_arguments_raise_invalid_input(make, message):
     with pytest.raises(InvalidInputError, match=message):
         make()
@@ -279,8 +318,11 @@ def test_the_reference_solves_on_every_mesh_offered(n_elements):
 
 
 def test_meshes_beyond_the_finest_offered_are_refused_saying_why():
-    with pytest.raises(InvalidInputError, match=f"^n_elements must be at most {MAX_ELEMENTS}, "
-                                                "got 4000: the frame's stiffness is ill-cond"):
+    with pytest.raises(
+        InvalidInputError,
+        match=f"^n_elements must be at most {MAX_ELEMENTS}, "
+        "got 4000: the frame's stiffness is ill-cond",
+    ):
         Rod(n_elements=4000)
     proc = run("--help")
     assert f"up to {MAX_ELEMENTS}" in " ".join(proc.stdout.split())

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 import qpsolvers
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import contactqp as cq
 from contactqp.methods.box_qp import solve_box_qp
@@ -42,8 +43,9 @@ def test_qp_backends_agree_on_two_freedom_nodes(backend):
     own = cq.solve(problem)
     other = cq.solve(problem, "qp", backend=backend)
     assert own.success and other.success
-    np.testing.assert_allclose(other.displacements, own.displacements,
-                               atol=1e-7 * np.max(np.abs(own.displacements)))
+    np.testing.assert_allclose(
+        other.displacements, own.displacements, atol=1e-7 * np.max(np.abs(own.displacements))
+    )
 
 
 def test_single_contact_closed_form():
@@ -60,9 +62,15 @@ def test_single_contact_closed_form():
 def test_certificate_rejects_a_wrong_answer():
     problem = random_problem(30, 3)
     good = cq.solve(problem)
-    wrong = problem.make_result(good.displacements * 1.01, good.forces, method="test",
-                                converged=True,
-                                message="tampered", iterations=0, seconds=0.0)
+    wrong = problem.make_result(
+        good.displacements * 1.01,
+        good.forces,
+        method="test",
+        converged=True,
+        message="tampered",
+        iterations=0,
+        seconds=0.0,
+    )
     assert good.success and not wrong.success and wrong.status == 2
     assert "certificate failed" in wrong.message
 
@@ -71,12 +79,22 @@ def test_stiffness_model_gives_the_same_answer():
     problem = random_problem(40, 11)
     K = np.linalg.inv(problem.model.flexibility)
     model = cq.ReducedModel(stiffness=0.5 * (K + K.T))
-    twin = cq.ContactProblem(model, problem.loads, [cq.GapObstacle(range(40), problem.constraints.gaps,
-                                                                  problem.constraints.matrix.toarray().sum(1)[:, None])])
+    twin = cq.ContactProblem(
+        model,
+        problem.loads,
+        [
+            cq.GapObstacle(
+                range(40),
+                problem.constraints.gaps,
+                problem.constraints.matrix.toarray().sum(1)[:, None],
+            )
+        ],
+    )
     a, b = cq.solve(problem), cq.solve(twin)
     assert a.success and b.success
-    np.testing.assert_allclose(b.displacements, a.displacements,
-                               atol=1e-9 * np.max(np.abs(a.displacements)))
+    np.testing.assert_allclose(
+        b.displacements, a.displacements, atol=1e-9 * np.max(np.abs(a.displacements))
+    )
 
 
 def test_warm_start_reaches_the_same_answer_in_fewer_iterations():
@@ -114,9 +132,11 @@ def test_node_pairs_and_plane_obstacle():
 
 
 def test_unknown_solver_is_a_clear_error():
-    with pytest.raises(cq.InvalidInputError,
-                       match="unknown method 'nope' for frictionless problems; choose one of "
-                             "active-set \\(default\\), qp"):
+    with pytest.raises(
+        cq.InvalidInputError,
+        match="unknown method 'nope' for frictionless problems; choose one of "
+        "active-set \\(default\\), qp",
+    ):
         cq.solve(random_problem(3, 0), "nope")
 
 

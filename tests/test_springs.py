@@ -9,8 +9,8 @@ import scipy.sparse
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from contactqp.methods.box_qp import solve_box_qp
 from contactqp.applications.springs import SpringChain, chain_flexibility
+from contactqp.methods.box_qp import solve_box_qp
 
 
 def analytic(n, c, mu, m, g, F):
@@ -18,9 +18,15 @@ def analytic(n, c, mu, m, g, F):
     return np.cumsum(np.maximum(F - (n + 1 - i) * mu * m * g, 0.0) / c)
 
 
-@pytest.mark.parametrize("force, expected", [
-    (3, [0, 0, 0]), (6, [0, 0, 2]), (9, [0, 1, 6]), (14, [2, 8, 18]),
-])
+@pytest.mark.parametrize(
+    "force, expected",
+    [
+        (3, [0, 0, 0]),
+        (6, [0, 0, 2]),
+        (9, [0, 1, 6]),
+        (14, [2, 8, 18]),
+    ],
+)
 def test_published_table(force, expected):
     result = SpringChain(3, 1.0, 0.2, 2.0, 10.0).solve(force)
     assert result.converged
@@ -28,8 +34,13 @@ def test_published_table(force, expected):
 
 
 @settings(max_examples=20, deadline=None)
-@given(n=st.integers(1, 300), c=st.floats(0.1, 100), mu=st.floats(0.0, 1.0),
-       m=st.floats(0.1, 10), load=st.floats(0.0, 3.0))
+@given(
+    n=st.integers(1, 300),
+    c=st.floats(0.1, 100),
+    mu=st.floats(0.0, 1.0),
+    m=st.floats(0.1, 10),
+    load=st.floats(0.0, 3.0),
+)
 def test_matches_analytic(n, c, mu, m, load):
     g = 9.81
     F = load * n * max(mu * m * g, 1e-3)  # up to three times the force that moves every body
@@ -62,12 +73,18 @@ def test_primal_energy_formulation_agrees():
     np.testing.assert_allclose(SpringChain(n, c, mu, m, g).solve(F).x, X, atol=1e-9)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"n": 0}, "n must"), ({"stiffness": -1.0}, "stiffness"), ({"mu": -0.1}, "mu"),
-    ({"mass": float("nan")}, "mass"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"n": 0}, "n must"),
+        ({"stiffness": -1.0}, "stiffness"),
+        ({"mu": -0.1}, "mu"),
+        ({"mass": float("nan")}, "mass"),
+    ],
+)
 def test_bad_parameters(kwargs, message):
     from contactqp import InvalidInputError
+
     params = {"n": 3, "stiffness": 1.0, "mu": 0.2, "mass": 2.0, "g": 10.0, **kwargs}
     with pytest.raises(InvalidInputError, match=message):
         SpringChain(**params)
@@ -81,12 +98,12 @@ def test_a_hundred_thousand_bodies_against_the_closed_form_and_equilibrium():
     expected = analytic(n, c, mu, m, g, F)
     assert result.converged and 0 < result.sliding.sum() < n
     np.testing.assert_allclose(result.x, expected, rtol=0, atol=1e-9 * np.max(expected))
-    K = scipy.sparse.diags([-np.ones(n - 1), np.r_[2 * np.ones(n - 1), 1.0], -np.ones(n - 1)],
-                           [-1, 0, 1])
+    K = scipy.sparse.diags(
+        [-np.ones(n - 1), np.r_[2 * np.ones(n - 1), 1.0], -np.ones(n - 1)], [-1, 0, 1]
+    )
     pull = np.zeros(n)
     pull[-1] = F
-    np.testing.assert_allclose(c * (K @ result.x), pull - result.friction, rtol=0,
-                               atol=1e-9 * F)
+    np.testing.assert_allclose(c * (K @ result.x), pull - result.friction, rtol=0, atol=1e-9 * F)
     limit = mu * m * g  # friction forces are differences of spring forces up to F: 1e-12 F
     assert np.all(np.abs(result.friction) <= limit + 1e-12 * F)
     np.testing.assert_allclose(result.friction[result.x > 0], limit, rtol=0, atol=1e-12 * F)

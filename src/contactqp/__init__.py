@@ -1,6 +1,15 @@
 """contactqp: fast elastic contact with friction on reduced (compliance-matrix) models."""
 
+from .core.certificate import Certificate, FrictionCertificate, LocalCertificate
 from .core.contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
+from .core.fastened import FastenedProblem
+from .core.friction import FrictionLaw
+from .core.history import HistoryResult, linear_path
+from .core.local_problem import GlobalProblem, LocalProblem
+from .core.model import ReducedModel, unit_load_compliance
+from .core.problem import ContactProblem, FrictionalProblem
+from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
+from .core.status import STATUS_LABELS, ContactStatus
 from .errors import (
     ContactError,
     ContactWarning,
@@ -11,15 +20,6 @@ from .errors import (
     SolverError,
     UnsupportedProblemError,
 )
-from .core.model import ReducedModel, unit_load_compliance
-from .core.friction import FrictionLaw
-from .core.fastened import FastenedProblem
-from .core.history import HistoryResult, linear_path
-from .core.local_problem import GlobalProblem, LocalProblem
-from .core.problem import ContactProblem, FrictionalProblem
-from .core.certificate import Certificate, FrictionCertificate, LocalCertificate
-from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
-from .core.status import STATUS_LABELS, ContactStatus
 from .methods import METHODS, default_method, is_installed, methods_for, solve, solve_history
 
 __all__ = [
@@ -66,8 +66,17 @@ __all__ = [
 __version__ = "0.1.0"
 
 
-def solve_gaps(flexibility, loads, gaps, *, directions=(1.0,), nodes=None, dofs_per_node=1,
-               method: str | None = None, **options) -> ContactResult:
+def solve_gaps(
+    flexibility,
+    loads,
+    gaps,
+    *,
+    directions=(1.0,),
+    nodes=None,
+    dofs_per_node=1,
+    method: str | None = None,
+    **options,
+) -> ContactResult:
     """Solve the common case in one call: a flexibility matrix, loads and per-node gaps.
 
     Parameters

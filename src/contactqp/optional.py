@@ -39,7 +39,8 @@ def require(module: str, purpose: str, extra: str, distribution: str | None = No
     except ImportError:
         name = distribution or module.split(".")[0]
         raise MissingDependencyError(
-            f"{purpose} needs {name}: pip install 'contactqp[{extra}]'") from None
+            f"{purpose} needs {name}: pip install 'contactqp[{extra}]'"
+        ) from None
 
 
 def require_backend(name: str, installed: Iterable[str]) -> None:
@@ -53,5 +54,6 @@ def require_backend(name: str, installed: Iterable[str]) -> None:
     """
     installed = sorted(installed)
     if name not in installed:
-        raise InvalidInputError(f"backend {name!r} is not installed; available: "
-                                f"{', '.join(installed) or 'none'}")
+        raise InvalidInputError(
+            f"backend {name!r} is not installed; available: {', '.join(installed) or 'none'}"
+        )

@@ -39,7 +39,7 @@ class Part:
     @property
     def rigidity(self) -> float:
         """Flexural rigidity ``D = E t^3 / (12 (1 - nu^2))`` (N m)."""
-        return self.young * self.thickness ** 3 / (12.0 * (1.0 - self.poisson ** 2))
+        return self.young * self.thickness**3 / (12.0 * (1.0 - self.poisson**2))
 
 
 @dataclass(frozen=True)
@@ -73,8 +73,7 @@ class StackedModel:
         In-plane position of each pair (m).
     """
 
-    def __init__(self, assembly: StackedParts, model: ReducedModel, points,
-                 grid: tuple[int, int]):
+    def __init__(self, assembly: StackedParts, model: ReducedModel, points, grid: tuple[int, int]):
         self.assembly, self.model, self.points = assembly, model, points
         self._grid = (int(grid[0]), int(grid[1]))
         if self._grid[0] * self._grid[1] != len(points):
@@ -119,12 +118,14 @@ class StackedModel:
         if deepest < -self.thickness:
             raise InvalidInputError(
                 f"{what}: an overlap of {-deepest * 1e3:.4g} mm is deeper than the "
-                f"{self.thickness * 1e3:.4g} mm plates (a negative gap is interference)")
+                f"{self.thickness * 1e3:.4g} mm plates (a negative gap is interference)"
+            )
         return gaps
 
     def node_pairs(self, gaps: ArrayLike) -> NodePairs:
         """The interface as :class:`NodePairs` for initial gaps ``gaps`` (m, shape (k,))."""
         k = self.n_pairs
         direction = np.eye(int(self.model.dofs_per_node[0]))[-1]  # u_z, the node's last
-        return NodePairs(np.column_stack([np.arange(k), k + np.arange(k)]),
-                         self.check_gaps(gaps), direction)
+        return NodePairs(
+            np.column_stack([np.arange(k), k + np.arange(k)]), self.check_gaps(gaps), direction
+        )

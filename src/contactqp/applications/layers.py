@@ -75,22 +75,39 @@ class Layers:
     steps: int = 40
 
     def __post_init__(self):
-        positive = ("length", "lower_height", "upper_height", "depth", "density", "young",
-                    "actuator_stiffness", "support_stiffness")
+        positive = (
+            "length",
+            "lower_height",
+            "upper_height",
+            "depth",
+            "density",
+            "young",
+            "actuator_stiffness",
+            "support_stiffness",
+        )
         for name in (*positive, "poisson", "mu", "cohesion", "gravity"):
             value = getattr(self, name)
             low_open = name in positive
-            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                    or not math.isfinite(value) or value < 0 or (low_open and value == 0):
-                raise InvalidInputError(f"{name} must be finite and {'>' if low_open else '>='} "
-                                        f"0, got {value!r}")
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, numbers.Real)
+                or not math.isfinite(value)
+                or value < 0
+                or (low_open and value == 0)
+            ):
+                raise InvalidInputError(
+                    f"{name} must be finite and {'>' if low_open else '>='} 0, got {value!r}"
+                )
         if not self.poisson < 0.5:
             raise InvalidInputError(f"poisson must be < 0.5, got {self.poisson!r}")
         counts = (*tuple(self.cells), self.steps) if np.ndim(self.cells) == 1 else ()
-        if len(counts) != 4 or any(isinstance(n, bool) or not isinstance(n, numbers.Integral)
-                                   or n < 1 for n in counts):
-            raise InvalidInputError(f"cells must be 3 integers >= 1 and steps an integer >= 1, "
-                                    f"got {self.cells!r}, {self.steps!r}")
+        if len(counts) != 4 or any(
+            isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1 for n in counts
+        ):
+            raise InvalidInputError(
+                f"cells must be 3 integers >= 1 and steps an integer >= 1, "
+                f"got {self.cells!r}, {self.steps!r}"
+            )
         if self.steps >= MAX_STEPS:  # the history has steps + 1 load steps
             raise InvalidInputError(f"steps must be below {MAX_STEPS}, got {self.steps}")
 
@@ -113,8 +130,13 @@ class Layers:
         from ..compliance.fem import ElasticModel, plate  # noqa: I001  (first: names the extra)
         import skfem
 
-        body = ElasticModel(plate(self.length, height, self.cells[0], rows), self.young,
-                            self.poisson, plane="strain", thickness=self.depth)
+        body = ElasticModel(
+            plate(self.length, height, self.cells[0], rows),
+            self.young,
+            self.poisson,
+            plane="strain",
+            thickness=self.depth,
+        )
 
         @skfem.LinearForm
         def weight(v, _):
@@ -157,10 +179,12 @@ class Layers:
         upper_all = factorize(K).solve(upper_weight)
 
         blocks = [lower_model.flexibility, condense(K, freedoms)]
-        coords = np.vstack([lower.mesh.p[:, top].T,
-                            upper.mesh.p[:, kept].T + [0.0, self.lower_height]])
-        model = ReducedModel(flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=2,
-                             coordinates=coords)
+        coords = np.vstack(
+            [lower.mesh.p[:, top].T, upper.mesh.p[:, kept].T + [0.0, self.lower_height]]
+        )
+        model = ReducedModel(
+            flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=2, coordinates=coords
+        )
         free = np.concatenate([lower_free, upper_all[freedoms]])
         loads = model.forces(free)
         n = len(top)
@@ -168,8 +192,10 @@ class Layers:
         spacing = self.length / self.cells[0]
         tributary = np.full(n, spacing)
         tributary[[0, -1]] = spacing / 2
-        actuator = (np.concatenate([[n], 2 * n + np.arange(len(side) - 1)]),
-                    self.actuator_stiffness * share)
+        actuator = (
+            np.concatenate([[n], 2 * n + np.arange(len(side) - 1)]),
+            self.actuator_stiffness * share,
+        )
         return model, pairs, actuator, loads, self.cohesion * tributary * self.depth
 
     def solve(self, d_max: float | None = None, **options: Any) -> LayersResult:
@@ -195,19 +221,27 @@ class Layers:
         nodes, stiffness = actuator
         pull = np.zeros(model.n_freedoms)
         pull[2 * nodes] = stiffness
-        problem = FrictionalProblem(model, gravity, [NodePairs(pairs, np.zeros(n), (0.0, 1.0))],
-                                    mu=self.mu, cohesion=cohesions)
+        problem = FrictionalProblem(
+            model,
+            gravity,
+            [NodePairs(pairs, np.zeros(n), (0.0, 1.0))],
+            mu=self.mu,
+            cohesion=cohesions,
+        )
         history = solve_history(problem, gravity + np.outer(travel, pull), **options)
         failed = next((k for k, step in enumerate(history.steps) if not step.success), None)
         if failed is not None:
-            raise LayersError(f"step {failed} (actuator at {travel[failed]:.4g} m) not solved: "
-                              f"{history.steps[failed].message}")
+            raise LayersError(
+                f"step {failed} (actuator at {travel[failed]:.4g} m) not solved: "
+                f"{history.steps[failed].message}"
+            )
         U = history.displacements.reshape(len(travel), -1, 2)
         load = (travel[:, None] - U[:, nodes, 0]) @ stiffness
-        relative = (U[:, n:2 * n, 0] - U[:, :n, 0]).mean(axis=1)
+        relative = (U[:, n : 2 * n, 0] - U[:, :n, 0]).mean(axis=1)
         status = history.contact_status
-        sliding = (np.all(status != ContactStatus.STICK, axis=1)
-                   & np.any(status == ContactStatus.SLIP, axis=1))
+        sliding = np.all(status != ContactStatus.STICK, axis=1) & np.any(
+            status == ContactStatus.SLIP, axis=1
+        )
         normal = history.forces[:, :, 0].sum(axis=1)
         return LayersResult(self, travel, load, relative, sliding, normal)
 
@@ -257,10 +291,16 @@ class LayersResult:
         """JSON-ready summary in SI units."""
         at = self.onset if self.onset is not None else -1
         layers = self.layers
-        return {"mu": layers.mu, "cohesion": layers.cohesion, "area": layers.area,
-                "normal_force": float(self.normal_force[at]), "weight": layers.weight,
-                "analytic_onset_force": layers.limit, "onset_force": self.onset_force,
-                "curve": np.column_stack([self.load, self.relative]).tolist()}
+        return {
+            "mu": layers.mu,
+            "cohesion": layers.cohesion,
+            "area": layers.area,
+            "normal_force": float(self.normal_force[at]),
+            "weight": layers.weight,
+            "analytic_onset_force": layers.limit,
+            "onset_force": self.onset_force,
+            "curve": np.column_stack([self.load, self.relative]).tolist(),
+        }
 
 
 def plot_layers(result: LayersResult, path: str | os.PathLike[str]) -> Path:
@@ -269,6 +309,11 @@ def plot_layers(result: LayersResult, path: str | os.PathLike[str]) -> Path:
     from ..io.plot import plot_sliding_curve
 
     layers = result.layers
-    return plot_sliding_curve(result.relative, result.load, layers.limit, path,
-                              onset=result.onset,
-                              title=f"Two layers: mu = {layers.mu:g}, c = {layers.cohesion:g} Pa")
+    return plot_sliding_curve(
+        result.relative,
+        result.load,
+        layers.limit,
+        path,
+        onset=result.onset,
+        title=f"Two layers: mu = {layers.mu:g}, c = {layers.cohesion:g} Pa",
+    )

@@ -65,14 +65,25 @@ from ..methods.registry import get_method
 from ..studies.cases import GapVariation
 from .assembly import Part, StackedModel, StackedParts
 
-__all__ = ["Assembly", "RivetingModel", "FasteningSequence", "FasteningCase",
-           "plate_flexibility", "result_mesh", "plot_status"]
+__all__ = [
+    "Assembly",
+    "RivetingModel",
+    "FasteningSequence",
+    "FasteningCase",
+    "plate_flexibility",
+    "result_mesh",
+    "plot_status",
+]
 
 _EDGES = ("left", "right", "bottom", "top")
 
 
-def plate_flexibility(plate: Part, points: ArrayLike, cells: tuple[int, int],
-                      supports: Sequence[str] = ("left", "right")) -> np.ndarray:
+def plate_flexibility(
+    plate: Part,
+    points: ArrayLike,
+    cells: tuple[int, int],
+    supports: Sequence[str] = ("left", "right"),
+) -> np.ndarray:
     """Out-of-plane flexibility of points of a Kirchhoff plate (Morley elements, condensed).
 
     Parameters
@@ -99,11 +110,12 @@ def plate_flexibility(plate: Part, points: ArrayLike, cells: tuple[int, int],
 
     bad = [s for s in supports if s not in _EDGES]
     if bad or not supports:
-        raise InvalidInputError(f"supports must be edges among {', '.join(_EDGES)}, got "
-                                f"{supports!r}")
+        raise InvalidInputError(
+            f"supports must be edges among {', '.join(_EDGES)}, got {supports!r}"
+        )
     mesh = plate_mesh(plate.length, plate.width, *cells, cell="tri")
     basis = skfem.Basis(mesh, skfem.ElementTriMorley())
-    scale = plate.young * plate.thickness ** 3 / (12.0 * (1.0 + plate.poisson))
+    scale = plate.young * plate.thickness**3 / (12.0 * (1.0 + plate.poisson))
     ratio = plate.poisson / (1.0 - plate.poisson)
 
     @skfem.BilinearForm
@@ -171,8 +183,9 @@ class Assembly(StackedParts):
         self.check_outline()
         nx, ny = (int(n) for n in self.grid)
         if nx < 1 or ny < 1 or int(self.refine) < 1:
-            raise InvalidInputError(f"grid and refine must be positive, got {self.grid}, "
-                                    f"{self.refine}")
+            raise InvalidInputError(
+                f"grid and refine must be positive, got {self.grid}, {self.refine}"
+            )
         held = set(self.supports)
         xs, cx = _axis(nx, self.lower.length, "left" in held, "right" in held, self.refine)
         ys, cy = _axis(ny, self.lower.width, "bottom" in held, "top" in held, self.refine)
@@ -188,8 +201,11 @@ class Assembly(StackedParts):
         """
         points, cells = self._layout
         lower = plate_flexibility(self.lower, points, cells, self.supports)
-        upper = lower if self.upper == self.lower else plate_flexibility(
-            self.upper, points, cells, self.supports)
+        upper = (
+            lower
+            if self.upper == self.lower
+            else plate_flexibility(self.upper, points, cells, self.supports)
+        )
         for block in (lower, upper):
             block.setflags(write=False)
         return lower, upper
@@ -206,8 +222,11 @@ class Assembly(StackedParts):
             fasteners.append(i + nx * j)
         if len(set(fasteners)) != len(fasteners):
             raise InvalidInputError("two fasteners share a contact pair")
-        model = ReducedModel(flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=1,
-                             coordinates=np.vstack([points, points]))
+        model = ReducedModel(
+            flexibility=scipy.linalg.block_diag(*blocks),
+            dofs_per_node=1,
+            coordinates=np.vstack([points, points]),
+        )
         return RivetingModel(self, model, points.copy(), np.array(fasteners, dtype=int))
 
 
@@ -232,8 +251,9 @@ class RivetingModel(StackedModel):
     @cached_property
     def base_problem(self) -> ContactProblem:
         """The contact problem with zero gaps; its dual is assembled once and shared."""
-        problem = ContactProblem(self.model, np.zeros(2 * self.n_pairs),
-                                 [self.node_pairs(np.zeros(self.n_pairs))])
+        problem = ContactProblem(
+            self.model, np.zeros(2 * self.n_pairs), [self.node_pairs(np.zeros(self.n_pairs))]
+        )
         problem.dual()
         return problem
 
@@ -241,9 +261,14 @@ class RivetingModel(StackedModel):
         """The contact problem for an initial gap field ``gaps`` (m, shape (k,))."""
         return self.base_problem.variant(gaps=gaps)
 
-    def fasten(self, gaps: ArrayLike, order: Sequence[int] | None = None, *,
-               method: str = "lawson-hanson",
-               tol: float = 1e-10) -> FasteningSequence:
+    def fasten(
+        self,
+        gaps: ArrayLike,
+        order: Sequence[int] | None = None,
+        *,
+        method: str = "lawson-hanson",
+        tol: float = 1e-10,
+    ) -> FasteningSequence:
         """Install the fasteners one after another on the gap field ``gaps`` (m, shape (k,)).
 
         Parameters
@@ -324,8 +349,12 @@ class FasteningCase(GapVariation):
     def solve_sample(self, gaps, warm):
         options = dict(self.options)
         method = options.pop("method")
-        state = solve(self.fastened.variant(gaps=gaps), method,
-                      **_fastening_options(method, options.pop("tol"), warm), **options)
+        state = solve(
+            self.fastened.variant(gaps=gaps),
+            method,
+            **_fastening_options(method, options.pop("tol"), warm),
+            **options,
+        )
         record = self._record(state)
         record["fastener_force"] = state.fastener_forces
         record["success"] = state.success
@@ -340,8 +369,7 @@ class FasteningCase(GapVariation):
         return {**super().describe(), "fasteners": self.fasteners.tolist()}
 
 
-def result_mesh(model: RivetingModel, state: FastenedResult,
-                initial_gaps: ArrayLike) -> PointMesh:
+def result_mesh(model: RivetingModel, state: FastenedResult, initial_gaps: ArrayLike) -> PointMesh:
     """Both contact grids as quadrilateral surfaces with the fastened state, for
     :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *result_mesh(...))``).
 
@@ -354,11 +382,16 @@ def result_mesh(model: RivetingModel, state: FastenedResult,
     nx, ny = model.grid
     k = model.n_pairs
     ids = np.arange(k).reshape(ny, nx)
-    quads = np.column_stack([ids[:-1, :-1].ravel(), ids[:-1, 1:].ravel(), ids[1:, 1:].ravel(),
-                             ids[1:, :-1].ravel()])
+    quads = np.column_stack(
+        [ids[:-1, :-1].ravel(), ids[:-1, 1:].ravel(), ids[1:, 1:].ravel(), ids[1:, :-1].ravel()]
+    )
     z = model.assembly.lower.thickness
-    points = np.vstack([np.column_stack([model.points, np.zeros(k)]),
-                        np.column_stack([model.points, np.full(k, z)])])
+    points = np.vstack(
+        [
+            np.column_stack([model.points, np.zeros(k)]),
+            np.column_stack([model.points, np.full(k, z)]),
+        ]
+    )
     w = state.displacements
     tension = np.zeros(k)
     tension[state.fasteners] = state.fastener_forces
@@ -371,22 +404,33 @@ def result_mesh(model: RivetingModel, state: FastenedResult,
         "displacement": np.column_stack([np.zeros((2 * k, 2)), w]),
         "contact_force": np.column_stack([np.zeros((2 * k, 2)), np.concatenate([-force, force])]),
         "initial_gap": both(np.asarray(initial_gaps, dtype=float)),
-        "gap": both(state.gaps), "status": both(state.contact_status),
+        "gap": both(state.gaps),
+        "status": both(state.contact_status),
         "fastener_force": both(tension),
     }
     return PointMesh(points, [("quad", np.vstack([quads, quads + k]))], data)
 
 
-def plot_status(model: RivetingModel, state: FastenedResult, initial_gaps: ArrayLike,
-                path: str | os.PathLike[str]) -> Path:
+def plot_status(
+    model: RivetingModel,
+    state: FastenedResult,
+    initial_gaps: ArrayLike,
+    path: str | os.PathLike[str],
+) -> Path:
     """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
     (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
     from ..io.plot import plot_point_maps
 
-    panels = [(np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
-              (state.gaps * 1e3, "residual gap (mm)", "viridis"),
-              (state.contact_status, "status: " + " / ".join(
-                  f"{code} {STATUS_LABELS[code]}" for code in FastenedResult.STATUSES),
-               "coolwarm")]
-    return plot_point_maps(model.points, panels, path, marked=model.points[state.fasteners],
-                           marked_label="fasteners")
+    panels = [
+        (np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
+        (state.gaps * 1e3, "residual gap (mm)", "viridis"),
+        (
+            state.contact_status,
+            "status: "
+            + " / ".join(f"{code} {STATUS_LABELS[code]}" for code in FastenedResult.STATUSES),
+            "coolwarm",
+        ),
+    ]
+    return plot_point_maps(
+        model.points, panels, path, marked=model.points[state.fasteners], marked_label="fasteners"
+    )

@@ -104,21 +104,31 @@ class FrictionAssembly(StackedParts):
         gx, gy = np.meshgrid(xs, ys)  # pair i + (nx - 1) j at (xs[i], ys[j])
         points = np.column_stack([gx.ravel(), gy.ravel()])
         parts, blocks, coordinates = [], [], []
-        for part, face, base in ((self.lower, "top", 0.0),
-                                 (self.upper, "bottom", self.lower.thickness)):
-            body = ElasticModel(block(part.length, part.width, part.thickness, nx, ny, 1,
-                                      cell="tet"), part.young, part.poisson, order=2)
+        for part, face, base in (
+            (self.lower, "top", 0.0),
+            (self.upper, "bottom", self.lower.thickness),
+        ):
+            body = ElasticModel(
+                block(part.length, part.width, part.thickness, nx, ny, 1, cell="tet"),
+                part.young,
+                part.poisson,
+                order=2,
+            )
             body.fix("left").fix("right")
             height = part.thickness if face == "top" else 0.0
-            nodes = body.select_nodes(np.column_stack([points, np.full(len(points), height)]),
-                                      where=face).nodes
+            nodes = body.select_nodes(
+                np.column_stack([points, np.full(len(points), height)]), where=face
+            ).nodes
             reduced = body.reduced_model(nodes)
             assert reduced.coordinates is not None  # a mesh's reduced model has its nodes'
             parts.append((body, nodes))
             blocks.append(reduced.flexibility)
             coordinates.append(reduced.coordinates + [0.0, 0.0, base])
-        model = ReducedModel(flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=_DOFS,
-                             coordinates=np.vstack(coordinates))
+        model = ReducedModel(
+            flexibility=scipy.linalg.block_diag(*blocks),
+            dofs_per_node=_DOFS,
+            coordinates=np.vstack(coordinates),
+        )
         return FrictionRivetingModel(self, model, points, parts)
 
 
@@ -182,9 +192,18 @@ class FrictionRivetingModel(StackedModel):
         loads[_DOFS * np.arange(self.n_pairs, 2 * self.n_pairs)] = force / self.n_pairs
         return loads
 
-    def fasten(self, gaps: ArrayLike, fasteners: Sequence[tuple[int, int]], mu: ArrayLike, *,
-               clamp: float = 500.0, shear: float = 0.0, shear_steps: int = 2,
-               facets: int | None = None, **options: Any) -> list[FasteningStep]:
+    def fasten(
+        self,
+        gaps: ArrayLike,
+        fasteners: Sequence[tuple[int, int]],
+        mu: ArrayLike,
+        *,
+        clamp: float = 500.0,
+        shear: float = 0.0,
+        shear_steps: int = 2,
+        facets: int | None = None,
+        **options: Any,
+    ) -> list[FasteningStep]:
         """Install ``fasteners`` in order, then apply and remove ``shear``; every step's state.
 
         Parameters
@@ -224,12 +243,16 @@ class FrictionRivetingModel(StackedModel):
         labels = [f"fastener {f}" for f in positions]
         if shear:
             fastened = history[-1]
-            history.extend(linear_path([fastened, fastened + self.shear_loads(shear), fastened],
-                                       shear_steps)[1:])
-            fractions = np.concatenate([np.arange(1, shear_steps + 1),
-                                        np.arange(shear_steps - 1, -1, -1)]) / shear_steps
+            history.extend(
+                linear_path([fastened, fastened + self.shear_loads(shear), fastened], shear_steps)[
+                    1:
+                ]
+            )
+            fractions = (
+                np.concatenate([np.arange(1, shear_steps + 1), np.arange(shear_steps - 1, -1, -1)])
+                / shear_steps
+            )
             labels.extend(f"shear {shear * f:g} N" for f in fractions)
-        problem = FrictionalProblem(self.model, history[0], self.obstacles(gaps), mu,
-                                    facets=facets)
+        problem = FrictionalProblem(self.model, history[0], self.obstacles(gaps), mu, facets=facets)
         steps = solve_history(problem, np.array(history), **options).steps
         return [FasteningStep(label, step) for label, step in zip(labels, steps, strict=True)]

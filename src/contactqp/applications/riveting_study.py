@@ -83,14 +83,23 @@ class RivetingStudy:
         return self.sequence.success and self.summary.failed == 0 and self.statistics is not None
 
 
-def run_riveting_study(out: str | PathLike[str], *, samples: int | None = None, seed: int = 0,
-                       workers: int = 1, scheduler: str | None = None,
-                       gaps: str | PathLike[str] | ArrayLike | None = None, mean_gap: float = 2e-4,
-                       amplitude: float = 1e-4, correlation_length: float = 0.04,
-                       method: str = "lawson-hanson", plot: bool = False,
-                       assembly: Assembly | None = None,
-                       progress: Callable[[int, int], None] | None = None,
-                       names: dict[str, str] | None = None) -> RivetingStudy:
+def run_riveting_study(
+    out: str | PathLike[str],
+    *,
+    samples: int | None = None,
+    seed: int = 0,
+    workers: int = 1,
+    scheduler: str | None = None,
+    gaps: str | PathLike[str] | ArrayLike | None = None,
+    mean_gap: float = 2e-4,
+    amplitude: float = 1e-4,
+    correlation_length: float = 0.04,
+    method: str = "lawson-hanson",
+    plot: bool = False,
+    assembly: Assembly | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    names: dict[str, str] | None = None,
+) -> RivetingStudy:
     """Run (or resume) the riveting variation study into the directory ``out``.
 
     Parameters
@@ -141,6 +150,7 @@ def run_riveting_study(out: str | PathLike[str], *, samples: int | None = None, 
         Bad parameters, a gap file of the wrong width or unreadable, an overlap deeper than a
         plate, or a store of another study in ``out``.
     """
+
     def name(parameter: str) -> str:
         return (names or {}).get(parameter, parameter)
 
@@ -151,16 +161,20 @@ def run_riveting_study(out: str | PathLike[str], *, samples: int | None = None, 
         nominal_gaps = source.samples.mean(axis=0)
         samples = source.n_available if samples is None else samples
     else:
-        source = GaussianGapField(model.points, amplitude, correlation_length, mean=mean_gap,
-                                  seed=seed)
+        source = GaussianGapField(
+            model.points, amplitude, correlation_length, mean=mean_gap, seed=seed
+        )
         nominal_gaps = source.mean
         samples = DEFAULT_SAMPLES if samples is None else samples
     if nominal_gaps.shape != (model.n_pairs,):
-        raise InvalidInputError(f"{name('gaps')}: gap realisations must have {model.n_pairs} "
-                                f"columns, got {nominal_gaps.shape[0]}")
+        raise InvalidInputError(
+            f"{name('gaps')}: gap realisations must have {model.n_pairs} "
+            f"columns, got {nominal_gaps.shape[0]}"
+        )
     # absurd gaps are refused before anything is written (unusual ones are warned about below)
-    model.check_gaps(nominal_gaps,
-                     name("mean_gap") if gaps is None else f"the mean of {name('gaps')}")
+    model.check_gaps(
+        nominal_gaps, name("mean_gap") if gaps is None else f"the mean of {name('gaps')}"
+    )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     case = FasteningCase(model, method=method)
@@ -170,62 +184,100 @@ def run_riveting_study(out: str | PathLike[str], *, samples: int | None = None, 
     run_batch(case, source, samples, store, scheduler=scheduler, limit=0)
     sequence = model.fasten(nominal_gaps, method=method)
     # warnings once the input is known to be valid, so that bad input stays one line
-    _warn_unusual_gaps(model.thickness, float(nominal_gaps.max()),
-                       amplitude if gaps is None else 0.0, mean_gap if gaps is None else 0.0,
-                       name)
+    _warn_unusual_gaps(
+        model.thickness,
+        float(nominal_gaps.max()),
+        amplitude if gaps is None else 0.0,
+        mean_gap if gaps is None else 0.0,
+        name,
+    )
     files = _write_nominal(out, model, sequence, nominal_gaps)
-    summary = run_batch(case, source, samples, store, workers=workers, scheduler=scheduler,
-                        progress=progress)
+    summary = run_batch(
+        case, source, samples, store, workers=workers, scheduler=scheduler, progress=progress
+    )
     files["samples.h5"] = store
     data = load_batch(store, samples)  # not the rest of a longer past study
     if not data.fields["success"].any():  # a failed solve, not bad input
         return RivetingStudy(model, nominal_gaps, sequence, summary, None, files)
     statistics = data.statistics()
     xy = model.points
-    files["statistics.csv"] = write_csv(out / "statistics.csv", {
-        "x": xy[:, 0], "y": xy[:, 1], "mean_gap": statistics.mean,
-        **{f"gap_q{level * 100:g}": q for level, q in zip(statistics.levels,
-                                                          statistics.quantiles, strict=True)},
-        "contact_probability": statistics.contact_probability})
+    files["statistics.csv"] = write_csv(
+        out / "statistics.csv",
+        {
+            "x": xy[:, 0],
+            "y": xy[:, 1],
+            "mean_gap": statistics.mean,
+            **{
+                f"gap_q{level * 100:g}": q
+                for level, q in zip(statistics.levels, statistics.quantiles, strict=True)
+            },
+            "contact_probability": statistics.contact_probability,
+        },
+    )
     if plot:
         from ..io.plot import plot_statistics
         from .riveting import plot_status
 
-        files["nominal.png"] = plot_status(model, sequence.final, nominal_gaps,
-                                           out / "nominal.png")
+        files["nominal.png"] = plot_status(model, sequence.final, nominal_gaps, out / "nominal.png")
         files["statistics.png"] = plot_statistics(statistics, xy, out / "statistics.png")
     return RivetingStudy(model, nominal_gaps, sequence, summary, statistics, files)
 
 
-def _warn_unusual_gaps(thickness: float, largest_gap: float, amplitude: float, mean_gap: float,
-                       name) -> None:
+def _warn_unusual_gaps(
+    thickness: float, largest_gap: float, amplitude: float, mean_gap: float, name
+) -> None:
     """ContactWarnings for gaps that are valid but far from the plate model's range."""
     for what, value in [("nominal gap", largest_gap), (name("amplitude"), amplitude)]:
         if value > thickness:
-            warnings.warn(f"{what} {value * 1e3:.4g} mm exceeds the {thickness * 1e3:.4g} mm "
-                          "plate thickness: far beyond small deflections, where the linear "
-                          "plate model holds", ContactWarning, stacklevel=3)
+            warnings.warn(
+                f"{what} {value * 1e3:.4g} mm exceeds the {thickness * 1e3:.4g} mm "
+                "plate thickness: far beyond small deflections, where the linear "
+                "plate model holds",
+                ContactWarning,
+                stacklevel=3,
+            )
     if mean_gap < 0:
-        warnings.warn(f"{name('mean_gap')} {mean_gap:g} m is negative: the plates overlap by "
-                      f"{-mean_gap * 1e3:.4g} mm at rest (interference)", ContactWarning,
-                      stacklevel=3)
+        warnings.warn(
+            f"{name('mean_gap')} {mean_gap:g} m is negative: the plates overlap by "
+            f"{-mean_gap * 1e3:.4g} mm at rest (interference)",
+            ContactWarning,
+            stacklevel=3,
+        )
 
 
-def _write_nominal(out: Path, model: RivetingModel, sequence: FasteningSequence,
-                   nominal_gaps) -> dict:
+def _write_nominal(
+    out: Path, model: RivetingModel, sequence: FasteningSequence, nominal_gaps
+) -> dict:
     """Write the nominal state's files; ``{name: path}``."""
     final = sequence.final
     xy = model.points
     nominal_mesh = result_mesh(model, final, nominal_gaps)
     files = {"nominal.vtu": write_vtu(out / "nominal.vtu", *nominal_mesh)}
-    files["nominal_contacts.csv"] = write_csv(out / "nominal_contacts.csv", {
-        "x": xy[:, 0], "y": xy[:, 1], "initial_gap": nominal_gaps, "gap": final.gaps,
-        "force": final.forces, "status": final.status_labels})
+    files["nominal_contacts.csv"] = write_csv(
+        out / "nominal_contacts.csv",
+        {
+            "x": xy[:, 0],
+            "y": xy[:, 1],
+            "initial_gap": nominal_gaps,
+            "gap": final.gaps,
+            "force": final.forces,
+            "status": final.status_labels,
+        },
+    )
     pairs = model.fasteners[sequence.order]
-    files["nominal_sequence.csv"] = write_csv(out / "nominal_sequence.csv", {
-        "step": np.arange(1, len(pairs) + 1), "pair": pairs, "x": xy[pairs, 0],
-        "y": xy[pairs, 1], "tension": [step.fastener_forces[-1] for step in sequence.steps],
-        "closed": [int(np.count_nonzero(step.contact_status == ContactStatus.CLOSED))
-                   for step in sequence.steps],
-        "max_gap": [float(step.gaps.max()) for step in sequence.steps]})
+    files["nominal_sequence.csv"] = write_csv(
+        out / "nominal_sequence.csv",
+        {
+            "step": np.arange(1, len(pairs) + 1),
+            "pair": pairs,
+            "x": xy[pairs, 0],
+            "y": xy[pairs, 1],
+            "tension": [step.fastener_forces[-1] for step in sequence.steps],
+            "closed": [
+                int(np.count_nonzero(step.contact_status == ContactStatus.CLOSED))
+                for step in sequence.steps
+            ],
+            "max_gap": [float(step.gaps.max()) for step in sequence.steps],
+        },
+    )
     return files

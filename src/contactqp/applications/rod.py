@@ -61,9 +61,24 @@ from ..io import export
 from ..methods import solve
 from ..optional import require
 
-__all__ = ["Rod", "RodLoad", "RodLoadCase", "FullSolution", "CaseComparison", "DEFAULT_CASES",
-           "ReferenceSolveError", "solve_reduced", "solve_full", "compare", "deviations",
-           "as_record", "result_mesh", "plot_rod", "ABSOLUTE_BELOW", "MAX_ELEMENTS"]
+__all__ = [
+    "Rod",
+    "RodLoad",
+    "RodLoadCase",
+    "FullSolution",
+    "CaseComparison",
+    "DEFAULT_CASES",
+    "ReferenceSolveError",
+    "solve_reduced",
+    "solve_full",
+    "compare",
+    "deviations",
+    "as_record",
+    "result_mesh",
+    "plot_rod",
+    "ABSOLUTE_BELOW",
+    "MAX_ELEMENTS",
+]
 
 #: Reference values below this fraction of a case's largest displacement get absolute deviations.
 ABSOLUTE_BELOW = 1e-6
@@ -95,8 +110,10 @@ class RodLoadCase:
 #: One force at 10 mm, and three forces growing towards the clamp; both close the free end only.
 DEFAULT_CASES = (
     RodLoadCase("one force", (RodLoad(0.010, 0.0, -1.0),)),
-    RodLoadCase("several forces", (RodLoad(0.010, 0.0, -0.3), RodLoad(0.020, 0.0, -0.6),
-                                   RodLoad(0.030, 0.0, -0.9))),
+    RodLoadCase(
+        "several forces",
+        (RodLoad(0.010, 0.0, -0.3), RodLoad(0.020, 0.0, -0.6), RodLoad(0.030, 0.0, -0.9)),
+    ),
 )
 
 
@@ -133,8 +150,12 @@ class Rod:
     def __post_init__(self):
         for name in ("length", "young", "area", "gap_free", "gap_clamped"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                    or not math.isfinite(value) or value <= 0:
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, numbers.Real)
+                or not math.isfinite(value)
+                or value <= 0
+            ):
                 raise InvalidInputError(f"{name} must be finite and > 0, got {value}")
         self.node_indices  # noqa: B018  (validates nodes and n_elements)
 
@@ -146,22 +167,29 @@ class Rod:
     @cached_property
     def frame(self) -> Frame2D:
         """The finite-element model: ``n_elements`` frame elements, right end clamped."""
-        return Frame2D.straight(self.length, self.n_elements, self.young, self.area,
-                                self.inertia, fixed={-1: "xyr"})
+        return Frame2D.straight(
+            self.length, self.n_elements, self.young, self.area, self.inertia, fixed={-1: "xyr"}
+        )
 
     @cached_property
     def node_indices(self) -> np.ndarray:
         """Mesh indices of the computational nodes."""
-        if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, numbers.Real) \
-                or int(self.n_elements) != self.n_elements or self.n_elements < 1:
+        if (
+            isinstance(self.n_elements, bool)
+            or not isinstance(self.n_elements, numbers.Real)
+            or int(self.n_elements) != self.n_elements
+            or self.n_elements < 1
+        ):
             raise InvalidInputError(
-                f"n_elements must be a whole number >= 1, got {self.n_elements!r}")
+                f"n_elements must be a whole number >= 1, got {self.n_elements!r}"
+            )
         if self.n_elements > MAX_ELEMENTS:
             raise InvalidInputError(
                 f"n_elements must be at most {MAX_ELEMENTS}, got {self.n_elements}: the frame's "
                 f"stiffness is ill-conditioned like n_elements^4 (round-off reaches 1e-4 of the "
                 f"answer at {MAX_ELEMENTS}, and it is singular to working precision from about "
-                f"2400)")
+                f"2400)"
+            )
         try:
             x = np.asarray(self.nodes, dtype=float)
         except (TypeError, ValueError):
@@ -175,7 +203,8 @@ class Rod:
             bad = x[off | (index < 0) | (index >= self.n_elements)][0]
             raise InvalidInputError(
                 f"computational node x = {bad:g} m is not a free mesh node of the "
-                f"{self.n_elements} elements on [0, {self.length:g}) m")
+                f"{self.n_elements} elements on [0, {self.length:g}) m"
+            )
         if np.unique(index).size != index.size:
             raise InvalidInputError("nodes contains repeated positions")
         return index
@@ -206,7 +235,8 @@ class Rod:
             if hit.size == 0:
                 raise InvalidInputError(
                     f"load case {case.name!r}: force at x = {load.x:g} m is not on a computational "
-                    f"node ({', '.join(f'{x:g}' for x in self.nodes)})")
+                    f"node ({', '.join(f'{x:g}' for x in self.nodes)})"
+                )
             rows.append((int(self.node_indices[hit[0]]), load.fx, load.fy))
         return self.frame.load_vector(rows)
 
@@ -235,8 +265,9 @@ def solve_reduced(rod: Rod, case: RodLoadCase, solver: str = "active-set") -> Co
     P = np.array([loads[frame.index(int(k), c)] for k in rod.node_indices for c in ("ux", "uy")])
     start = time.perf_counter()
     x = rod.frame.coordinates[rod.node_indices, 0]
-    problem = ContactProblem(model, P, [GapObstacle(range(model.n_nodes), rod.normal_gap(x),
-                                                    rod.normal)])
+    problem = ContactProblem(
+        model, P, [GapObstacle(range(model.n_nodes), rod.normal_gap(x), rod.normal)]
+    )
     result = solve(problem, solver)
     return dataclasses.replace(result, seconds=time.perf_counter() - start)
 
@@ -303,8 +334,10 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
     start = time.perf_counter()
     columns = np.array([[frame.index(int(k), "ux"), frame.index(int(k), "uy")] for k in nodes])
     n = d.size
-    G = sp.csr_matrix((np.tile(rod.normal, len(nodes)), columns.ravel(),
-                       np.arange(0, 2 * len(nodes) + 1, 2)), shape=(len(nodes), n))
+    G = sp.csr_matrix(
+        (np.tile(rod.normal, len(nodes)), columns.ravel(), np.arange(0, 2 * len(nodes) + 1, 2)),
+        shape=(len(nodes), n),
+    )
     h = rod.normal_gap(frame.coordinates[nodes, 0])
     scale = float(h.max())
     Gs, fs, hs = (G @ sp.diags(d)).tocsc(), d * f / scale, h / scale
@@ -316,15 +349,19 @@ def solve_full(rod: Rod, case: RodLoadCase, contact: str = "mesh") -> FullSoluti
         raise ReferenceSolveError(f"load case {case.name!r}: Clarabel found no solution")
     # contact forces (z * scale) above 1e-8 of the largest load are active; no load, no contact
     largest = np.max(np.abs(f), initial=0.0)
-    active = np.asarray(answer.z) * scale > 1e-8 * largest if largest > 0 \
+    active = (
+        np.asarray(answer.z) * scale > 1e-8 * largest
+        if largest > 0
         else np.zeros(len(nodes), dtype=bool)
+    )
     v, z = _active_set_polish(Ks, Gs, fs, hs, active, case.name)
     forces = z * scale
     penetration = np.max(Gs @ v - hs, initial=0.0)
     if penetration > 1e-9 or np.min(z, initial=0.0) < -1e-9 * np.max(np.abs(z), initial=0.0):
         raise ReferenceSolveError(
             f"load case {case.name!r}: the polished reference violates contact (penetration "
-            f"{penetration * scale:.3g} m, least force {np.min(z, initial=0.0) * scale:.3g} N)")
+            f"{penetration * scale:.3g} m, least force {np.min(z, initial=0.0) * scale:.3g} N)"
+        )
     seconds = time.perf_counter() - start
     full = np.zeros(3 * frame.n_nodes)
     full[frame.free] = scale * d * v
@@ -358,24 +395,28 @@ def _active_set_polish(K, G, f, h, active, name):
         lu = spla.splu(K.tocsc())
     except RuntimeError as exc:  # SuperLU: exactly singular
         raise ReferenceSolveError(
-            f"load case {name!r}: the mesh's stiffness is singular ({exc})") from None
+            f"load case {name!r}: the mesh's stiffness is singular ({exc})"
+        ) from None
     Gt = G.T.tocsc()
     influence = np.empty(Gt.shape)
     for start in range(0, Gt.shape[1], _COLUMN_BLOCK):
-        influence[:, start:start + _COLUMN_BLOCK] = lu.solve(
-            Gt[:, start:start + _COLUMN_BLOCK].toarray())
+        influence[:, start : start + _COLUMN_BLOCK] = lu.solve(
+            Gt[:, start : start + _COLUMN_BLOCK].toarray()
+        )
     W = np.asarray(G @ influence)
     free = lu.solve(f)
     solution = solve_nonnegative_qp(0.5 * (W + W.T), G @ free - h, x0=active.astype(float))
     z = solution.x
     if not solution.converged:
         raise ReferenceSolveError(
-            f"load case {name!r}: the reference's active-set polish did not converge")
+            f"load case {name!r}: the reference's active-set polish did not converge"
+        )
     return free - influence @ z, z
 
 
-def deviations(values: ArrayLike, reference: ArrayLike,
-               floor: float) -> tuple[np.ndarray, np.ndarray]:
+def deviations(
+    values: ArrayLike, reference: ArrayLike, floor: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Relative deviations in percent, or absolute ones (same unit) where ``|reference| <= floor``.
 
     Returns
@@ -388,8 +429,9 @@ def deviations(values: ArrayLike, reference: ArrayLike,
     values, reference = np.asarray(values, dtype=float), np.asarray(reference, dtype=float)
     difference = np.abs(values - reference)
     absolute = np.abs(reference) <= floor
-    eps = np.where(absolute, difference, 100.0 * difference / np.where(absolute, 1.0,
-                                                                       np.abs(reference)))
+    eps = np.where(
+        absolute, difference, 100.0 * difference / np.where(absolute, 1.0, np.abs(reference))
+    )
     return eps, absolute
 
 
@@ -465,16 +507,29 @@ def _compare_case(rod: Rod, case: RodLoadCase, solver: str, repeat: int) -> Case
     mesh = rod.mesh_contact_nodes
     crossing = recovered[mesh, :2] @ rod.normal - rod.normal_gap(frame.coordinates[mesh, 0])
     return CaseComparison(
-        case=case, reduced=reduced, same_nodes=same_nodes, reference=reference,
-        eps_x=eps[:, 0], eps_y=eps[:, 1], absolute_x=absolute[:, 0], absolute_y=absolute[:, 1],
-        max_eps=max_eps, max_eps_same_nodes=max_eps_same_nodes,
-        t_reduced=t_reduced, t_full=min(r.seconds for r in references),
-        max_penetration=float(max(np.max(crossing), 0.0)), recovered=recovered)
+        case=case,
+        reduced=reduced,
+        same_nodes=same_nodes,
+        reference=reference,
+        eps_x=eps[:, 0],
+        eps_y=eps[:, 1],
+        absolute_x=absolute[:, 0],
+        absolute_y=absolute[:, 1],
+        max_eps=max_eps,
+        max_eps_same_nodes=max_eps_same_nodes,
+        t_reduced=t_reduced,
+        t_full=min(r.seconds for r in references),
+        max_penetration=float(max(np.max(crossing), 0.0)),
+        recovered=recovered,
+    )
 
 
-def compare(rod: Rod | None = None, cases: Sequence[RodLoadCase] = DEFAULT_CASES,
-            solver: str = "active-set",
-            repeat: int = 3) -> list[CaseComparison]:
+def compare(
+    rod: Rod | None = None,
+    cases: Sequence[RodLoadCase] = DEFAULT_CASES,
+    solver: str = "active-set",
+    repeat: int = 3,
+) -> list[CaseComparison]:
     """The method's table: reduced solutions against full finite-element contact solutions.
 
     Parameters
@@ -508,30 +563,60 @@ def as_record(rod: Rod, comparisons: Sequence[CaseComparison]) -> dict:
     for c in comparisons:
         U = c.reduced.displacements.reshape(-1, 2)
         ref = c.reference.displacements[rod.node_indices, :2]
-        nodes = [{"x": float(x[i]), "gap": float(rod.gap(x[i])), "ux": float(U[i, 0]),
-                  "uy": float(U[i, 1]), "ux_ref": float(ref[i, 0]), "uy_ref": float(ref[i, 1]),
-                  "eps_x": float(c.eps_x[i]), "eps_y": float(c.eps_y[i]),
-                  "eps_x_absolute": bool(c.absolute_x[i]), "eps_y_absolute": bool(c.absolute_y[i]),
-                  "force": float(c.reduced.forces[i]),
-                  "closed": bool(c.reduced.contact_status[i] == ContactStatus.CLOSED)}
-                 for i in range(len(x))]
+        nodes = [
+            {
+                "x": float(x[i]),
+                "gap": float(rod.gap(x[i])),
+                "ux": float(U[i, 0]),
+                "uy": float(U[i, 1]),
+                "ux_ref": float(ref[i, 0]),
+                "uy_ref": float(ref[i, 1]),
+                "eps_x": float(c.eps_x[i]),
+                "eps_y": float(c.eps_y[i]),
+                "eps_x_absolute": bool(c.absolute_x[i]),
+                "eps_y_absolute": bool(c.absolute_y[i]),
+                "force": float(c.reduced.forces[i]),
+                "closed": bool(c.reduced.contact_status[i] == ContactStatus.CLOSED),
+            }
+            for i in range(len(x))
+        ]
         touching = c.reference.forces > 0
-        cases.append({
-            "name": c.case.name,
-            "loads": [{"x": load.x, "fx": load.fx, "fy": load.fy} for load in c.case.loads],
-            "nodes": nodes, "max_eps": c.max_eps, "max_eps_same_nodes": c.max_eps_same_nodes,
-            "t_reduced": c.t_reduced, "t_full": c.t_full, "max_penetration": c.max_penetration,
-            "reference_contacts": [{"x": float(rod.frame.coordinates[k, 0]), "force": float(f)}
-                                   for k, f in zip(c.reference.contact_nodes[touching],
-                                                   c.reference.forces[touching],
-                                                   strict=True)],
-            "success": c.reduced.success, "status": c.reduced.status,
-            "message": c.reduced.message})
-    return {"clamped_end": "right",
-            "rod": {"length": rod.length, "young": rod.young, "area": rod.area,
-                    "inertia": rod.inertia, "gap_free": rod.gap_free,
-                    "gap_clamped": rod.gap_clamped, "n_elements": rod.n_elements},
-            "cases": cases}
+        cases.append(
+            {
+                "name": c.case.name,
+                "loads": [{"x": load.x, "fx": load.fx, "fy": load.fy} for load in c.case.loads],
+                "nodes": nodes,
+                "max_eps": c.max_eps,
+                "max_eps_same_nodes": c.max_eps_same_nodes,
+                "t_reduced": c.t_reduced,
+                "t_full": c.t_full,
+                "max_penetration": c.max_penetration,
+                "reference_contacts": [
+                    {"x": float(rod.frame.coordinates[k, 0]), "force": float(f)}
+                    for k, f in zip(
+                        c.reference.contact_nodes[touching],
+                        c.reference.forces[touching],
+                        strict=True,
+                    )
+                ],
+                "success": c.reduced.success,
+                "status": c.reduced.status,
+                "message": c.reduced.message,
+            }
+        )
+    return {
+        "clamped_end": "right",
+        "rod": {
+            "length": rod.length,
+            "young": rod.young,
+            "area": rod.area,
+            "inertia": rod.inertia,
+            "gap_free": rod.gap_free,
+            "gap_clamped": rod.gap_clamped,
+            "n_elements": rod.n_elements,
+        },
+        "cases": cases,
+    }
 
 
 def result_mesh(rod: Rod, comparisons: Sequence[CaseComparison]) -> export.PointMesh:
@@ -554,8 +639,9 @@ def result_mesh(rod: Rod, comparisons: Sequence[CaseComparison]) -> export.Point
 
     for c in comparisons:
         slug = c.case.name.replace(" ", "_")
-        data[f"{slug}_displacement"] = np.column_stack([c.reference.displacements[:, :2],
-                                                        np.zeros(n)])
+        data[f"{slug}_displacement"] = np.column_stack(
+            [c.reference.displacements[:, :2], np.zeros(n)]
+        )
         data[f"{slug}_displacement_reduced"] = np.column_stack([c.recovered[:, :2], np.zeros(n)])
         data[f"{slug}_contact_force"] = vectors(c.reference.contact_nodes, c.reference.forces)
         data[f"{slug}_contact_force_reduced"] = vectors(rod.node_indices, c.reduced.forces)
@@ -578,14 +664,33 @@ def plot_rod(rod: Rod, comparisons: Sequence[CaseComparison], path: str | os.Pat
     for c in comparisons:
         U = c.reduced.displacements.reshape(-1, 2)
         at_nodes = np.column_stack([x[nodes] + U[:, 0], U[:, 1]])
-        loads = [(np.array([load.x, c.reference.displacements[int(np.argmin(np.abs(x - load.x))),
-                                                              1]]),
-                  np.array([0.0, load.fy])) for load in c.case.loads]
-        contacts = [(at_nodes[i], -c.reduced.forces[i] * rod.normal)
-                    for i in np.flatnonzero(c.reduced.forces > 0)]
-        cases.append(DeflectionCase(
-            title=f"{c.case.name}: largest deviation {c.max_eps:.2g} %",
-            deformed=rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2],
-            nodes=at_nodes, loads=loads, contacts=contacts))
-    return plot_deflections(x, -rod.gap(x), cases, path, clamp=0.25 * rod.gap_clamped,
-                            xlabel="x (mm), clamped at the right end")
+        loads = [
+            (
+                np.array(
+                    [load.x, c.reference.displacements[int(np.argmin(np.abs(x - load.x))), 1]]
+                ),
+                np.array([0.0, load.fy]),
+            )
+            for load in c.case.loads
+        ]
+        contacts = [
+            (at_nodes[i], -c.reduced.forces[i] * rod.normal)
+            for i in np.flatnonzero(c.reduced.forces > 0)
+        ]
+        cases.append(
+            DeflectionCase(
+                title=f"{c.case.name}: largest deviation {c.max_eps:.2g} %",
+                deformed=rod.frame.coordinates[:, :2] + c.reference.displacements[:, :2],
+                nodes=at_nodes,
+                loads=loads,
+                contacts=contacts,
+            )
+        )
+    return plot_deflections(
+        x,
+        -rod.gap(x),
+        cases,
+        path,
+        clamp=0.25 * rod.gap_clamped,
+        xlabel="x (mm), clamped at the right end",
+    )

@@ -155,20 +155,31 @@ class SpringChain:
         if not np.all(np.isfinite(x)):
             message = "the displacements overflow (beyond 1e308 m)"
         else:
-            message = (f"solved body by body from the loaded end; worst relative residual "
-                       f"{residual:.1e}" + ("" if converged else f" above tol = {tol:g}"))
-        return SpringChainResult(force=float(force), x=x, friction=friction, sliding=sliding,
-                                 converged=converged, iterations=1, message=message)
+            message = (
+                f"solved body by body from the loaded end; worst relative residual "
+                f"{residual:.1e}" + ("" if converged else f" above tol = {tol:g}")
+            )
+        return SpringChainResult(
+            force=float(force),
+            x=x,
+            friction=friction,
+            sliding=sliding,
+            converged=converged,
+            iterations=1,
+            message=message,
+        )
 
     def _residual(self, x, friction, pull, moving) -> float:
         """Worst of the equilibrium ``c K x = pull - friction`` (on the sparse stiffness), the
         friction bounds and the law of the bodies that move, relative to the largest force in
         these equations (a spring force ``c x`` included)."""
         limit = self.friction_limit
-        scale = max(abs(pull[-1]), limit, self.stiffness * float(np.max(np.abs(x))),
-                    np.finfo(float).tiny)
+        scale = max(
+            abs(pull[-1]), limit, self.stiffness * float(np.max(np.abs(x))), np.finfo(float).tiny
+        )
         equilibrium = chain_stiffness(len(x), self.stiffness) @ x - (pull - friction)
         bound = np.maximum(np.abs(friction) - limit, 0.0)
         law = np.abs(friction[moving] - limit * np.sign(x[moving]))
-        return float(max(np.max(np.abs(equilibrium)), np.max(bound),
-                         np.max(law, initial=0.0))) / scale
+        return (
+            float(max(np.max(np.abs(equilibrium)), np.max(bound), np.max(law, initial=0.0))) / scale
+        )

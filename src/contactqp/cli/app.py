@@ -38,8 +38,14 @@ def warn(message: str) -> None:
     click.echo(f"contactqp: warning: {' '.join(str(message).split())}", err=True)
 
 
-def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
-                  file: TextIO | None = None, line: str | None = None) -> None:
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
     """Python warnings as one :func:`warn` line; one not of contactqp's tree names its class."""
     own = issubclass(category, ContactWarning)
     warn(str(message) if own else f"{message} ({category.__name__})")
@@ -53,8 +59,9 @@ def console() -> Console:
 
 
 @contextmanager
-def progress(what: str, after: float = 2.0,
-             every: float = 10.0) -> Iterator[Callable[[int, int], None]]:
+def progress(
+    what: str, after: float = 2.0, every: float = 10.0
+) -> Iterator[Callable[[int, int], None]]:
     """Show on stderr how far a long run is; yield the callback ``report(done, total)``.
 
     Nothing is shown for runs shorter than ``after`` seconds. Then, on a terminal, a rich
@@ -83,8 +90,11 @@ def progress(what: str, after: float = 2.0,
             bar.update(task, completed=done)
         elif now - last >= every or last == start:
             last = now
-            click.echo(f"contactqp: {what} {done} of {total} ({100 * done // total} %), "
-                       f"{now - start:.0f} s", err=True)
+            click.echo(
+                f"contactqp: {what} {done} of {total} ({100 * done // total} %), "
+                f"{now - start:.0f} s",
+                err=True,
+            )
 
     try:
         yield report
@@ -143,4 +153,3 @@ def _run(argv: Sequence[str] | None) -> int:
         fail("interrupted")
         return 130
     return EXIT_OK
-

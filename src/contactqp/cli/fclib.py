@@ -24,15 +24,23 @@ SOLUTION_SUFFIX = ".solution.hdf5"
 
 @cli.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--tol", type=click.FloatRange(min=0.0, min_open=True), default=1e-8,
-              show_default=True, help="Target natural-map error.")
+@click.option(
+    "--tol",
+    type=click.FloatRange(min=0.0, min_open=True),
+    default=1e-8,
+    show_default=True,
+    help="Target natural-map error.",
+)
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per file and line.")
-@click.option("--solution-dir", type=click.Path(file_okay=False, path_type=Path),
-              help=f"Write DIR/<file name>{SOLUTION_SUFFIX} (e.g. x.dat{SOLUTION_SUFFIX}) with "
-                   "/solution/r, /solution/u (and /solution/v for global problems), converged "
-                   "only. Refused if a target is an input, two inputs share a target, or a "
-                   "target exists and is not the solution file this command wrote for the same "
-                   "input.")
+@click.option(
+    "--solution-dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    help=f"Write DIR/<file name>{SOLUTION_SUFFIX} (e.g. x.dat{SOLUTION_SUFFIX}) with "
+    "/solution/r, /solution/u (and /solution/v for global problems), converged "
+    "only. Refused if a target is an input, two inputs share a target, or a "
+    "target exists and is not the solution file this command wrote for the same "
+    "input.",
+)
 def fclib(files: tuple[Path, ...], tol: float, as_json: bool, solution_dir: Path | None) -> None:
     """Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.
 
@@ -60,24 +68,33 @@ def fclib(files: tuple[Path, ...], tol: float, as_json: bool, solution_dir: Path
         except ContactError as exc:
             message = str(exc)  # the reader's messages may already name the file
             fail(message if message.startswith(str(path)) else f"{path}: {message}")
-            exit_code = max(exit_code, EXIT_NOT_SOLVED if isinstance(exc, SolverError)
-                            else EXIT_BAD_INPUT)
+            exit_code = max(
+                exit_code, EXIT_NOT_SOLVED if isinstance(exc, SolverError) else EXIT_BAD_INPUT
+            )
             continue
         certificate = solution.certificate
         counts = status_counts(solution.contact_status)
-        record = {"file": str(path), "dim": problem.dim, "contacts": problem.n_contacts,
-                  "converged": solution.success, "error": certificate.natural_map,
-                  "equilibrium": certificate.equilibrium, **certificate.limits.as_dict(),
-                  "iterations": solution.iterations, "seconds": solution.seconds,
-                  **{s: counts[s] for s in STATUSES},
-                  "limits": certificate.limits.describe(tol)}
+        record = {
+            "file": str(path),
+            "dim": problem.dim,
+            "contacts": problem.n_contacts,
+            "converged": solution.success,
+            "error": certificate.natural_map,
+            "equilibrium": certificate.equilibrium,
+            **certificate.limits.as_dict(),
+            "iterations": solution.iterations,
+            "seconds": solution.seconds,
+            **{s: counts[s] for s in STATUSES},
+            "limits": certificate.limits.describe(tol),
+        }
         if not solution.success:
             fail(f"{path}: {solution.message}" + ("; no solution written" if solution_dir else ""))
             exit_code = max(exit_code, EXIT_NOT_SOLVED)
         elif solution_dir:
             solution_dir.mkdir(parents=True, exist_ok=True)
-            write_solution(targets[path], solution.forces, solution.displacements,
-                           solution.v, source=path)
+            write_solution(
+                targets[path], solution.forces, solution.displacements, solution.v, source=path
+            )
         if as_json:
             click.echo(json.dumps(record))
         rows.append(record)
@@ -106,18 +123,27 @@ def _solution_targets(files: Sequence[Path], solution_dir: Path) -> dict[Path, P
         target = solution_dir / f"{path.name}{SOLUTION_SUFFIX}"
         where = key(target)
         if where in inputs:
-            _refuse(f"{target}: the solution of {path} would overwrite the input "
-                    f"{inputs[where]}; choose another --solution-dir")
+            _refuse(
+                f"{target}: the solution of {path} would overwrite the input "
+                f"{inputs[where]}; choose another --solution-dir"
+            )
         other = owners.setdefault(where, path)
         if key(other) != key(path):
-            _refuse(f"{target}: {other} and {path} would write the same solution file; solve "
-                    f"them with different --solution-dir")
+            _refuse(
+                f"{target}: {other} and {path} would write the same solution file; solve "
+                f"them with different --solution-dir"
+            )
         if target.exists() and not is_own_solution(target, path):
             written_for = solution_source(target)
-            what = (f"the solution of another input, {written_for}" if written_for
-                    else "not a solution file written by contactqp fclib")
-            _refuse(f"{target}: exists and is {what}; not overwritten (remove it or choose "
-                    f"another --solution-dir)")
+            what = (
+                f"the solution of another input, {written_for}"
+                if written_for
+                else "not a solution file written by contactqp fclib"
+            )
+            _refuse(
+                f"{target}: exists and is {what}; not overwritten (remove it or choose "
+                f"another --solution-dir)"
+            )
         targets[path] = target
     return targets
 
@@ -134,7 +160,14 @@ def _fclib_table(rows: list[dict[str, Any]]) -> None:
     for column in COLUMNS:
         table.add_column(column, justify="left" if column == "file" else "right")
     for r in rows:
-        table.add_row(Path(r["file"]).name, str(r["dim"]), str(r["contacts"]), str(r["converged"]),
-                      f"{r['error']:.2e}", str(r["iterations"]), f"{r['seconds']:.3g}",
-                      *(str(r[s]) for s in STATUSES))
+        table.add_row(
+            Path(r["file"]).name,
+            str(r["dim"]),
+            str(r["contacts"]),
+            str(r["converged"]),
+            f"{r['error']:.2e}",
+            str(r["iterations"]),
+            f"{r['seconds']:.3g}",
+            *(str(r[s]) for s in STATUSES),
+        )
     console().print(table)

@@ -14,18 +14,29 @@ from .app import EXIT_NOT_SOLVED, cli, console, fail
 
 
 @cli.command()
-@click.option("--elements", type=click.IntRange(min=8, max=MAX_ELEMENTS), default=80,
-              show_default=True,
-              help=f"Frame elements of the full mesh, a multiple of 8 (which keeps the 8 nodes on "
-                   f"it) up to {MAX_ELEMENTS}: the frame's stiffness is ill-conditioned like "
-                   f"elements^4, round-off reaches 1e-4 of the answer at {MAX_ELEMENTS} and the "
-                   f"stiffness is singular to working precision from about 2400.")
-@click.option("--json", "as_json", is_flag=True,
-              help="Print the table as one JSON object (SI units).")
-@click.option("--plot", type=click.Path(dir_okay=False, path_type=Path),
-              help="Draw the deformed rod over the obstacle to this PNG file.")
-@click.option("--vtu", type=click.Path(dir_okay=False, path_type=Path),
-              help="Write the mesh and the solutions to this VTU file (ParaView).")
+@click.option(
+    "--elements",
+    type=click.IntRange(min=8, max=MAX_ELEMENTS),
+    default=80,
+    show_default=True,
+    help=f"Frame elements of the full mesh, a multiple of 8 (which keeps the 8 nodes on "
+    f"it) up to {MAX_ELEMENTS}: the frame's stiffness is ill-conditioned like "
+    f"elements^4, round-off reaches 1e-4 of the answer at {MAX_ELEMENTS} and the "
+    f"stiffness is singular to working precision from about 2400.",
+)
+@click.option(
+    "--json", "as_json", is_flag=True, help="Print the table as one JSON object (SI units)."
+)
+@click.option(
+    "--plot",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Draw the deformed rod over the obstacle to this PNG file.",
+)
+@click.option(
+    "--vtu",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Write the mesh and the solutions to this VTU file (ParaView).",
+)
 def rod(elements: int, as_json: bool, plot: Path | None, vtu: Path | None) -> None:
     """The published rod over an obstacle: reduced model (8 nodes) against full FE contact.
 
@@ -67,23 +78,38 @@ def _rod_tables(model, comparisons):
     out = console()
     x = model.frame.coordinates[model.node_indices, 0]
     for c in comparisons:
-        loads = ", ".join(f"({load.fx:g}, {load.fy:g}) N at {load.x * 1e3:g} mm"
-                          for load in c.case.loads)
-        table = Table(title=f"{c.case.name}: {loads}",
-                      caption=f"max eps {c.max_eps:.2g} % (same-node reference "
-                              f"{c.max_eps_same_nodes:.2g} %); reduced {c.t_reduced * 1e3:.3g} "
-                              f"ms, full FE contact {c.t_full * 1e3:.3g} ms; ux in --json; "
-                              "* absolute (m)")
-        for column in ("x (mm)", "gap (mm)", "uy (mm)", "uy ref (mm)", "eps_x (%)", "eps_y (%)",
-                       "force (N)"):
+        loads = ", ".join(
+            f"({load.fx:g}, {load.fy:g}) N at {load.x * 1e3:g} mm" for load in c.case.loads
+        )
+        table = Table(
+            title=f"{c.case.name}: {loads}",
+            caption=f"max eps {c.max_eps:.2g} % (same-node reference "
+            f"{c.max_eps_same_nodes:.2g} %); reduced {c.t_reduced * 1e3:.3g} "
+            f"ms, full FE contact {c.t_full * 1e3:.3g} ms; ux in --json; "
+            "* absolute (m)",
+        )
+        for column in (
+            "x (mm)",
+            "gap (mm)",
+            "uy (mm)",
+            "uy ref (mm)",
+            "eps_x (%)",
+            "eps_y (%)",
+            "force (N)",
+        ):
             table.add_column(column, justify="right")
         uy = c.reduced.displacements.reshape(-1, 2)[:, 1]
         uy_ref = c.reference.displacements[model.node_indices, 1]
         for i in range(len(x)):
             table.add_row(
-                f"{x[i] * 1e3:g}", f"{model.gap(x[i]) * 1e3:.3g}", f"{uy[i] * 1e3:.6f}",
-                f"{uy_ref[i] * 1e3:.6f}", _eps(c.eps_x[i], c.absolute_x[i]),
-                _eps(c.eps_y[i], c.absolute_y[i]), f"{c.reduced.forces[i]:.4g}")
+                f"{x[i] * 1e3:g}",
+                f"{model.gap(x[i]) * 1e3:.3g}",
+                f"{uy[i] * 1e3:.6f}",
+                f"{uy_ref[i] * 1e3:.6f}",
+                _eps(c.eps_x[i], c.absolute_x[i]),
+                _eps(c.eps_y[i], c.absolute_y[i]),
+                f"{c.reduced.forces[i]:.4g}",
+            )
         out.print(table)
 
 

@@ -21,5 +21,11 @@ from .condensation import condense, factorize
 from .halfspace import grid, influence_matrix, normal_influence
 from .importers import load_compliance
 
-__all__ = ["grid", "normal_influence", "influence_matrix", "condense", "factorize",
-           "load_compliance"]
+__all__ = [
+    "grid",
+    "normal_influence",
+    "influence_matrix",
+    "condense",
+    "factorize",
+    "load_compliance",
+]

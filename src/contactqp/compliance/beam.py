@@ -31,8 +31,9 @@ COMPONENTS = ("ux", "uy", "rz")
 _LETTERS = {"x": 0, "y": 1, "r": 2}
 
 
-def frame_element_stiffness(start: ArrayLike, end: ArrayLike, young: float, area: float,
-                            inertia: float) -> np.ndarray:
+def frame_element_stiffness(
+    start: ArrayLike, end: ArrayLike, young: float, area: float, inertia: float
+) -> np.ndarray:
     """Stiffness of one plane frame element in global coordinates.
 
     Parameters
@@ -57,14 +58,16 @@ def frame_element_stiffness(start: ArrayLike, end: ArrayLike, young: float, area
     a = young * area / length
     b = young * inertia / length**3
     L = length
-    local = np.array([
-        [a, 0, 0, -a, 0, 0],
-        [0, 12 * b, 6 * b * L, 0, -12 * b, 6 * b * L],
-        [0, 6 * b * L, 4 * b * L**2, 0, -6 * b * L, 2 * b * L**2],
-        [-a, 0, 0, a, 0, 0],
-        [0, -12 * b, -6 * b * L, 0, 12 * b, -6 * b * L],
-        [0, 6 * b * L, 2 * b * L**2, 0, -6 * b * L, 4 * b * L**2],
-    ])
+    local = np.array(
+        [
+            [a, 0, 0, -a, 0, 0],
+            [0, 12 * b, 6 * b * L, 0, -12 * b, 6 * b * L],
+            [0, 6 * b * L, 4 * b * L**2, 0, -6 * b * L, 2 * b * L**2],
+            [-a, 0, 0, a, 0, 0],
+            [0, -12 * b, -6 * b * L, 0, 12 * b, -6 * b * L],
+            [0, 6 * b * L, 2 * b * L**2, 0, -6 * b * L, 4 * b * L**2],
+        ]
+    )
     rotation = np.zeros((6, 6))
     block = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
     rotation[:3, :3] = rotation[3:, 3:] = block
@@ -80,14 +83,18 @@ def _positive(value: ArrayLike, name: str, count: int) -> np.ndarray:
     if array is None or not np.all(np.isfinite(array)) or np.any(array <= 0):
         raise InvalidInputError(
             f"{name} must be one positive finite value or {count} of them (one per element), "
-            f"got {np.shape(value) or value}")
+            f"got {np.shape(value) or value}"
+        )
     return array
 
 
 def _node_number(node: object, n_nodes: int, what: str = "node") -> int:
     """``node`` as a whole index in ``-n_nodes..n_nodes - 1``; InvalidInputError otherwise."""
-    if isinstance(node, (bool, np.bool_)) or not isinstance(node, numbers.Real) \
-            or not float(node).is_integer():
+    if (
+        isinstance(node, (bool, np.bool_))
+        or not isinstance(node, numbers.Real)
+        or not float(node).is_integer()
+    ):
         raise InvalidInputError(f"{what} must be a whole node index, got {node!r}")
     index = int(float(node))
     if not -n_nodes <= index < n_nodes:
@@ -116,17 +123,28 @@ class Frame2D:
         Wrong shapes, non-positive properties, zero-length elements or unknown fixations.
     """
 
-    def __init__(self, coordinates: ArrayLike, elements: ArrayLike, young: ArrayLike,
-                 area: ArrayLike, inertia: ArrayLike,
-                 fixed: Mapping[int, str] | None = None) -> None:
+    def __init__(
+        self,
+        coordinates: ArrayLike,
+        elements: ArrayLike,
+        young: ArrayLike,
+        area: ArrayLike,
+        inertia: ArrayLike,
+        fixed: Mapping[int, str] | None = None,
+    ) -> None:
         coords = finite_array(coordinates, "coordinates", 2)
         if coords.shape[1] != 2 or coords.shape[0] < 2:
             raise InvalidInputError(f"coordinates must have shape (n >= 2, 2), got {coords.shape}")
         conn = np.asarray(elements)
-        if conn.ndim != 2 or conn.shape[1] != 2 or conn.shape[0] == 0 \
-                or not np.issubdtype(conn.dtype, np.integer):
+        if (
+            conn.ndim != 2
+            or conn.shape[1] != 2
+            or conn.shape[0] == 0
+            or not np.issubdtype(conn.dtype, np.integer)
+        ):
             raise InvalidInputError(
-                f"elements must be integer node pairs of shape (m, 2), got {conn.shape}")
+                f"elements must be integer node pairs of shape (m, 2), got {conn.shape}"
+            )
         if conn.min() < 0 or conn.max() >= len(coords):
             raise InvalidInputError(f"elements refer to nodes outside 0..{len(coords) - 1}")
         lengths = np.linalg.norm(coords[conn[:, 1]] - coords[conn[:, 0]], axis=1)
@@ -142,7 +160,8 @@ class Frame2D:
             _node_number(node, len(coords), "fixed node")
             if not isinstance(letters, str) or not letters or set(letters) - set(_LETTERS):
                 raise InvalidInputError(
-                    f"fixed[{node}] must be letters among 'x', 'y', 'r', got {letters!r}")
+                    f"fixed[{node}] must be letters among 'x', 'y', 'r', got {letters!r}"
+                )
             held += [3 * (int(node) % len(coords)) + _LETTERS[c] for c in letters]
         self.fixed = np.unique(np.array(held, dtype=int))
         self.free = np.setdiff1d(np.arange(3 * len(coords)), self.fixed)
@@ -150,14 +169,26 @@ class Frame2D:
         self._position[self.free] = np.arange(self.free.size)
 
     @classmethod
-    def straight(cls, length: float, n_elements: int, young: ArrayLike, area: ArrayLike,
-                 inertia: ArrayLike, fixed: Mapping[int, str] | None = None) -> Frame2D:
+    def straight(
+        cls,
+        length: float,
+        n_elements: int,
+        young: ArrayLike,
+        area: ArrayLike,
+        inertia: ArrayLike,
+        fixed: Mapping[int, str] | None = None,
+    ) -> Frame2D:
         """A straight rod along ``x`` from 0 to ``length`` (m), in equal elements."""
-        if not isinstance(length, numbers.Real) or not isinstance(n_elements, numbers.Real) \
-                or not (np.isfinite(length) and length > 0) or int(n_elements) != n_elements \
-                or n_elements < 1:
-            raise InvalidInputError(f"length must be > 0 and n_elements a whole number >= 1, got "
-                                    f"{length}, {n_elements}")
+        if (
+            not isinstance(length, numbers.Real)
+            or not isinstance(n_elements, numbers.Real)
+            or not (np.isfinite(length) and length > 0)
+            or int(n_elements) != n_elements
+            or n_elements < 1
+        ):
+            raise InvalidInputError(
+                f"length must be > 0 and n_elements a whole number >= 1, got {length}, {n_elements}"
+            )
         x = np.linspace(0.0, length, int(n_elements) + 1)
         nodes = np.column_stack([x, np.zeros_like(x)])
         elements = np.column_stack([np.arange(n_elements), np.arange(1, n_elements + 1)])
@@ -191,10 +222,12 @@ class Frame2D:
 
     def full_stiffness(self) -> sp.csr_matrix:
         """Stiffness of all ``3 n_nodes`` freedoms, fixations ignored (singular), shape (3n, 3n)."""
-        blocks = [frame_element_stiffness(self.coordinates[a], self.coordinates[b], young, area,
-                                          inertia)
-                  for (a, b), young, area, inertia
-                  in zip(self.elements, self.young, self.area, self.inertia, strict=True)]
+        blocks = [
+            frame_element_stiffness(self.coordinates[a], self.coordinates[b], young, area, inertia)
+            for (a, b), young, area, inertia in zip(
+                self.elements, self.young, self.area, self.inertia, strict=True
+            )
+        ]
         dofs = (3 * self.elements[:, :, None] + np.arange(3)).reshape(-1, 6)
         rows = np.repeat(dofs, 6, axis=1).ravel()
         cols = np.tile(dofs, (1, 6)).ravel()
@@ -222,7 +255,8 @@ class Frame2D:
             if len(values) not in (2, 3) or not finite:
                 raise InvalidInputError(
                     f"a load must be (node, fx, fy) or (node, fx, fy, mz) with finite values, "
-                    f"got {row!r}")
+                    f"got {row!r}"
+                )
             for component, value in zip(COMPONENTS, values, strict=False):  # mz is optional
                 if value != 0.0:
                     vector[self._free_position(node, component)] += value
@@ -243,8 +277,10 @@ class Frame2D:
         """
         loads = np.asarray(load_vector, dtype=float)
         if loads.shape != (self.free.size,) or not np.all(np.isfinite(loads)):
-            raise InvalidInputError(f"load_vector must be {self.free.size} finite values (one per "
-                                    f"free freedom), got shape {loads.shape}")
+            raise InvalidInputError(
+                f"load_vector must be {self.free.size} finite values (one per "
+                f"free freedom), got shape {loads.shape}"
+            )
         full = np.zeros(3 * self.n_nodes)
         full[self.free] = factorize(self.stiffness(), labels=self.labels).solve(loads)
         return full.reshape(-1, 3)
@@ -266,12 +302,16 @@ class Frame2D:
             The fixations leave the frame free to move.
         """
         if not components or set(components) - set(_LETTERS):
-            raise InvalidInputError(f"components must be letters among 'x', 'y', 'r', got "
-                                    f"{components!r}")
-        freedoms = np.array([self.index(k, COMPONENTS[_LETTERS[c]])
-                             for k in nodes for c in components], dtype=int)
+            raise InvalidInputError(
+                f"components must be letters among 'x', 'y', 'r', got {components!r}"
+            )
+        freedoms = np.array(
+            [self.index(k, COMPONENTS[_LETTERS[c]]) for k in nodes for c in components], dtype=int
+        )
         return condense(self.stiffness(), freedoms, labels=self.labels)
 
     def __repr__(self) -> str:
-        return (f"Frame2D({self.n_nodes} nodes, {len(self.elements)} elements, "
-                f"{self.free.size} free freedoms)")
+        return (
+            f"Frame2D({self.n_nodes} nodes, {len(self.elements)} elements, "
+            f"{self.free.size} free freedoms)"
+        )

@@ -33,8 +33,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike
 
-from ..errors import InvalidInputError, NotPositiveDefiniteError, RigidBodyModeError
 from ..core.model import SYMMETRY_RTOL
+from ..errors import InvalidInputError, NotPositiveDefiniteError, RigidBodyModeError
 
 __all__ = ["condense", "factorize", "SINGULAR_PIVOT_RTOL"]
 
@@ -54,8 +54,9 @@ def _checked_stiffness(stiffness) -> sp.csc_matrix:
         except (TypeError, ValueError):
             raise InvalidInputError("stiffness must be a square matrix of numbers") from None
         if stiffness.ndim != 2:
-            raise InvalidInputError(f"stiffness must be a non-empty square matrix, got shape "
-                                    f"{stiffness.shape}")
+            raise InvalidInputError(
+                f"stiffness must be a non-empty square matrix, got shape {stiffness.shape}"
+            )
     K = sp.csc_matrix(stiffness, dtype=float)
     if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] == 0:
         raise InvalidInputError(f"stiffness must be a non-empty square matrix, got shape {K.shape}")
@@ -75,9 +76,13 @@ def _checked_freedoms(freedoms, n: int) -> np.ndarray:
     return idx
 
 
-def factorize(stiffness: ArrayLike | sp.spmatrix | sp.sparray, *,
-              labels: Sequence[str] | None = None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
-              symmetry_rtol: float = SYMMETRY_RTOL) -> spla.SuperLU:
+def factorize(
+    stiffness: ArrayLike | sp.spmatrix | sp.sparray,
+    *,
+    labels: Sequence[str] | None = None,
+    pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> spla.SuperLU:
     """Factorise a symmetric positive definite sparse stiffness, refusing singular ones.
 
     Parameters
@@ -118,10 +123,14 @@ def factorize(stiffness: ArrayLike | sp.spmatrix | sp.sparray, *,
     if np.any(diagonal <= 0):
         freedom = int(np.argmin(diagonal))
         if diagonal[freedom] == 0:
-            raise RigidBodyModeError(f"the stiffness matrix is singular: {label(freedom)} has no "
-                                     "stiffness (unconnected), fix or remove it")
-        raise NotPositiveDefiniteError(f"stiffness is not positive definite: negative diagonal "
-                                       f"{diagonal[freedom]:.3g} at {label(freedom)}")
+            raise RigidBodyModeError(
+                f"the stiffness matrix is singular: {label(freedom)} has no "
+                "stiffness (unconnected), fix or remove it"
+            )
+        raise NotPositiveDefiniteError(
+            f"stiffness is not positive definite: negative diagonal "
+            f"{diagonal[freedom]:.3g} at {label(freedom)}"
+        )
     scale = sp.diags(1.0 / np.sqrt(diagonal))
     asymmetry = (scale @ abs(K - K.T) @ scale).tocoo()
     if asymmetry.nnz and asymmetry.data.max() > symmetry_rtol:
@@ -129,17 +138,22 @@ def factorize(stiffness: ArrayLike | sp.spmatrix | sp.sparray, *,
         i, j = int(asymmetry.row[worst]), int(asymmetry.col[worst])
         raise InvalidInputError(
             f"the stiffness is not symmetric: |K_ij - K_ji| / sqrt(K_ii K_jj) = "
-            f"{asymmetry.data[worst]:.3g} > {symmetry_rtol:g} between {label(i)} and {label(j)}")
+            f"{asymmetry.data[worst]:.3g} > {symmetry_rtol:g} between {label(i)} and {label(j)}"
+        )
     try:
-        lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options={"SymmetricMode": True})
+        lu = spla.splu(
+            K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+        )
     except RuntimeError:  # SuperLU: "Factor is exactly singular"
-        raise RigidBodyModeError("the stiffness matrix is singular: the model has rigid-body "
-                                 "modes, add fixations (a pivot is exactly zero)") from None
+        raise RigidBodyModeError(
+            "the stiffness matrix is singular: the model has rigid-body "
+            "modes, add fixations (a pivot is exactly zero)"
+        ) from None
 
     if not np.array_equal(lu.perm_r, lu.perm_c):
-        raise NotPositiveDefiniteError("stiffness is not positive definite: its factorisation "
-                                       "needed row pivoting")
+        raise NotPositiveDefiniteError(
+            "stiffness is not positive definite: its factorisation needed row pivoting"
+        )
     eliminated = np.argsort(lu.perm_c)  # perm_c[i] is the position of freedom i in the factor
 
     def name(column: int) -> str:
@@ -151,19 +165,26 @@ def factorize(stiffness: ArrayLike | sp.spmatrix | sp.sparray, *,
     if ratio[weakest] < -pivot_rtol:
         raise NotPositiveDefiniteError(
             f"stiffness is not positive definite: negative pivot {pivots[weakest]:.3g} "
-            f"at {name(weakest)}")
+            f"at {name(weakest)}"
+        )
     if ratio[weakest] < pivot_rtol:
         raise RigidBodyModeError(
             "the stiffness matrix is singular to working precision: the model has rigid-body "
             "modes (add fixations) or is too ill-conditioned to condense accurately, e.g. a very "
             f"fine mesh of slender beams (pivot {ratio[weakest]:.3g} of the diagonal at "
-            f"{name(weakest)})")
+            f"{name(weakest)})"
+        )
     return lu
 
 
-def condense(stiffness: ArrayLike | sp.spmatrix | sp.sparray, freedoms: ArrayLike, *,
-             labels: Sequence[str] | None = None, pivot_rtol: float = SINGULAR_PIVOT_RTOL,
-             symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
+def condense(
+    stiffness: ArrayLike | sp.spmatrix | sp.sparray,
+    freedoms: ArrayLike,
+    *,
+    labels: Sequence[str] | None = None,
+    pivot_rtol: float = SINGULAR_PIVOT_RTOL,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> np.ndarray:
     """Flexibility matrix of ``freedoms`` for the (fixed, non-singular) sparse ``stiffness``.
 
     Parameters
@@ -227,14 +248,20 @@ def _by_schur_complement(K: sp.csc_matrix, lu, idx: np.ndarray) -> np.ndarray | 
     chosen[idx] = True
     order = np.concatenate([elimination[~chosen[elimination]], idx])
     try:
-        last = spla.splu(K[order][:, order].tocsc(), permc_spec="NATURAL",
-                         diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        last = spla.splu(
+            K[order][:, order].tocsc(),
+            permc_spec="NATURAL",
+            diag_pivot_thresh=0.0,
+            options={"SymmetricMode": True},
+        )
     except RuntimeError:  # "Factor is exactly singular" in this elimination order
         raise _ill_conditioned() from None
-    if not (np.array_equal(last.perm_c[n - k:], np.arange(n - k, n))
-            and np.array_equal(last.perm_r, last.perm_c)):
+    if not (
+        np.array_equal(last.perm_c[n - k :], np.arange(n - k, n))
+        and np.array_equal(last.perm_r, last.perm_c)
+    ):
         return None  # the chosen freedoms were not eliminated last
-    S = (last.L[n - k:, n - k:] @ last.U[n - k:, n - k:]).toarray()
+    S = (last.L[n - k :, n - k :] @ last.U[n - k :, n - k :]).toarray()
     try:
         factor = scipy.linalg.cho_factor(0.5 * (S + S.T), lower=True, check_finite=False)
     except np.linalg.LinAlgError:
@@ -245,4 +272,5 @@ def _by_schur_complement(K: sp.csc_matrix, lu, idx: np.ndarray) -> np.ndarray | 
 def _ill_conditioned() -> NotPositiveDefiniteError:
     return NotPositiveDefiniteError(
         "the condensed stiffness of the chosen freedoms is not positive definite in floating "
-        "point: the model is too ill-conditioned (raise pivot_rtol to refuse it earlier)")
+        "point: the model is too ill-conditioned (raise pivot_rtol to refuse it earlier)"
+    )

@@ -102,11 +102,13 @@ def _centres(x, y) -> tuple[np.ndarray, np.ndarray]:
         xs = np.asarray(x, dtype=float)
         ys = np.asarray(y, dtype=float)
     except (TypeError, ValueError):
-        raise InvalidInputError("x and y must be 1-D arrays of cell centres (m), "
-                                "as numbers") from None
+        raise InvalidInputError(
+            "x and y must be 1-D arrays of cell centres (m), as numbers"
+        ) from None
     if xs.ndim != 1 or xs.size == 0:
         raise InvalidInputError(
-            f"x must be a non-empty 1-D array of cell centres (m), got shape {xs.shape}")
+            f"x must be a non-empty 1-D array of cell centres (m), got shape {xs.shape}"
+        )
     if ys.shape != xs.shape:
         raise InvalidInputError(f"y must have the shape of x {xs.shape}, got shape {ys.shape}")
     if not np.all(np.isfinite(xs)):
@@ -152,8 +154,12 @@ def _rectangle_integral(X, Y, half_x: float, half_y: float) -> np.ndarray:
     terms are formed from the same operands in every call, and the result is exactly symmetric.
     """
     phi = rectangle_potential
-    return (phi(X + half_x, Y + half_y) - phi(X - half_x, Y + half_y)
-            - phi(X + half_x, Y - half_y) + phi(X - half_x, Y - half_y))
+    return (
+        phi(X + half_x, Y + half_y)
+        - phi(X - half_x, Y + half_y)
+        - phi(X + half_x, Y - half_y)
+        + phi(X - half_x, Y - half_y)
+    )
 
 
 def _lattice_indices(coordinate: np.ndarray, pitch: float):
@@ -167,12 +173,15 @@ def _lattice_indices(coordinate: np.ndarray, pitch: float):
 
 
 def _overlap_message(i: int, j: int, xs, ys) -> str:
-    return (f"x, y: cells {i} and {j} overlap (centres ({xs[i]:.6g}, {ys[i]:.6g}) and "
-            f"({xs[j]:.6g}, {ys[j]:.6g}) m are closer than one cell dx, dy)")
+    return (
+        f"x, y: cells {i} and {j} overlap (centres ({xs[i]:.6g}, {ys[i]:.6g}) and "
+        f"({xs[j]:.6g}, {ys[j]:.6g}) m are closer than one cell dx, dy)"
+    )
 
 
-def normal_influence(x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: float,
-                     poisson: float) -> np.ndarray:
+def normal_influence(
+    x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: float, poisson: float
+) -> np.ndarray:
     """Normal flexibility matrix of an elastic half-space discretised into uniformly loaded cells.
 
     Entry ``(i, j)`` is the normal surface displacement (m) at the centre of cell ``i`` caused by
@@ -241,8 +250,13 @@ def normal_influence(x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: fl
     half_x, half_y = 0.5 * dx, 0.5 * dy
     result = np.empty((xs.size, xs.size))
     for rows, (integral,), _, _ in _pairwise(
-            xs, ys, dx, dy, lambda X, Y: (scale * _rectangle_integral(X, Y, half_x, half_y),),
-            signs=False):
+        xs,
+        ys,
+        dx,
+        dy,
+        lambda X, Y: (scale * _rectangle_integral(X, Y, half_x, half_y),),
+        signs=False,
+    ):
         result[rows] = integral
     return result
 
@@ -287,8 +301,12 @@ def _pairwise(xs, ys, dx, dy, evaluate, signs: bool = True):
             flat_index = np.abs(steps_x)
             flat_index *= index_type(width)
             flat_index += np.abs(steps_y)
-            yield (slice(start, stop), tuple(np.take(table, flat_index) for table in tables),
-                   np.sign(steps_x) if signs else None, np.sign(steps_y) if signs else None)
+            yield (
+                slice(start, stop),
+                tuple(np.take(table, flat_index) for table in tables),
+                np.sign(steps_x) if signs else None,
+                np.sign(steps_y) if signs else None,
+            )
         return
 
     overlap_x, overlap_y = dx * (1.0 - 1e-9), dy * (1.0 - 1e-9)
@@ -301,8 +319,12 @@ def _pairwise(xs, ys, dx, dy, evaluate, signs: bool = True):
         if overlapping.any():
             i, j = np.argwhere(overlapping)[0]
             raise InvalidInputError(_overlap_message(int(i) + start, int(j), xs, ys))
-        yield (slice(start, stop), evaluate(np.abs(X), np.abs(Y)),
-               np.sign(X) if signs else None, np.sign(Y) if signs else None)
+        yield (
+            slice(start, stop),
+            evaluate(np.abs(X), np.abs(Y)),
+            np.sign(X) if signs else None,
+            np.sign(Y) if signs else None,
+        )
 
 
 def _cerruti_integrals(X, Y, half_x: float, half_y: float):
@@ -322,9 +344,14 @@ def _cerruti_integrals(X, Y, half_x: float, half_y: float):
     (``v / rho^2`` by exchanging ``u`` and ``v``), each evaluated at the four corners like
     :func:`rectangle_potential`. The last three are odd in the offsets: multiply by the signs.
     """
+
     def corners(primitive):
-        return (primitive(X + half_x, Y + half_y) - primitive(X - half_x, Y + half_y)
-                - primitive(X + half_x, Y - half_y) + primitive(X - half_x, Y - half_y))
+        return (
+            primitive(X + half_x, Y + half_y)
+            - primitive(X - half_x, Y + half_y)
+            - primitive(X + half_x, Y - half_y)
+            + primitive(X - half_x, Y - half_y)
+        )
 
     def asinh_term(u, v):  # v asinh(u / |v|), 0 on v = 0
         av = np.abs(v)
@@ -337,12 +364,25 @@ def _cerruti_integrals(X, Y, half_x: float, half_y: float):
 
     xx = corners(asinh_term)
     yy = corners(lambda u, v: asinh_term(v, u))
-    return (xx + yy, xx, yy, corners(lambda u, v: -np.hypot(u, v)),
-            corners(log_term), corners(lambda u, v: log_term(v, u)))
+    return (
+        xx + yy,
+        xx,
+        yy,
+        corners(lambda u, v: -np.hypot(u, v)),
+        corners(log_term),
+        corners(lambda u, v: log_term(v, u)),
+    )
 
 
-def influence_matrix(x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: float,
-                     poisson: float, coupling: bool = True) -> np.ndarray:
+def influence_matrix(
+    x: ArrayLike,
+    y: ArrayLike,
+    dx: float,
+    dy: float,
+    young: float,
+    poisson: float,
+    coupling: bool = True,
+) -> np.ndarray:
     """Full (3 per cell) flexibility of an elastic half-space under uniform cell tractions.
 
     Entry ``(3 i + a, 3 j + b)`` is the displacement (m) along axis ``a`` of the centre of cell
@@ -417,15 +457,19 @@ def influence_matrix(x: ArrayLike, y: ArrayLike, dx: float, dy: float, young: fl
 
     def evaluate(X, Y):
         one, xx, yy, xy, along_x, along_y = _cerruti_integrals(X, Y, half_x, half_y)
-        return (c * ((1.0 - nu) * one + nu * xx), c * ((1.0 - nu) * one + nu * yy),
-                c * nu * xy, normal_scale * _rectangle_integral(X, Y, half_x, half_y),
-                coupling_scale * along_x, coupling_scale * along_y)
+        return (
+            c * ((1.0 - nu) * one + nu * xx),
+            c * ((1.0 - nu) * one + nu * yy),
+            c * nu * xy,
+            normal_scale * _rectangle_integral(X, Y, half_x, half_y),
+            coupling_scale * along_x,
+            coupling_scale * along_y,
+        )
 
     n = xs.size
     result = np.empty((3 * n, 3 * n))
-    for rows, (rxx, ryy, rxy, rzz, rxz, ryz), sign_x, sign_y in _pairwise(xs, ys, dx, dy,
-                                                                        evaluate):
-        block = result[3 * rows.start:3 * rows.stop].reshape(rows.stop - rows.start, 3, n, 3)
+    for rows, (rxx, ryy, rxy, rzz, rxz, ryz), sign_x, sign_y in _pairwise(xs, ys, dx, dy, evaluate):
+        block = result[3 * rows.start : 3 * rows.stop].reshape(rows.stop - rows.start, 3, n, 3)
         block[:, 0, :, 0] = rxx
         block[:, 1, :, 1] = ryy
         block[:, 0, :, 1] = block[:, 1, :, 0] = sign_x * sign_y * rxy

@@ -14,8 +14,16 @@ import numpy as np
 
 from .local_problem import CONTACT_FLOOR, AccuracyLimits, natural_map_error
 
-__all__ = ["CERTIFICATE_TOL", "Certificate", "certify", "FrictionCertificate",
-           "certify_friction", "LocalCertificate", "scales", "contact_scales"]
+__all__ = [
+    "CERTIFICATE_TOL",
+    "Certificate",
+    "certify",
+    "FrictionCertificate",
+    "certify_friction",
+    "LocalCertificate",
+    "scales",
+    "contact_scales",
+]
 
 
 #: Default largest accepted relative residual of a certificate.
@@ -71,9 +79,14 @@ class Certificate:
 
     def as_dict(self) -> dict:
         """Plain dictionary (for JSON)."""
-        return {"penetration": self.penetration, "force_sign": self.force_sign,
-                "complementarity": self.complementarity, "equilibrium": self.equilibrium,
-                "tol": self.tol, "passed": self.passed}
+        return {
+            "penetration": self.penetration,
+            "force_sign": self.force_sign,
+            "complementarity": self.complementarity,
+            "equilibrium": self.equilibrium,
+            "tol": self.tol,
+            "passed": self.passed,
+        }
 
 
 def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Certificate:
@@ -91,8 +104,9 @@ def certify(problem, displacements, forces, tol: float = CERTIFICATE_TOL) -> Cer
     Every residual is inf when ``U`` or ``lambda`` holds NaN or inf, or a residual overflows.
     """
     with np.errstate(all="ignore"):  # an overflow shows as an infinite residual
-        return _certify(problem, np.asarray(displacements, dtype=float),
-                        np.asarray(forces, dtype=float), tol)
+        return _certify(
+            problem, np.asarray(displacements, dtype=float), np.asarray(forces, dtype=float), tol
+        )
 
 
 def _certify(problem, U, lam, tol) -> Certificate:
@@ -127,10 +141,17 @@ def scales(model, loads, displacements, forces, gaps) -> tuple[float, float]:
     """
     tiny = np.finfo(float).tiny
     force = max(np.max(np.abs(loads), initial=0.0), np.max(np.abs(forces), initial=0.0), tiny)
-    compliance = (np.max(np.diag(model.flexibility)) if model.given == "flexibility"
-                  else 1.0 / np.max(np.diag(model.stiffness)))
-    length = max(np.max(np.abs(displacements), initial=0.0), np.max(np.abs(gaps), initial=0.0),
-                 compliance * force, tiny)
+    compliance = (
+        np.max(np.diag(model.flexibility))
+        if model.given == "flexibility"
+        else 1.0 / np.max(np.diag(model.stiffness))
+    )
+    length = max(
+        np.max(np.abs(displacements), initial=0.0),
+        np.max(np.abs(gaps), initial=0.0),
+        compliance * force,
+        tiny,
+    )
     return float(force), float(length)
 
 
@@ -169,12 +190,19 @@ def contact_scales(problem, local_displacements, forces, step) -> tuple[float, n
     # the floor left when no contact carries force: what the loads (and the previous state)
     # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
     loaded = step.q_apex - problem.local().offset
-    force = max(np.max(np.abs(forces), initial=0.0), np.max(step.apex_shift, initial=0.0),
-                np.max(np.abs(loaded), initial=0.0) / compliance if compliance > 0 else 0.0,
-                np.finfo(float).tiny)
-    length = np.maximum.reduce([np.abs(free).max(axis=1),
-                                np.abs(local_displacements).max(axis=1),
-                                np.abs(problem.constraints.gaps)])
+    force = max(
+        np.max(np.abs(forces), initial=0.0),
+        np.max(step.apex_shift, initial=0.0),
+        np.max(np.abs(loaded), initial=0.0) / compliance if compliance > 0 else 0.0,
+        np.finfo(float).tiny,
+    )
+    length = np.maximum.reduce(
+        [
+            np.abs(free).max(axis=1),
+            np.abs(local_displacements).max(axis=1),
+            np.abs(problem.constraints.gaps),
+        ]
+    )
     return float(force), _floored(length)
 
 
@@ -256,8 +284,14 @@ class FrictionCertificate:
     @property
     def worst(self) -> float:
         """The largest checked residual (inf when the answer holds NaN or inf)."""
-        checked = [self.penetration, self.force_sign, self.cone, self.complementarity,
-                   self.dissipation, self.equilibrium]
+        checked = [
+            self.penetration,
+            self.force_sign,
+            self.cone,
+            self.complementarity,
+            self.dissipation,
+            self.equilibrium,
+        ]
         return max(checked + [self.natural_map] * self.exact_cone)
 
     @property
@@ -267,15 +301,23 @@ class FrictionCertificate:
 
     def as_dict(self) -> dict:
         """Plain dictionary (for JSON)."""
-        return {"penetration": self.penetration, "force_sign": self.force_sign,
-                "cone": self.cone, "complementarity": self.complementarity,
-                "dissipation": self.dissipation, "equilibrium": self.equilibrium,
-                "natural_map": self.natural_map, "exact_cone": self.exact_cone,
-                "tol": self.tol, "passed": self.passed}
+        return {
+            "penetration": self.penetration,
+            "force_sign": self.force_sign,
+            "cone": self.cone,
+            "complementarity": self.complementarity,
+            "dissipation": self.dissipation,
+            "equilibrium": self.equilibrium,
+            "natural_map": self.natural_map,
+            "exact_cone": self.exact_cone,
+            "tol": self.tol,
+            "passed": self.passed,
+        }
 
 
-def certify_friction(problem, displacements, forces, step,
-                     tol: float = CERTIFICATE_TOL) -> FrictionCertificate:
+def certify_friction(
+    problem, displacements, forces, step, tol: float = CERTIFICATE_TOL
+) -> FrictionCertificate:
     """Check displacements and local forces against a :class:`~contactqp.FrictionalProblem`.
 
     Parameters
@@ -293,14 +335,20 @@ def certify_friction(problem, displacements, forces, step,
     Every residual is inf when ``U`` or ``r`` holds NaN or inf, or a residual overflows.
     """
     with np.errstate(all="ignore"):  # an overflow shows as an infinite residual
-        return _certify_friction(problem, np.asarray(displacements, dtype=float),
-                                 np.asarray(forces, dtype=float), step, tol)
+        return _certify_friction(
+            problem,
+            np.asarray(displacements, dtype=float),
+            np.asarray(forces, dtype=float),
+            step,
+            tol,
+        )
 
 
 def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
     if not (np.all(np.isfinite(U)) and np.all(np.isfinite(r))):
-        return FrictionCertificate(*[np.inf] * 7, exact_cone=problem.law.facets is None
-                                   or problem.dim == 2, tol=tol)
+        return FrictionCertificate(
+            *[np.inf] * 7, exact_cone=problem.law.facets is None or problem.dim == 2, tol=tol
+        )
     k, d = problem.n_contacts, problem.dim
     R = r.reshape(k, d)
     H, gaps, P, law = problem.frames.operator, problem.constraints.gaps, problem.loads, problem.law
@@ -315,12 +363,14 @@ def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
         penetration=_worst(-final_gaps / length),
         force_sign=_worst(-apex[:, 0] / force),
         cone=_worst(law.cone_excess(R) / force),
-        complementarity=_worst(np.linalg.norm(apex, axis=1) * np.abs(final_gaps)
-                               / (force * length)),
+        complementarity=_worst(
+            np.linalg.norm(apex, axis=1) * np.abs(final_gaps) / (force * length)
+        ),
         dissipation=_worst(np.abs(law.dissipation_gap(R, slip)) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
-        natural_map=_finite_or_inf(natural_map_error(
-            step.fclib, (r + step.apex_shift) / step.force_unit, per_contact=True)),
+        natural_map=_finite_or_inf(
+            natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit, per_contact=True)
+        ),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )
@@ -383,5 +433,10 @@ class LocalCertificate:
     def as_dict(self) -> dict:
         """Plain dictionary (for JSON): the residuals, ``tol``, ``passed`` and the limits'
         ``attainable``, ``data_limit``, ``condition`` and ``digits``."""
-        return {"natural_map": self.natural_map, "equilibrium": self.equilibrium,
-                "tol": self.tol, "passed": self.passed, **self.limits.as_dict()}
+        return {
+            "natural_map": self.natural_map,
+            "equilibrium": self.equilibrium,
+            "tol": self.tol,
+            "passed": self.passed,
+            **self.limits.as_dict(),
+        }

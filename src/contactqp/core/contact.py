@@ -83,8 +83,10 @@ def _unit_directions(directions: ArrayLike, count: int, name: str) -> np.ndarray
     if dirs.ndim == 1:
         dirs = np.tile(dirs, (count, 1))
     if dirs.ndim != 2 or dirs.shape[0] != count or dirs.shape[1] not in (1, 2, 3):
-        raise InvalidInputError(f"{name} must have shape (d,) or ({count}, d) with d in 1..3, "
-                                f"got {np.shape(directions)}")
+        raise InvalidInputError(
+            f"{name} must have shape (d,) or ({count}, d) with d in 1..3, "
+            f"got {np.shape(directions)}"
+        )
     if not np.all(np.isfinite(dirs)):
         raise InvalidInputError(f"{name} contains NaN or inf")
     norms = np.linalg.norm(dirs, axis=1)
@@ -116,15 +118,23 @@ def _node_freedoms(model: ReducedModel, node: int, direction: np.ndarray, name: 
     return dofs
 
 
-def _node_rows(model: ReducedModel, nodes: np.ndarray, gaps: np.ndarray, directions: np.ndarray,
-               name: str, label: str) -> list[ConstraintRow]:
+def _node_rows(
+    model: ReducedModel,
+    nodes: np.ndarray,
+    gaps: np.ndarray,
+    directions: np.ndarray,
+    name: str,
+    label: str,
+) -> list[ConstraintRow]:
     """One constraint row per node: ``(node, freedoms, direction, gap, label)``.
 
     ``directions`` is one unit vector for all nodes, shape (d,), or one per node, shape (k, d).
     """
     directions = np.broadcast_to(directions, (len(nodes), np.shape(directions)[-1]))
-    return [(int(k), _node_freedoms(model, k, d, name), d, float(g), f"node {k}{label}")
-            for k, g, d in zip(nodes, gaps, directions, strict=True)]
+    return [
+        (int(k), _node_freedoms(model, k, d, name), d, float(g), f"node {k}{label}")
+        for k, g, d in zip(nodes, gaps, directions, strict=True)
+    ]
 
 
 def _coordinates(model: ReducedModel, name: str) -> np.ndarray:
@@ -224,12 +234,16 @@ class ProfileObstacle:
         nodes = _node_indices(model, self.nodes, "ProfileObstacle.nodes")
         direction = _unit_directions(self.direction, 1, "ProfileObstacle.direction")[0]
         if coords.shape[1] != len(direction):
-            raise InvalidInputError(f"ProfileObstacle.direction has {len(direction)} components, "
-                                    f"coordinates {coords.shape[1]}")
+            raise InvalidInputError(
+                f"ProfileObstacle.direction has {len(direction)} components, "
+                f"coordinates {coords.shape[1]}"
+            )
         surface = real_array(self.profile(coords[nodes]), "ProfileObstacle.profile").reshape(-1)
         if surface.shape != nodes.shape or not np.all(np.isfinite(surface)):
-            raise InvalidInputError(f"ProfileObstacle.profile must return {nodes.size} finite "
-                                    f"values, got shape {surface.shape}")
+            raise InvalidInputError(
+                f"ProfileObstacle.profile must return {nodes.size} finite "
+                f"values, got shape {surface.shape}"
+            )
         gaps = surface - coords[nodes] @ direction
         return _node_rows(model, nodes, gaps, direction, "ProfileObstacle", " / profile")
 
@@ -271,14 +285,16 @@ class NodePairs:
         dirs = _unit_directions(self.directions, len(first), "NodePairs.directions")
         rows: list[ConstraintRow] = []
         for a, b, g, d in zip(first, second, gaps, dirs, strict=True):
-            dofs = np.concatenate([_node_freedoms(model, a, d, "NodePairs"),
-                                   _node_freedoms(model, b, d, "NodePairs")])
+            dofs = np.concatenate(
+                [_node_freedoms(model, a, d, "NodePairs"), _node_freedoms(model, b, d, "NodePairs")]
+            )
             rows.append((int(a), dofs, np.concatenate([d, -d]), float(g), f"pair {a}-{b}"))
         return rows
 
 
-def assemble_constraints(model: ReducedModel,
-                         obstacles: Obstacle | Iterable[Obstacle]) -> Constraints:
+def assemble_constraints(
+    model: ReducedModel, obstacles: Obstacle | Iterable[Obstacle]
+) -> Constraints:
     """Stack the rows of every obstacle and pair into ``A U <= Delta``.
 
     Parameters
@@ -305,8 +321,10 @@ def assemble_constraints(model: ReducedModel,
     gaps = np.array([r[3] for r in rows])
     if np.max(np.abs(gaps)) > MAX_MAGNITUDE:
         worst = int(np.argmax(np.abs(gaps)))
-        raise InvalidInputError(f"the gap of {rows[worst][4]} is {gaps[worst]:.3g} m, beyond "
-                                f"{MAX_MAGNITUDE:g}: rescale the units")
+        raise InvalidInputError(
+            f"the gap of {rows[worst][4]} is {gaps[worst]:.3g} m, beyond "
+            f"{MAX_MAGNITUDE:g}: rescale the units"
+        )
     _refuse_duplicates(rows)
     indptr = np.cumsum([0] + [len(r[1]) for r in rows])
     indices = np.concatenate([r[1] for r in rows])
@@ -329,12 +347,14 @@ def _obstacle_list(obstacles: Obstacle | Iterable[Obstacle]) -> list[Obstacle]:
     except TypeError:
         raise InvalidInputError(
             f"obstacles must be an obstacle or a sequence of obstacles, got "
-            f"{type(obstacles).__name__}") from None
+            f"{type(obstacles).__name__}"
+        ) from None
     for position, obstacle in enumerate(listed):
         if not isinstance(obstacle, Obstacle):
             raise InvalidInputError(
                 f"obstacles[{position}] is a {type(obstacle).__name__}, not an obstacle "
-                f"(GapObstacle, PlaneObstacle, ProfileObstacle or NodePairs)")
+                f"(GapObstacle, PlaneObstacle, ProfileObstacle or NodePairs)"
+            )
     return listed
 
 
@@ -370,7 +390,8 @@ def _refuse_duplicates(rows: list[ConstraintRow]) -> None:
         raise InvalidInputError(
             f"{label} is constrained twice along the same direction (constraints {first} "
             f"and {second}, '{rows[first][4]}' and '{label}'): the contact operator would "
-            f"be singular; give each node and direction once (keep the smaller gap)")
+            f"be singular; give each node and direction once (keep the smaller gap)"
+        )
 
 
 def tangent_basis(normals: ArrayLike) -> np.ndarray:
@@ -462,21 +483,27 @@ def local_frames(model: ReducedModel, constraints: Constraints) -> LocalFrames:
     coo = A.tocoo()
     inside = component[coo.col] < d
     if not np.all(inside):
-        raise InvalidInputError(f"constraint row {coo.row[~inside][0]} touches a node with more "
-                                f"than {d} freedoms")
+        raise InvalidInputError(
+            f"constraint row {coo.row[~inside][0]} touches a node with more than {d} freedoms"
+        )
     comp = component[coo.col]
     signs = scipy.sparse.coo_matrix(
-        (coo.data * normals[coo.row, comp], (coo.row, node_of[coo.col])),
-        shape=(m, model.n_nodes)).tocsr()
+        (coo.data * normals[coo.row, comp], (coo.row, node_of[coo.col])), shape=(m, model.n_nodes)
+    ).tocsr()
     signed = signs[coo.row, node_of[coo.col]].A1
-    if not (np.allclose(np.abs(signs.data[signs.data != 0]), 1.0)
-            and np.allclose(coo.data, signed * normals[coo.row, comp])):
+    if not (
+        np.allclose(np.abs(signs.data[signs.data != 0]), 1.0)
+        and np.allclose(coo.data, signed * normals[coo.row, comp])
+    ):
         raise InvalidInputError("a constraint row is not made of node blocks +-n: no local frame")
     tangents = tangent_basis(normals)
     rows = [-A]
     for j in range(d - 1):
-        rows.append(scipy.sparse.csr_matrix(
-            (signed * tangents[coo.row, j, comp], (coo.row, coo.col)), shape=A.shape))
+        rows.append(
+            scipy.sparse.csr_matrix(
+                (signed * tangents[coo.row, j, comp], (coo.row, coo.col)), shape=A.shape
+            )
+        )
     # interleave: local row i*d + c is row i of block c
     order = (np.arange(d)[None, :] * m + np.arange(m)[:, None]).ravel()
     operator = scipy.sparse.vstack(rows).tocsr()[order]

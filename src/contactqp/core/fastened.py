@@ -73,7 +73,8 @@ class FastenedProblem:
     def __init__(self, problem: ContactProblem, fasteners):
         if not isinstance(problem, ContactProblem):
             raise InvalidInputError(
-                f"problem must be a ContactProblem, got {type(problem).__name__}")
+                f"problem must be a ContactProblem, got {type(problem).__name__}"
+            )
         rows = np.asarray(fasteners, dtype=int).reshape(-1)
         m = problem.n_constraints
         if rows.size == 0 or rows.min() < 0 or rows.max() >= m or np.unique(rows).size != rows.size:
@@ -96,7 +97,7 @@ class FastenedProblem:
         """Lower Cholesky factor ``L`` of ``S = L L^T`` (kept, shared by variants)."""
         return self._reduction.schur_cholesky()
 
-    def variant(self, *, gaps=None) -> "FastenedProblem":
+    def variant(self, *, gaps=None) -> FastenedProblem:
         """The same fasteners on other initial gaps (m, shape (m,)); ``S`` is shared."""
         twin = object.__new__(FastenedProblem)
         twin.__dict__.update(self.__dict__)
@@ -115,13 +116,22 @@ class FastenedProblem:
             return None
         start = np.asarray(r0, dtype=float).reshape(-1)
         if start.shape != (self.n_constraints,):
-            raise InvalidInputError(f"r0 must have shape ({self.n_constraints},), got "
-                                    f"{np.shape(r0)}")
+            raise InvalidInputError(
+                f"r0 must have shape ({self.n_constraints},), got {np.shape(r0)}"
+            )
         return np.maximum(start[self.contacts], 0.0)
 
-    def make_result(self, forces, *, method: str, converged: bool, message: str,
-                    iterations: int, seconds: float,
-                    info: dict | None = None) -> FastenedResult:
+    def make_result(
+        self,
+        forces,
+        *,
+        method: str,
+        converged: bool,
+        message: str,
+        iterations: int,
+        seconds: float,
+        info: dict | None = None,
+    ) -> FastenedResult:
         """The certified :class:`~contactqp.core.result.FastenedResult` of contact-row forces
         ``forces`` (N, >= 0)."""
         problem, rows, contacts = self.problem, self.fasteners, self.contacts
@@ -129,16 +139,25 @@ class FastenedProblem:
         multipliers = np.empty(problem.n_constraints)
         multipliers[contacts] = forces
         multipliers[rows] = scipy.linalg.cho_solve(
-            self._reduction.factor, dual.b[rows] - self._reduction.coupling @ forces)
+            self._reduction.factor, dual.b[rows] - self._reduction.coupling @ forces
+        )
         tension = np.maximum(-multipliers[rows], 0.0)
         compression = np.maximum(multipliers, 0.0)
         A = problem.constraints.matrix
         pulled = problem.variant(loads=problem.loads + A[rows].T @ tension)
         contact = pulled.make_result(
-            dual.displacements(multipliers), compression, method=method, converged=converged,
-            message=message, iterations=iterations, seconds=seconds, info=info)
-        return FastenedResult.from_contact(contact, rows, tension, multipliers,
-                                           problem.constraints.gaps)
+            dual.displacements(multipliers),
+            compression,
+            method=method,
+            converged=converged,
+            message=message,
+            iterations=iterations,
+            seconds=seconds,
+            info=info,
+        )
+        return FastenedResult.from_contact(
+            contact, rows, tension, multipliers, problem.constraints.gaps
+        )
 
     def __repr__(self) -> str:
         return f"FastenedProblem({self.problem!r}, {self.fasteners.size} fasteners)"

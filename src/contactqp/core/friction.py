@@ -54,10 +54,16 @@ def polygon_normals(facets: int) -> np.ndarray:
     Side ``k`` is orthogonal to the angle ``2 pi k / facets`` (side 0 across the first tangent
     axis) at the distance ``cos(pi / facets)`` from the centre of the unit circle.
     """
-    if (isinstance(facets, bool) or not isinstance(facets, numbers.Integral) or facets < 3
-            or facets > MAX_FACETS):
-        raise InvalidInputError(f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
-                                f"the exact cone), got {facets!r}")
+    if (
+        isinstance(facets, bool)
+        or not isinstance(facets, numbers.Integral)
+        or facets < 3
+        or facets > MAX_FACETS
+    ):
+        raise InvalidInputError(
+            f"facets must be an integer from 3 to {MAX_FACETS} (beyond, use "
+            f"the exact cone), got {facets!r}"
+        )
     angles = 2.0 * np.pi * np.arange(int(facets)) / int(facets)
     return np.column_stack([np.cos(angles), np.sin(angles)])
 
@@ -71,10 +77,12 @@ def _per_contact(value: ArrayLike, name: str, count: int) -> np.ndarray:
     elif array.shape != (count,):
         raise InvalidInputError(
             f"{name} must be a scalar or hold one value per contact ({count}), got shape "
-            f"{array.shape}")
+            f"{array.shape}"
+        )
     if np.any(array < 0):
         raise InvalidInputError(
-            f"{name} must be >= 0, got {array.min():g} at contact {int(np.argmin(array))}")
+            f"{name} must be >= 0, got {array.min():g} at contact {int(np.argmin(array))}"
+        )
     return array
 
 
@@ -113,15 +121,22 @@ class FrictionLaw:
     cohesion: np.ndarray
     facets: int | None
 
-    def __init__(self, mu: ArrayLike, cohesion: ArrayLike = 0.0, facets: int | None = None, *,
-                 n_contacts: int) -> None:
+    def __init__(
+        self,
+        mu: ArrayLike,
+        cohesion: ArrayLike = 0.0,
+        facets: int | None = None,
+        *,
+        n_contacts: int,
+    ) -> None:
         object.__setattr__(self, "mu", _per_contact(mu, "mu", n_contacts))
         object.__setattr__(self, "cohesion", _per_contact(cohesion, "cohesion", n_contacts))
         bad = np.flatnonzero((self.cohesion > 0) & (self.mu == 0))
         if bad.size:
             raise InvalidInputError(
                 f"cohesion > 0 needs mu > 0 (the cone's apex is at r_N = -c/mu): contact "
-                f"{bad[0]} has mu = 0 and cohesion {self.cohesion[bad[0]]:g}")
+                f"{bad[0]} has mu = 0 and cohesion {self.cohesion[bad[0]]:g}"
+            )
         if facets is not None:
             polygon_normals(facets)
             facets = int(facets)
@@ -188,8 +203,9 @@ class FrictionLaw:
         s = np.asarray(slips, dtype=float)
         return self.bound(r[:, 0]) * self.support(-s) + np.sum(r[:, 1:] * s, axis=1)
 
-    def status(self, forces: ArrayLike, slips: ArrayLike, force_tol: ArrayLike,
-               slip_tol: ArrayLike) -> np.ndarray:
+    def status(
+        self, forces: ArrayLike, slips: ArrayLike, force_tol: ArrayLike, slip_tol: ArrayLike
+    ) -> np.ndarray:
         """:class:`~contactqp.core.status.ContactStatus` code per contact: open, stick or slip.
 
         Open: the force measured from the apex is zero (``||r~|| <= force_tol``, N). Slip:
@@ -198,5 +214,6 @@ class FrictionLaw:
         """
         carries = np.linalg.norm(self.apex_forces(forces), axis=1) > force_tol
         slipping = np.linalg.norm(np.asarray(slips, dtype=float), axis=1) > slip_tol
-        return np.where(carries, np.where(slipping, ContactStatus.SLIP, ContactStatus.STICK),
-                        ContactStatus.OPEN)
+        return np.where(
+            carries, np.where(slipping, ContactStatus.SLIP, ContactStatus.STICK), ContactStatus.OPEN
+        )

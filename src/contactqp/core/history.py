@@ -73,7 +73,8 @@ def linear_path(points: ArrayLike, steps: int, max_steps: int | None = MAX_STEPS
     if max_steps is not None and total > max_steps:
         raise InvalidInputError(
             f"steps = {steps} gives {total} load steps for {P.shape[0]} turning points, more "
-            f"than the {max_steps} allowed (each step is a full solve, and its result is kept)")
+            f"than the {max_steps} allowed (each step is a full solve, and its result is kept)"
+        )
     fractions = np.arange(1, int(steps) + 1) / int(steps)
     segments = [P[:1]] + [a + fractions[:, None] * (b - a) for a, b in pairwise(P)]
     return np.vstack(segments)

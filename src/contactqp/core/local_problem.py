@@ -283,21 +283,32 @@ class AccuracyLimits:
         """One clause per limit above ``tol`` (empty string when none is)."""
         notes = []
         if self.rounding > tol:
-            cause = (f"the conditioning of M (cond {self.condition:.1e} after Jacobi scaling)"
-                     if self.condition > 1.0 else "rounding")
-            notes.append(f"{cause} limits the attainable natural-map error to about "
-                         f"{self.rounding:.1e} > tol {tol:g}")
+            cause = (
+                f"the conditioning of M (cond {self.condition:.1e} after Jacobi scaling)"
+                if self.condition > 1.0
+                else "rounding"
+            )
+            notes.append(
+                f"{cause} limits the attainable natural-map error to about "
+                f"{self.rounding:.1e} > tol {tol:g}"
+            )
         if self.data > tol:
             written = ", ".join(f"{name} {count}" for name, count in self.digits.items())
-            notes.append(f"the data carry only a few significant digits ({written}): the error "
-                         f"is on the problem as written; the problem it was written from is met "
-                         f"only to about {self.data:.1e}")
+            notes.append(
+                f"the data carry only a few significant digits ({written}): the error "
+                f"is on the problem as written; the problem it was written from is met "
+                f"only to about {self.data:.1e}"
+            )
         return "; ".join(notes)
 
     def as_dict(self) -> dict:
         """JSON-ready ``{"attainable", "data_limit", "condition", "digits"}``."""
-        return {"attainable": self.rounding, "data_limit": self.data,
-                "condition": self.condition, "digits": dict(self.digits)}
+        return {
+            "attainable": self.rounding,
+            "data_limit": self.data,
+            "condition": self.condition,
+            "digits": dict(self.digits),
+        }
 
 
 _EPS = float(np.finfo(float).eps)
@@ -311,8 +322,10 @@ def _abs_product(A, x) -> np.ndarray:
         return _abs_sparse_product(sp.csr_matrix(A), ax)  # no copy of a CSR matrix
     A = np.asarray(A)
     rows = max(1, (1 << 22) // max(1, A.shape[1]))  # blocks of at most 32 MB
-    return np.concatenate([np.abs(A[start:start + rows]) @ ax
-                           for start in range(0, A.shape[0], rows)] or [np.zeros(0)])
+    return np.concatenate(
+        [np.abs(A[start : start + rows]) @ ax for start in range(0, A.shape[0], rows)]
+        or [np.zeros(0)]
+    )
 
 
 def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
@@ -330,10 +343,15 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
         last = min(last, A.shape[0])
         begin, end = indptr[first], indptr[last]
         values = A.data[begin:end]
-        values = (np.abs(values, out=scratch[:end - begin]) if end - begin <= scratch.size
-                  else np.abs(values))  # one row longer than a block
-        rows = sp.csr_matrix((values, A.indices[begin:end], indptr[first:last + 1] - begin),
-                             shape=(last - first, A.shape[1]))
+        values = (
+            np.abs(values, out=scratch[: end - begin])
+            if end - begin <= scratch.size
+            else np.abs(values)
+        )  # one row longer than a block
+        rows = sp.csr_matrix(
+            (values, A.indices[begin:end], indptr[first : last + 1] - begin),
+            shape=(last - first, A.shape[1]),
+        )
         out[first:last] = rows @ ax
         first = last
     return out
@@ -350,15 +368,18 @@ def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLim
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
-    magnitude = (_abs_product(problem.W, rv) if columns is None
-                 else _abs_product(columns[1], rv[columns[0]]))
+    magnitude = (
+        _abs_product(problem.W, rv) if columns is None else _abs_product(columns[1], rv[columns[0]])
+    )
     product = float(np.linalg.norm(magnitude))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
-    data = (relative_rounding(digits.get("W")) * product
-            + relative_rounding(digits.get("q")) * size_q)
-    return AccuracyLimits(rounding=_EPS * (product + size_q) / scale, data=data / scale,
-                          digits=dict(digits))
+    data = (
+        relative_rounding(digits.get("W")) * product + relative_rounding(digits.get("q")) * size_q
+    )
+    return AccuracyLimits(
+        rounding=_EPS * (product + size_q) / scale, data=data / scale, digits=dict(digits)
+    )
 
 
 @dataclass(frozen=True)
@@ -428,8 +449,9 @@ class _ScaledFactor:
         if n <= 100:
             inverse = self.lu.solve(np.eye(n))
             return norm * float(np.abs(inverse).sum(axis=0).max())
-        inverse = LinearOperator((n, n), matvec=self.lu.solve, dtype=float,
-                                 rmatvec=lambda x: self.lu.solve(x, trans="T"))
+        inverse = LinearOperator(
+            (n, n), matvec=self.lu.solve, dtype=float, rmatvec=lambda x: self.lu.solve(x, trans="T")
+        )
         return norm * float(onenormest(inverse))
 
 
@@ -505,7 +527,8 @@ class GlobalProblem:
         qv = np.asarray(Hc.T @ solve(fv)).ravel() + wv
         if not (np.all(np.isfinite(Wd)) and np.all(np.isfinite(qv))):
             raise NotPositiveDefiniteError(
-                f"M ({ndof}x{ndof}) is singular: the solve is not finite")
+                f"M ({ndof}x{ndof}) is singular: the solve is not finite"
+            )
         if sparse_h:
             W = sp.csr_matrix(Wd)
             W.eliminate_zeros()
@@ -537,7 +560,8 @@ class GlobalProblem:
         rv = finite_array(r, "r", 1)
         if rv.shape != (m,):
             raise InvalidInputError(
-                f"r must have length dim*n_contacts = {m}, got shape {rv.shape}")
+                f"r must have length dim*n_contacts = {m}, got shape {rv.shape}"
+            )
         M, H, f, w = self.M, self.H, self.f, self.w
         Hr = np.asarray(H @ rv).ravel()
         if M.shape[0] == 0:
@@ -554,16 +578,22 @@ class GlobalProblem:
         scale = math.sqrt(max(local.q @ local.q, rv @ rv, u @ u)) or 1.0
         # rounding: the scaled unknown y = v / s is solved to ~cond * eps relative, u = H^T S y + w
         scaled_h = sp.diags(s) @ H if sp.issparse(H) else s[:, None] * H
-        size_h = float(np.sqrt((abs(scaled_h).power(2) if sp.issparse(H)
-                                else scaled_h ** 2).sum()))  # Frobenius: >= the 2-norm
+        size_h = float(
+            np.sqrt((abs(scaled_h).power(2) if sp.issparse(H) else scaled_h**2).sum())
+        )  # Frobenius: >= the 2-norm
         size_y = float(np.linalg.norm(v / s)) if v.size else 0.0
         transported = float(np.linalg.norm(_abs_product(H.T, v))) + float(np.linalg.norm(w))
         rounding = (condition * _EPS * size_h * size_y + _EPS * transported) / scale
         data = self._data_limit(rv, v) / scale
         return GlobalCertificate(
-            v=v, u=u, error=float(error), equilibrium=equilibrium,
-            limits=AccuracyLimits(rounding=rounding, data=data, condition=condition,
-                                  digits=dict(self.digits)))
+            v=v,
+            u=u,
+            error=float(error),
+            equilibrium=equilibrium,
+            limits=AccuracyLimits(
+                rounding=rounding, data=data, condition=condition, digits=dict(self.digits)
+            ),
+        )
 
     def _data_limit(self, r, v) -> float:
         """Size of the change of ``u`` when the written values move by their rounding."""
@@ -571,12 +601,17 @@ class GlobalProblem:
         if not any(rel.values()):
             return 0.0
         # first order: M dv = -dM v + dH r + df, du = H^T dv + dH^T v + dw
-        forcing = (rel["M"] * _abs_product(self.M, v) + rel["H"] * _abs_product(self.H, r)
-                   + rel["f"] * np.abs(self.f))
+        forcing = (
+            rel["M"] * _abs_product(self.M, v)
+            + rel["H"] * _abs_product(self.H, r)
+            + rel["f"] * np.abs(self.f)
+        )
         moved = self._factor.solve(forcing) if self.M.shape[0] else forcing
-        return float(np.linalg.norm(np.asarray(self.H.T @ moved).ravel())
-                     + rel["H"] * np.linalg.norm(_abs_product(self.H.T, v))
-                     + rel["w"] * np.linalg.norm(self.w))
+        return float(
+            np.linalg.norm(np.asarray(self.H.T @ moved).ravel())
+            + rel["H"] * np.linalg.norm(_abs_product(self.H.T, v))
+            + rel["w"] * np.linalg.norm(self.w)
+        )
 
 
 def condense_global(M, H, f, w, mu, dim, title="") -> LocalProblem:
@@ -729,8 +764,9 @@ def natural_map_error(problem: LocalProblem, r, u=None, *, per_contact: bool = F
 CONTACT_FLOOR = 1e-6
 
 
-def natural_map_residual(problem: LocalProblem, r, u, *,
-                         per_contact: bool = False) -> tuple[float, float]:
+def natural_map_residual(
+    problem: LocalProblem, r, u, *, per_contact: bool = False
+) -> tuple[float, float]:
     """``(residual, error)`` of float arrays ``r``, ``u`` of shape (m,), without checks.
 
     ``error`` is :func:`natural_map_error`; ``residual`` its numerator, an absolute measure
@@ -744,8 +780,9 @@ def natural_map_residual(problem: LocalProblem, r, u, *,
     scale = math.sqrt(max(problem.q @ problem.q, r @ r, u @ u)) or 1.0
     error = residual / scale
     if per_contact and squares.size:
-        own = np.maximum.reduce([_row_squares(problem.q, d), _row_squares(r, d),
-                                 _row_squares(u, d)])
+        own = np.maximum.reduce(
+            [_row_squares(problem.q, d), _row_squares(r, d), _row_squares(u, d)]
+        )
         floor = (CONTACT_FLOOR * scale) ** 2
         error = max(error, math.sqrt(np.max(squares / np.maximum(own, floor))))
     return residual, error
@@ -788,11 +825,16 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     rv, uv = _candidate(problem, r, u)
     diagonal = np.abs(np.asarray(problem.W.diagonal(), dtype=float))
     w = float(diagonal.max(initial=0.0)) or 1.0
-    force = max(np.linalg.norm(rv), np.linalg.norm(rv + problem.apex_shift),
-                np.linalg.norm(problem.q) / w, np.linalg.norm(uv) / w)
+    force = max(
+        np.linalg.norm(rv),
+        np.linalg.norm(rv + problem.apex_shift),
+        np.linalg.norm(problem.q) / w,
+        np.linalg.norm(uv) / w,
+    )
     force = force if force > 0 else 1.0
-    return problem.law.status(rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force,
-                              rtol * w * force)
+    return problem.law.status(
+        rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force, rtol * w * force
+    )
 
 
 #: A sparse matrix of at most this size, or at least this full, is factored dense (LAPACK beats
@@ -804,8 +846,6 @@ def better_dense(W) -> bool:
     """True when a sparse ``W`` is better factored as a dense array (:data:`DENSE_SIZE`)."""
     m = W.shape[0]
     return m <= DENSE_SIZE or W.nnz >= DENSE_FILL * m * m
-
-
 
 
 def check_diagonal(S, name: str = "W") -> np.ndarray:
@@ -829,7 +869,7 @@ def check_diagonal(S, name: str = "W") -> np.ndarray:
     zero_rows = np.flatnonzero(diag == 0)
     if zero_rows.size:
         rows = S[zero_rows]
-        if (rows.count_nonzero() if sp.issparse(rows) else np.count_nonzero(rows)):
+        if rows.count_nonzero() if sp.issparse(rows) else np.count_nonzero(rows):
             raise NotPositiveDefiniteError(
                 f"{name} is not positive semidefinite: a row with a zero diagonal entry "
                 f"has nonzero off-diagonal entries"
@@ -871,8 +911,12 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
         Sk = sp.csc_matrix(S)[keep][:, keep]
         scaled = sp.csc_matrix(sp.diags(s) @ Sk @ sp.diags(s) + PSD_SHIFT * sp.identity(keep.size))
         try:
-            lu = splu(scaled, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                      options={"SymmetricMode": True})
+            lu = splu(
+                scaled,
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
             pivots = lu.U.diagonal()
             ok = np.array_equal(lu.perm_r, lu.perm_c) and bool(np.all(pivots > 0))
         except RuntimeError:  # exactly singular

@@ -19,9 +19,18 @@ from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
 
-__all__ = ["ReducedModel", "UnitLoadCompliance", "unit_load_compliance", "check_spd_matrix",
-           "checked_cholesky", "finite_array", "real_array", "positive_tolerance", "iteration_cap",
-           "MAX_MAGNITUDE"]
+__all__ = [
+    "ReducedModel",
+    "UnitLoadCompliance",
+    "unit_load_compliance",
+    "check_spd_matrix",
+    "checked_cholesky",
+    "finite_array",
+    "real_array",
+    "positive_tolerance",
+    "iteration_cap",
+    "MAX_MAGNITUDE",
+]
 
 #: Relative asymmetry ``max|M - M^T| / max|M|`` below which a matrix is symmetrised (with a
 #: warning) instead of refused.
@@ -45,8 +54,9 @@ def real_array(value: ArrayLike, name: str) -> np.ndarray:
         raise InvalidInputError(f"{name} must be an array of real numbers: {exc}") from None
 
 
-def finite_array(value: ArrayLike, name: str, ndim: int, *,
-                 magnitude: float | None = None) -> np.ndarray:
+def finite_array(
+    value: ArrayLike, name: str, ndim: int, *, magnitude: float | None = None
+) -> np.ndarray:
     """``value`` as a float array of ``ndim`` dimensions, real and finite; errors name ``name``.
 
     ``magnitude``: also refuse entries larger in absolute value (see :data:`MAX_MAGNITUDE`).
@@ -59,7 +69,8 @@ def finite_array(value: ArrayLike, name: str, ndim: int, *,
     if magnitude is not None and array.size and np.max(np.abs(array)) > magnitude:
         raise InvalidInputError(
             f"{name} has an entry of magnitude {np.max(np.abs(array)):.3g}, beyond {magnitude:g}: "
-            f"its products with forces and displacements would overflow; rescale the units")
+            f"its products with forces and displacements would overflow; rescale the units"
+        )
     return array
 
 
@@ -79,8 +90,10 @@ def positive_tolerance(value: object, name: str = "tol", *, below_one: bool = Fa
     if isinstance(value, numbers.Real) and not isinstance(value, bool):
         number = float(value)
     if number is None or not math.isfinite(number) or number <= 0 or (below_one and number >= 1):
-        raise InvalidInputError(f"{name} must be a positive finite number"
-                                f"{' below 1' if below_one else ''}, got {value!r}")
+        raise InvalidInputError(
+            f"{name} must be a positive finite number"
+            f"{' below 1' if below_one else ''}, got {value!r}"
+        )
     return number
 
 
@@ -91,8 +104,9 @@ def iteration_cap(value: object, name: str = "max_iter") -> int:
     return int(value)
 
 
-def check_spd_matrix(matrix: ArrayLike, name: str,
-                     symmetry_rtol: float = SYMMETRY_RTOL) -> np.ndarray:
+def check_spd_matrix(
+    matrix: ArrayLike, name: str, symmetry_rtol: float = SYMMETRY_RTOL
+) -> np.ndarray:
     """Validate a symmetric positive definite matrix and return it as a float array.
 
     See :func:`checked_cholesky`, which also returns the factor computed by the check.
@@ -100,8 +114,9 @@ def check_spd_matrix(matrix: ArrayLike, name: str,
     return checked_cholesky(matrix, name, symmetry_rtol)[0]
 
 
-def checked_cholesky(matrix: ArrayLike, name: str,
-                     symmetry_rtol: float = SYMMETRY_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def checked_cholesky(
+    matrix: ArrayLike, name: str, symmetry_rtol: float = SYMMETRY_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
     """Validate a symmetric positive definite matrix; return it and its lower Cholesky factor.
 
     Parameters
@@ -132,15 +147,18 @@ def checked_cholesky(matrix: ArrayLike, name: str,
     n, m = array.shape
     if n != m or n == 0:
         raise InvalidInputError(
-            f"{name} must be a non-empty square matrix, got shape {array.shape}")
+            f"{name} must be a non-empty square matrix, got shape {array.shape}"
+        )
     scale = np.max(np.abs(array))
     if scale == 0.0:
         raise InvalidInputError(
-            f"{name} is singular: all its entries are zero (shape {array.shape})")
+            f"{name} is singular: all its entries are zero (shape {array.shape})"
+        )
     if scale < 1.0 / MAX_MAGNITUDE:
         raise InvalidInputError(
             f"{name}'s largest entry is {scale:.3g}, below {1.0 / MAX_MAGNITUDE:g}: its products "
-            f"with forces and displacements would underflow; rescale the units")
+            f"with forces and displacements would underflow; rescale the units"
+        )
     asymmetry = np.max(np.abs(array - array.T)) / scale
     if asymmetry > symmetry_rtol:
         raise InvalidInputError(
@@ -187,8 +205,9 @@ class UnitLoadCompliance:
     reciprocity_error: float
 
 
-def unit_load_compliance(solve: Callable[[np.ndarray], np.ndarray], n_freedoms: int,
-                         unit: float = 1.0) -> UnitLoadCompliance:
+def unit_load_compliance(
+    solve: Callable[[np.ndarray], np.ndarray], n_freedoms: int, unit: float = 1.0
+) -> UnitLoadCompliance:
     """Assemble the flexibility matrix by applying a unit load to each freedom in turn.
 
     Parameters
@@ -243,10 +262,14 @@ class ReducedModel:
         See :func:`check_spd_matrix`.
     """
 
-    def __init__(self, flexibility: ArrayLike | None = None, stiffness: ArrayLike | None = None,
-                 dofs_per_node: int | Sequence[int] | np.ndarray = 1,
-                 coordinates: ArrayLike | None = None,
-                 symmetry_rtol: float = SYMMETRY_RTOL) -> None:
+    def __init__(
+        self,
+        flexibility: ArrayLike | None = None,
+        stiffness: ArrayLike | None = None,
+        dofs_per_node: int | Sequence[int] | np.ndarray = 1,
+        coordinates: ArrayLike | None = None,
+        symmetry_rtol: float = SYMMETRY_RTOL,
+    ) -> None:
         if stiffness is None and flexibility is not None:
             name, given = "flexibility", flexibility
         elif flexibility is None and stiffness is not None:
@@ -263,7 +286,8 @@ class ReducedModel:
         # a stiffness always needs its factor (U = K^-1 P): keep the validation's; a flexibility
         # needs one only if K is asked for, so its (n x n) factor is not held meanwhile
         self._factor: tuple[np.ndarray, bool] | None = (
-            (factor, True) if name == "stiffness" else None)
+            (factor, True) if name == "stiffness" else None
+        )
         n = matrix.shape[0]
         counts = self._dof_counts(dofs_per_node, n)
         self.dofs_per_node = counts
@@ -279,12 +303,14 @@ class ReducedModel:
             self.coordinates = coords
 
     @staticmethod
-    def _dof_counts(dofs_per_node: int | Sequence[int] | np.ndarray,
-                    n_freedoms: int) -> np.ndarray:
+    def _dof_counts(dofs_per_node: int | Sequence[int] | np.ndarray, n_freedoms: int) -> np.ndarray:
         if np.isscalar(dofs_per_node):
             # a whole number: 2.0 is 2, while 2.5, "2" or 2j are refused (not truncated or cast)
-            if (not isinstance(dofs_per_node, numbers.Integral | float)
-                    or dofs_per_node not in (1, 2, 3)):
+            if not isinstance(dofs_per_node, numbers.Integral | float) or dofs_per_node not in (
+                1,
+                2,
+                3,
+            ):
                 raise InvalidInputError(f"dofs_per_node must be 1, 2 or 3, got {dofs_per_node!r}")
             per = int(dofs_per_node)
             if n_freedoms % per:
@@ -319,8 +345,7 @@ class ReducedModel:
 
     def _cholesky(self) -> tuple[np.ndarray, bool]:
         if self._factor is None:  # built from a flexibility, whose factor was not kept
-            self._factor = scipy.linalg.cho_factor(self.flexibility, lower=True,
-                                                   check_finite=False)
+            self._factor = scipy.linalg.cho_factor(self.flexibility, lower=True, check_finite=False)
         return self._factor
 
     @property
@@ -330,8 +355,7 @@ class ReducedModel:
 
     def _inverse(self) -> np.ndarray:
         """The inverse of the given matrix, from its Cholesky factor."""
-        return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms),
-                                      check_finite=False)
+        return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms), check_finite=False)
 
     @property
     def asymmetry(self) -> float:
@@ -370,5 +394,4 @@ class ReducedModel:
         return scipy.linalg.cho_solve(self._cholesky(), values, check_finite=False)
 
     def __repr__(self) -> str:
-        return (f"ReducedModel({self.n_nodes} nodes, {self.n_freedoms} freedoms, "
-                f"given {self.given})")
+        return f"ReducedModel({self.n_nodes} nodes, {self.n_freedoms} freedoms, given {self.given})"

@@ -30,8 +30,7 @@ import scipy.sparse as sp
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError, UnsupportedProblemError
 
-__all__ = ["BlockFactor", "DenseOperator", "Operator", "PSD_SHIFT", "SparseOperator",
-           "as_operator"]
+__all__ = ["BlockFactor", "DenseOperator", "Operator", "PSD_SHIFT", "SparseOperator", "as_operator"]
 
 #: Diagonal shift, relative to the unit diagonal of the Jacobi-scaled matrix, accepted as
 #: rounding of a positive semidefinite matrix. Matrices written with 6 significant digits
@@ -135,14 +134,24 @@ class Operator(ABC):
             For an operator that does not form its matrix.
         """
         raise UnsupportedProblemError(
-            f"this method needs W as an explicit matrix; {type(self).__name__} does not form one")
+            f"this method needs W as an explicit matrix; {type(self).__name__} does not form one"
+        )
 
     def diagonal_blocks(self, size: int) -> np.ndarray:
         """The ``size x size`` blocks on the diagonal (one per contact), shape (n / size, s, s)."""
         count = self.shape[0] // size
-        return np.stack([self.block(np.arange(i * size, (i + 1) * size),
-                                    np.arange(i * size, (i + 1) * size)) for i in range(count)]
-                        ) if count else np.zeros((0, size, size))
+        return (
+            np.stack(
+                [
+                    self.block(
+                        np.arange(i * size, (i + 1) * size), np.arange(i * size, (i + 1) * size)
+                    )
+                    for i in range(count)
+                ]
+            )
+            if count
+            else np.zeros((0, size, size))
+        )
 
     def cholesky(self, index) -> BlockFactor:
         """The Cholesky factor of the principal block on ``index`` (cached: shared by callers).
@@ -178,8 +187,9 @@ class Operator(ABC):
     def singular_shift(self) -> float:
         """:data:`SINGULAR_SHIFT` times the largest diagonal entry (the tiny finite number if
         none is positive)."""
-        return SINGULAR_SHIFT * max(float(np.max(self.diagonal(), initial=0.0)),
-                                    np.finfo(float).tiny)
+        return SINGULAR_SHIFT * max(
+            float(np.max(self.diagonal(), initial=0.0)), np.finfo(float).tiny
+        )
 
     def _factorise(self, index: np.ndarray) -> BlockFactor:
         block = self.block(index, index)
@@ -195,22 +205,26 @@ class Operator(ABC):
             return BlockFactor(index, _cholesky(shifted), uniform)
         except np.linalg.LinAlgError:
             pass
-        where = (f"the {index.size}x{index.size} principal block on indices "
-                 f"{_describe(index)} is not positive semidefinite")
+        where = (
+            f"the {index.size}x{index.size} principal block on indices "
+            f"{_describe(index)} is not positive semidefinite"
+        )
         if np.any(diagonal < 0):
             i = int(np.argmin(diagonal))
             raise NotPositiveDefiniteError(
-                f"{where}: diagonal entry {int(index[i])} is {diagonal[i]:.3g} < 0")
+                f"{where}: diagonal entry {int(index[i])} is {diagonal[i]:.3g} < 0"
+            )
         zero = diagonal == 0
         if np.any(block[zero]):
             raise NotPositiveDefiniteError(
-                f"{where}: a row with a zero diagonal entry has nonzero off-diagonal entries")
+                f"{where}: a row with a zero diagonal entry has nonzero off-diagonal entries"
+            )
         scale = 1.0 / np.sqrt(np.where(zero, 1.0, diagonal))
         scaled = scale[:, None] * block * scale[None, :]
         scaled[np.diag_indices_from(scaled)] += PSD_SHIFT
         failure = NotPositiveDefiniteError(
-            f"{where}: the Cholesky factorisation of its Jacobi-scaled form + {PSD_SHIFT:g} I "
-            f"fails")
+            f"{where}: the Cholesky factorisation of its Jacobi-scaled form + {PSD_SHIFT:g} I fails"
+        )
         try:
             _cholesky(scaled)
             block[np.diag_indices_from(block)] += uniform + PSD_SHIFT * diagonal
@@ -300,7 +314,8 @@ def as_operator(W) -> Operator:
             array = np.asarray(W, dtype=float)
         except (TypeError, ValueError):
             raise InvalidInputError(
-                f"W must be a real matrix or an Operator, got {type(W).__name__}") from None
+                f"W must be a real matrix or an Operator, got {type(W).__name__}"
+            ) from None
         if type(array) is not np.ndarray:  # e.g. numpy.matrix
             array = array.view(np.ndarray)
         if array.ndim != 2:

@@ -36,13 +36,12 @@ import warnings
 import numpy as np
 import scipy.sparse
 
-from .contact import Constraints, LocalFrames, assemble_constraints, local_frames
 from ..errors import ContactWarning, InvalidInputError
+from .certificate import CERTIFICATE_TOL, certify, certify_friction, contact_scales
+from .contact import Constraints, LocalFrames, assemble_constraints, local_frames
 from .friction import FrictionLaw
 from .local_problem import LocalProblem
-from .model import (MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance,
-                    real_array)
-from .certificate import CERTIFICATE_TOL, certify, certify_friction, contact_scales
+from .model import MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance, real_array
 from .result import CERTIFICATE_FAILED, NOT_CONVERGED, SUCCESS, ContactResult, FrictionalResult
 from .status import ContactStatus
 
@@ -72,8 +71,7 @@ def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.nda
     P = finite_array(real_array(loads, "loads").reshape(-1), "loads", 1, magnitude=MAX_MAGNITUDE)
     if P.shape != (model.n_freedoms,):
         raise InvalidInputError(
-            f"loads must have shape ({model.n_freedoms},) to match the model, got "
-            f"{np.shape(loads)}"
+            f"loads must have shape ({model.n_freedoms},) to match the model, got {np.shape(loads)}"
         )
     positive_tolerance(certificate_tol, "certificate_tol")
     return P
@@ -127,7 +125,9 @@ class ContactProblem:
 
     kind = "frictionless"
 
-    def __init__(self, model: ReducedModel, loads, obstacles, certificate_tol: float = CERTIFICATE_TOL):
+    def __init__(
+        self, model: ReducedModel, loads, obstacles, certificate_tol: float = CERTIFICATE_TOL
+    ):
         self.loads = _checked_loads(model, loads, certificate_tol)
         self.model = model
         self.constraints = assemble_constraints(model, obstacles)
@@ -151,7 +151,7 @@ class ContactProblem:
             return self._dual.free_displacements
         return self.model.displacements(self.loads)
 
-    def variant(self, *, loads=None, gaps=None) -> "ContactProblem":
+    def variant(self, *, loads=None, gaps=None) -> ContactProblem:
         """The same model and constraints under other loads and/or initial gaps.
 
         The dual's ``W`` and influence are shared (assembled once, on first use); only
@@ -172,8 +172,9 @@ class ContactProblem:
         if gaps is not None:
             values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
             if values.shape != (self.n_constraints,):
-                raise InvalidInputError(f"gaps must have shape ({self.n_constraints},), got "
-                                        f"{values.shape}")
+                raise InvalidInputError(
+                    f"gaps must have shape ({self.n_constraints},), got {values.shape}"
+                )
             twin.constraints = dataclasses.replace(self.constraints, gaps=values)
         dual.b = twin.constraints.matrix @ dual.free_displacements - twin.constraints.gaps
         twin._dual = dual
@@ -189,20 +190,38 @@ class ContactProblem:
         internal = self.loads - self.constraints.matrix.T @ np.asarray(forces, dtype=float)
         return float(0.5 * U @ internal - self.loads @ U)
 
-    def make_result(self, displacements, forces, *, method: str, converged: bool, message: str,
-                    iterations: int, seconds: float, info: dict | None = None) -> ContactResult:
+    def make_result(
+        self,
+        displacements,
+        forces,
+        *,
+        method: str,
+        converged: bool,
+        message: str,
+        iterations: int,
+        seconds: float,
+        info: dict | None = None,
+    ) -> ContactResult:
         """Wrap a solver's answer in a :class:`ContactResult` with its certificate.
 
         An answer holding NaN or inf (an overflow, or a backend that found nothing) fails the
         certificate (status 2) and the message says so; numpy's warnings are kept inside.
         """
         with np.errstate(all="ignore"):
-            return self._result(displacements, forces, method=method, converged=converged,
-                                message=message, iterations=iterations, seconds=seconds,
-                                info=info)
+            return self._result(
+                displacements,
+                forces,
+                method=method,
+                converged=converged,
+                message=message,
+                iterations=iterations,
+                seconds=seconds,
+                info=info,
+            )
 
-    def _result(self, displacements, forces, *, method, converged, message, iterations, seconds,
-                info) -> ContactResult:
+    def _result(
+        self, displacements, forces, *, method, converged, message, iterations, seconds, info
+    ) -> ContactResult:
         U = np.asarray(displacements, dtype=float)
         lam = np.asarray(forces, dtype=float)
         certificate = certify(self, U, lam, self.certificate_tol)
@@ -211,12 +230,20 @@ class ContactProblem:
         A = self.constraints.matrix
         closed = lam > CLOSED_RTOL * force_scale
         return ContactResult(
-            displacements=U, forces=lam, nodal_forces=-(A.T @ lam),
+            displacements=U,
+            forces=lam,
+            nodal_forces=-(A.T @ lam),
             gaps=self.constraints.gaps - A @ U,
             contact_status=np.where(closed, ContactStatus.CLOSED, ContactStatus.OPEN),
-            energy=self.energy(U, lam), success=success, status=status, message=message,
-            iterations=int(iterations), seconds=float(seconds), method=method,
-            certificate=certificate, info=dict(info or {}),
+            energy=self.energy(U, lam),
+            success=success,
+            status=status,
+            message=message,
+            iterations=int(iterations),
+            seconds=float(seconds),
+            method=method,
+            certificate=certificate,
+            info=dict(info or {}),
         )
 
     def __repr__(self) -> str:
@@ -243,7 +270,7 @@ class LocalForm:
         self.operator = H
         self.influence, self.W = _delassus(model, H)
         self.offset = np.zeros(H.shape[0])
-        self.offset[::frames.dim] = constraints.gaps
+        self.offset[:: frames.dim] = constraints.gaps
         self._model = model
 
     def free_displacements(self, loads: np.ndarray) -> np.ndarray:
@@ -351,8 +378,18 @@ class FrictionalProblem:
         with one freedom (no tangent) or with different numbers of freedoms.
     """
 
-    def __init__(self, model: ReducedModel, loads, obstacles, mu, cohesion=0.0, facets=None,
-                 certificate_tol: float = CERTIFICATE_TOL, *, previous=None):
+    def __init__(
+        self,
+        model: ReducedModel,
+        loads,
+        obstacles,
+        mu,
+        cohesion=0.0,
+        facets=None,
+        certificate_tol: float = CERTIFICATE_TOL,
+        *,
+        previous=None,
+    ):
         self.loads = _checked_loads(model, loads, certificate_tol)
         self.model = model
         self.constraints = assemble_constraints(model, obstacles)
@@ -360,14 +397,16 @@ class FrictionalProblem:
         if self.frames.dim == 1:
             raise InvalidInputError(
                 "friction needs contact nodes with 2 or 3 freedoms: a node with one freedom has "
-                "no tangent")
+                "no tangent"
+            )
         self.law = FrictionLaw(mu, cohesion, facets, n_contacts=self.n_contacts)
         gapped = np.flatnonzero((self.law.cohesion > 0) & (self.constraints.gaps > 0))
         if gapped.size:
             raise InvalidInputError(
                 f"cohesion models a bonded interface, which starts closed: contact {gapped[0]} "
                 f"has cohesion {self.law.cohesion[gapped[0]]:g} N and initial gap "
-                f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)")
+                f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)"
+            )
         self.certificate_tol = float(certificate_tol)
         self._local = None
         self.previous = previous
@@ -399,7 +438,7 @@ class FrictionalProblem:
             self._local = LocalForm(self.model, self.constraints, self.frames)
         return self._local
 
-    def with_loads(self, loads, *, previous=None) -> "FrictionalProblem":
+    def with_loads(self, loads, *, previous=None) -> FrictionalProblem:
         """The same contacts and law under other loads, from the state ``previous`` (None:
         rest); nothing is assembled again."""
         twin = copy.copy(self)
@@ -416,11 +455,13 @@ class FrictionalProblem:
             return np.zeros((self.n_contacts, self.dim - 1))
         if not isinstance(previous, FrictionalResult):
             raise InvalidInputError(
-                f"previous must be a FrictionalResult or None, got {type(previous).__name__}")
+                f"previous must be a FrictionalResult or None, got {type(previous).__name__}"
+            )
         if previous.tangential_displacements.shape != (self.n_contacts, self.dim - 1):
             raise InvalidInputError(
                 f"previous has {len(previous.tangential_displacements)} contacts, this problem "
-                f"{self.n_contacts}")
+                f"{self.n_contacts}"
+            )
         return previous.tangential_displacements
 
     def local_problem(self) -> LocalProblem:
@@ -435,18 +476,28 @@ class FrictionalProblem:
         """
         return self.step().local
 
-    def step(self) -> "FrictionStep":
+    def step(self) -> FrictionStep:
         """The increment from :attr:`previous`, assembled once for method and certificate."""
         tangential = self._previous_tangential()
         q = self.local().q(self.loads).reshape(self.n_contacts, self.dim)
         q[:, 1:] -= tangential
-        local = LocalProblem(self.local().W, q.reshape(-1), self.law.mu, self.dim,
-                             cohesion=self.law.cohesion)
+        local = LocalProblem(
+            self.local().W, q.reshape(-1), self.law.mu, self.dim, cohesion=self.law.cohesion
+        )
         return FrictionStep(tangential, local)
 
-    def make_result(self, forces, *, method: str, converged: bool, message: str,
-                    iterations: int, seconds: float, info: dict | None = None,
-                    step: "FrictionStep | None" = None) -> FrictionalResult:
+    def make_result(
+        self,
+        forces,
+        *,
+        method: str,
+        converged: bool,
+        message: str,
+        iterations: int,
+        seconds: float,
+        info: dict | None = None,
+        step: FrictionStep | None = None,
+    ) -> FrictionalResult:
         """Wrap local forces ``r`` (N, shape (d k,)) in a certified :class:`FrictionalResult`.
 
         ``step`` is :meth:`step` when the caller has it already. Forces holding
@@ -454,17 +505,26 @@ class FrictionalProblem:
         message says so; numpy's warnings are kept inside.
         """
         with np.errstate(all="ignore"):
-            return self._result(forces, method=method, converged=converged,
-                                message=message, iterations=iterations, seconds=seconds,
-                                info=info, step=step)
+            return self._result(
+                forces,
+                method=method,
+                converged=converged,
+                message=message,
+                iterations=iterations,
+                seconds=seconds,
+                info=info,
+                step=step,
+            )
 
-    def _result(self, forces, *, method, converged, message, iterations, seconds, info,
-                step) -> FrictionalResult:
+    def _result(
+        self, forces, *, method, converged, message, iterations, seconds, info, step
+    ) -> FrictionalResult:
         r = real_array(forces, "forces").reshape(-1)
         if r.shape != (self.n_contacts * self.dim,):
             raise InvalidInputError(
                 f"forces must hold {self.dim} local components per contact "
-                f"({self.n_contacts * self.dim} values), got shape {np.shape(forces)}")
+                f"({self.n_contacts * self.dim} values), got shape {np.shape(forces)}"
+            )
         local = self.local()
         U = local.displacements(self.loads, r)
         if step is None:
@@ -480,27 +540,44 @@ class FrictionalProblem:
         gaps = self.constraints.gaps + HU[:, 0]
         pulling = np.flatnonzero((self.law.cohesion > 0) & (gaps > self.certificate_tol * length))
         if pulling.size:
-            note = (f"{pulling.size} cohesive contact(s) pulled open (first: contact "
-                    f"{pulling[0]}) still pull with their tensile strength c/mu: the model has no "
-                    f"tension cut-off, results past the opening are not physical")
+            note = (
+                f"{pulling.size} cohesive contact(s) pulled open (first: contact "
+                f"{pulling[0]}) still pull with their tensile strength c/mu: the model has no "
+                f"tension cut-off, results past the opening are not physical"
+            )
             warnings.warn(note, ContactWarning, stacklevel=4)
             message = f"{message}; {note}"
         nodal = local.operator.T @ r
         elastic = float(0.5 * U @ (self.loads + nodal))
         return FrictionalResult(
-            displacements=U, forces=R, nodal_forces=nodal, gaps=gaps,
-            contact_status=self.law.status(R, slip, CLOSED_RTOL * force,
-                                           self.certificate_tol * length),
-            energy=elastic - float(self.loads @ U), success=success, status=status,
-            message=message, iterations=int(iterations), seconds=float(seconds), method=method,
-            certificate=certificate, info=dict(info or {}), slip=slip,
-            tangential_displacements=HU[:, 1:], dissipation=-np.sum(R[:, 1:] * slip, axis=1),
-            elastic_energy=elastic, loads=self.loads.copy(),
+            displacements=U,
+            forces=R,
+            nodal_forces=nodal,
+            gaps=gaps,
+            contact_status=self.law.status(
+                R, slip, CLOSED_RTOL * force, self.certificate_tol * length
+            ),
+            energy=elastic - float(self.loads @ U),
+            success=success,
+            status=status,
+            message=message,
+            iterations=int(iterations),
+            seconds=float(seconds),
+            method=method,
+            certificate=certificate,
+            info=dict(info or {}),
+            slip=slip,
+            tangential_displacements=HU[:, 1:],
+            dissipation=-np.sum(R[:, 1:] * slip, axis=1),
+            elastic_energy=elastic,
+            loads=self.loads.copy(),
         )
 
     def __repr__(self) -> str:
-        return (f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
-                f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})")
+        return (
+            f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
+            f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})"
+        )
 
 
 def _verdict(converged: bool, certificate, message: str, model) -> tuple[int, bool, str]:
@@ -510,17 +587,31 @@ def _verdict(converged: bool, certificate, message: str, model) -> tuple[int, bo
     judges the matrix as given, so its asymmetry bounds the equilibrium residual attainable.
     """
     if not certificate.finite:
-        return CERTIFICATE_FAILED, False, (f"{message}; certificate failed: the answer holds "
-                                           f"NaN or inf (overflow or a failed solve)")
+        return (
+            CERTIFICATE_FAILED,
+            False,
+            (
+                f"{message}; certificate failed: the answer holds "
+                f"NaN or inf (overflow or a failed solve)"
+            ),
+        )
     if not converged:
         return NOT_CONVERGED, False, message
     if not certificate.passed:
         note = ""
         if model.asymmetry > 0.0 and certificate.equilibrium > certificate.tol:
-            note = (f"; the model's matrix was solved as its symmetric part (relative asymmetry "
-                    f"{model.asymmetry:.1e} as given), which limits the equilibrium residual "
-                    f"on the matrix as given")
-        return CERTIFICATE_FAILED, False, (f"{message}; certificate failed (worst relative "
-                                           f"residual {certificate.worst:.2e} > "
-                                           f"{certificate.tol:.0e}){note}")
+            note = (
+                f"; the model's matrix was solved as its symmetric part (relative asymmetry "
+                f"{model.asymmetry:.1e} as given), which limits the equilibrium residual "
+                f"on the matrix as given"
+            )
+        return (
+            CERTIFICATE_FAILED,
+            False,
+            (
+                f"{message}; certificate failed (worst relative "
+                f"residual {certificate.worst:.2e} > "
+                f"{certificate.tol:.0e}){note}"
+            ),
+        )
     return SUCCESS, True, message

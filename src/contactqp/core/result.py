@@ -24,8 +24,15 @@ import numpy as np
 from .certificate import Certificate, FrictionCertificate, LocalCertificate
 from .status import ContactStatus, status_counts, status_labels
 
-__all__ = ["ContactResult", "FrictionalResult", "LocalResult", "FastenedResult",
-           "SUCCESS", "NOT_CONVERGED", "CERTIFICATE_FAILED"]
+__all__ = [
+    "ContactResult",
+    "FrictionalResult",
+    "LocalResult",
+    "FastenedResult",
+    "SUCCESS",
+    "NOT_CONVERGED",
+    "CERTIFICATE_FAILED",
+]
 
 #: Values of :attr:`ContactResult.status`: solved, the method did not converge, the certificate
 #: (or, for an assembly, the fastener closure) failed.
@@ -117,23 +124,35 @@ class ContactResult:
         """A JSON-ready summary (no arrays): the scalar fields, the count of each status of
         :attr:`STATUSES` under its label, what the subclass adds and the certificate."""
         counts = status_counts(self.contact_status)
-        return {"success": self.success, "status": self.status, "message": self.message,
-                "method": self.method, "iterations": self.iterations, "seconds": self.seconds,
-                "contacts": self.n_contacts, "energy": self.energy,
-                **{s.label: counts[s.label] for s in self.STATUSES}, **self._summary_extra(),
-                "certificate": self.certificate.as_dict()}
+        return {
+            "success": self.success,
+            "status": self.status,
+            "message": self.message,
+            "method": self.method,
+            "iterations": self.iterations,
+            "seconds": self.seconds,
+            "contacts": self.n_contacts,
+            "energy": self.energy,
+            **{s.label: counts[s.label] for s in self.STATUSES},
+            **self._summary_extra(),
+            "certificate": self.certificate.as_dict(),
+        }
 
     def _summary_extra(self) -> dict:
-        return {"max_force": float(np.max(self.forces, initial=0.0)),
-                "min_gap": float(np.min(self.gaps, initial=np.inf))}
+        return {
+            "max_force": float(np.max(self.forces, initial=0.0)),
+            "min_gap": float(np.min(self.gaps, initial=np.inf)),
+        }
 
     def __repr__(self) -> str:
         counts = status_counts(self.contact_status)
         shown = "/".join(s.label for s in self.STATUSES)
         numbers = "/".join(str(counts[s.label]) for s in self.STATUSES)
-        return (f"{type(self).__name__}(success={self.success}, method={self.method!r}, "
-                f"{shown}={numbers}, iterations={self.iterations}, "
-                f"message={self.message!r})")
+        return (
+            f"{type(self).__name__}(success={self.success}, method={self.method!r}, "
+            f"{shown}={numbers}, iterations={self.iterations}, "
+            f"message={self.message!r})"
+        )
 
 
 @dataclass(kw_only=True, repr=False)
@@ -167,7 +186,10 @@ class FrictionalResult(ContactResult):
     """
 
     STATUSES: ClassVar[tuple[ContactStatus, ...]] = (
-        ContactStatus.OPEN, ContactStatus.STICK, ContactStatus.SLIP)
+        ContactStatus.OPEN,
+        ContactStatus.STICK,
+        ContactStatus.SLIP,
+    )
 
     slip: np.ndarray
     tangential_displacements: np.ndarray
@@ -215,7 +237,10 @@ class LocalResult(ContactResult):
     """
 
     STATUSES: ClassVar[tuple[ContactStatus, ...]] = (
-        ContactStatus.OPEN, ContactStatus.STICK, ContactStatus.SLIP)
+        ContactStatus.OPEN,
+        ContactStatus.STICK,
+        ContactStatus.SLIP,
+    )
 
     v: np.ndarray | None = None
 
@@ -247,7 +272,10 @@ class FastenedResult(ContactResult):
     """
 
     STATUSES: ClassVar[tuple[ContactStatus, ...]] = (
-        ContactStatus.OPEN, ContactStatus.CLOSED, ContactStatus.FASTENED)
+        ContactStatus.OPEN,
+        ContactStatus.CLOSED,
+        ContactStatus.FASTENED,
+    )
 
     fasteners: np.ndarray
     fastener_forces: np.ndarray
@@ -255,28 +283,44 @@ class FastenedResult(ContactResult):
     multipliers: np.ndarray
 
     @classmethod
-    def from_contact(cls, contact: ContactResult, fasteners, fastener_forces, multipliers,
-                     initial_gaps) -> FastenedResult:
+    def from_contact(
+        cls, contact: ContactResult, fasteners, fastener_forces, multipliers, initial_gaps
+    ) -> FastenedResult:
         """The state whose contact problem, pulled by the ``fastener_forces`` (N) at the
         ``fasteners`` rows, has the certified result ``contact``: the closure is checked against
         the certificate's tolerance times the largest initial gap or displacement (m), and the
         fastened pairs are marked ``fastened``."""
         rows = np.asarray(fasteners, dtype=int)
         closure = float(np.max(np.abs(contact.gaps[rows])))
-        scale = max(float(np.max(np.abs(initial_gaps))),
-                    float(np.max(np.abs(contact.displacements))), np.finfo(float).tiny)
+        scale = max(
+            float(np.max(np.abs(initial_gaps))),
+            float(np.max(np.abs(contact.displacements))),
+            np.finfo(float).tiny,
+        )
         closed = bool(closure <= contact.certificate.tol * scale)
         common = {f.name: getattr(contact, f.name) for f in dataclasses.fields(ContactResult)}
         if contact.success and not closed:
-            common.update(status=CERTIFICATE_FAILED, message=(
-                f"{contact.message}; fastener closure failed (largest |gap| {closure:.2e} m > "
-                f"{contact.certificate.tol:.0e} times {scale:.2e} m)"))
+            common.update(
+                status=CERTIFICATE_FAILED,
+                message=(
+                    f"{contact.message}; fastener closure failed (largest |gap| {closure:.2e} m > "
+                    f"{contact.certificate.tol:.0e} times {scale:.2e} m)"
+                ),
+            )
         codes = contact.contact_status.copy()
         codes[rows] = ContactStatus.FASTENED
         common.update(contact_status=codes, success=bool(contact.success and closed))
-        return cls(**common, fasteners=rows, fastener_forces=np.asarray(fastener_forces),
-                   closure=closure, multipliers=np.asarray(multipliers))
+        return cls(
+            **common,
+            fasteners=rows,
+            fastener_forces=np.asarray(fastener_forces),
+            closure=closure,
+            multipliers=np.asarray(multipliers),
+        )
 
     def _summary_extra(self) -> dict:
-        return {**super()._summary_extra(), "closure": self.closure,
-                "max_fastener_force": float(np.max(self.fastener_forces, initial=0.0))}
+        return {
+            **super()._summary_extra(),
+            "closure": self.closure,
+            "max_fastener_force": float(np.max(self.fastener_forces, initial=0.0)),
+        }

@@ -40,8 +40,9 @@ SCIPY_SPARSE_NPZ = frozenset({"format", "shape", "data"})
 _UNREADABLE = (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError)
 
 
-def read_array(path: str | os.PathLike[str], key: str | None = None,
-               format: str | None = None) -> np.ndarray:
+def read_array(
+    path: str | os.PathLike[str], key: str | None = None, format: str | None = None
+) -> np.ndarray:
     """Read a numeric array from a CSV, NPY, NPZ, MatrixMarket or OP4 file.
 
     Parameters
@@ -71,8 +72,9 @@ def read_array(path: str | os.PathLike[str], key: str | None = None,
     path = Path(path)
     fmt = array_format(path, format)
     if key is not None and fmt not in ("npz", "op4"):
-        raise InvalidInputError(f"key {key!r} applies only to .npz and .op4 files, not to {fmt} "
-                                "files")
+        raise InvalidInputError(
+            f"key {key!r} applies only to .npz and .op4 files, not to {fmt} files"
+        )
     if not path.exists():
         raise FileFormatError(f"file '{path}' not found")
     if not path.is_file():
@@ -106,9 +108,7 @@ def array_format(path: Path, fmt: str | None = None) -> str:
     """
     if fmt is not None:
         if fmt not in ARRAY_FORMATS:
-            raise InvalidInputError(
-                f"unknown format {fmt!r} (expected {', '.join(ARRAY_FORMATS)})"
-            )
+            raise InvalidInputError(f"unknown format {fmt!r} (expected {', '.join(ARRAY_FORMATS)})")
         return fmt
     name = Path(path).name.lower()
     for candidate, endings in ARRAY_FORMATS.items():
@@ -117,7 +117,7 @@ def array_format(path: Path, fmt: str | None = None) -> str:
     known = ", ".join(e for endings in ARRAY_FORMATS.values() for e in endings)
     raise FileFormatError(
         f"cannot tell the format of '{Path(path).name}' from its extension (known: {known}); "
-        "give it with { file = ..., format = \"csv\" }"
+        'give it with { file = ..., format = "csv" }'
     )
 
 
@@ -148,8 +148,9 @@ def read_numpy_array(path: str | os.PathLike[str], key: str | None = None) -> np
             loaded = np.load(stream, allow_pickle=False)
             if isinstance(loaded, np.ndarray):
                 if key is not None:
-                    raise InvalidInputError(f"{path}: a .npy file holds one array; key {key!r} "
-                                            "applies to .npz archives")
+                    raise InvalidInputError(
+                        f"{path}: a .npy file holds one array; key {key!r} applies to .npz archives"
+                    )
                 return loaded
             with loaded as archive:
                 return _archive_array(path, archive, key)
@@ -157,8 +158,9 @@ def read_numpy_array(path: str | os.PathLike[str], key: str | None = None) -> np
         raise
     except _UNREADABLE as exc:
         kind = "zlib.error" if isinstance(exc, zlib.error) else type(exc).__name__
-        raise FileFormatError(f"{path}: not a readable .npy / .npz file "
-                              f"({kind}: {_one_line(exc)})") from None
+        raise FileFormatError(
+            f"{path}: not a readable .npy / .npz file ({kind}: {_one_line(exc)})"
+        ) from None
 
 
 def read_csv_array(path: str | os.PathLike[str]) -> np.ndarray:
@@ -201,12 +203,15 @@ def _archive_array(path: Path, archive: np.lib.npyio.NpzFile, key: str | None) -
         return scipy.sparse.load_npz(path).toarray()
     if key is None:
         if len(names) != 1:
-            raise InvalidInputError(f"{path}: the archive holds {len(names)} arrays "
-                                    f"({', '.join(names) or 'none'}); name the one to read")
+            raise InvalidInputError(
+                f"{path}: the archive holds {len(names)} arrays "
+                f"({', '.join(names) or 'none'}); name the one to read"
+            )
         key = names[0]
     if key not in names:
-        raise InvalidInputError(f"{path}: the archive has no array {key!r} (it holds "
-                                f"{', '.join(names) or 'none'})")
+        raise InvalidInputError(
+            f"{path}: the archive has no array {key!r} (it holds {', '.join(names) or 'none'})"
+        )
     return archive[key]
 
 

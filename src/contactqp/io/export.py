@@ -29,8 +29,12 @@ class PointMesh(NamedTuple):
     point_data: dict
 
 
-def write_vtu(path: str | os.PathLike[str], points: ArrayLike,
-              cells: Iterable[tuple[str, ArrayLike]], point_data: Mapping[str, ArrayLike]) -> Path:
+def write_vtu(
+    path: str | os.PathLike[str],
+    points: ArrayLike,
+    cells: Iterable[tuple[str, ArrayLike]],
+    point_data: Mapping[str, ArrayLike],
+) -> Path:
     """Write a mesh and its point fields to a VTU file (ParaView): the one VTU writer.
 
     Parameters
@@ -56,8 +60,9 @@ def write_vtu(path: str | os.PathLike[str], points: ArrayLike,
     data = {name: np.asarray(values) for name, values in point_data.items()}
     for name, values in data.items():
         if values.shape[0] != len(xyz):
-            raise InvalidInputError(f"point_data[{name!r}] has {values.shape[0]} rows for "
-                                    f"{len(xyz)} points")
+            raise InvalidInputError(
+                f"point_data[{name!r}] has {values.shape[0]} rows for {len(xyz)} points"
+            )
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     meshio.write(str(path), meshio.Mesh(xyz, list(cells), point_data=data), file_format="vtu")
@@ -81,13 +86,15 @@ def write_csv(path: str | os.PathLike[str], columns: Mapping[str, ArrayLike]) ->
     names = list(columns)
     values = [np.asarray(columns[name]).reshape(-1) for name in names]
     if not names or len({len(v) for v in values}) != 1:
-        raise InvalidInputError("columns must be non-empty and of one length, got lengths "
-                                f"{[len(v) for v in values]}")
+        raise InvalidInputError(
+            f"columns must be non-empty and of one length, got lengths {[len(v) for v in values]}"
+        )
     return write_rows(path, names, zip(*(v.tolist() for v in values), strict=True))
 
 
-def write_rows(path: str | os.PathLike[str], header: Sequence[str],
-               rows: Iterable[Iterable[object]]) -> Path:
+def write_rows(
+    path: str | os.PathLike[str], header: Sequence[str], rows: Iterable[Iterable[object]]
+) -> Path:
     """Write a header row and ``rows`` (iterables of values) as a UTF-8 CSV table.
 
     Parameters

@@ -38,8 +38,18 @@ from ..errors import (
 from ..optional import require
 from .siconos import read_dat
 
-__all__ = ["read_problem", "read_global_problem", "read_any", "write_problem", "write_solution",
-           "is_hdf5", "is_own_solution", "solution_source", "file_key", "SOLUTION_OF"]
+__all__ = [
+    "read_problem",
+    "read_global_problem",
+    "read_any",
+    "write_problem",
+    "write_solution",
+    "is_hdf5",
+    "is_own_solution",
+    "solution_source",
+    "file_key",
+    "SOLUTION_OF",
+]
 
 #: Root attribute of a solution file written with ``write_solution(..., source=...)``.
 SOLUTION_OF = "contactqp_solution_of"
@@ -83,8 +93,9 @@ def _dataset(group, name):
 def _int(group, name):
     arr = np.asarray(_dataset(group, name)[()])
     if arr.size != 1 or arr.dtype.kind not in "iu":
-        raise FileLayoutError(f"{group.name}/{name} must hold one integer, got {arr.dtype} "
-                              f"{arr.shape}")
+        raise FileLayoutError(
+            f"{group.name}/{name} must hold one integer, got {arr.dtype} {arr.shape}"
+        )
     return int(arr.reshape(-1)[0])
 
 
@@ -94,8 +105,9 @@ def _vector(group, name, length=None, dtype=float):
         raise FileLayoutError(f"{group.name}/{name} is not numeric ({arr.dtype})")
     arr = arr.reshape(-1).astype(dtype, copy=False)
     if length is not None and arr.shape[0] < length:
-        raise FileLayoutError(f"{group.name}/{name} has {arr.shape[0]} values, at least {length} "
-                              f"expected")
+        raise FileLayoutError(
+            f"{group.name}/{name} has {arr.shape[0]} values, at least {length} expected"
+        )
     return arr if length is None else arr[:length]
 
 
@@ -130,8 +142,9 @@ def _read_matrix(group):
         cls = sp.csr_matrix if nz == -2 else sp.csc_matrix
         return sp.csr_matrix(cls((x, idx, p), shape=(m, n)))
     if nz < -2:
-        raise FileLayoutError(f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, "
-                              f">= 0 triplets)")
+        raise FileLayoutError(
+            f"{where}/nz = {nz} is not a known storage (-2 CSR, -1 CSC, >= 0 triplets)"
+        )
     rows = _vector(group, "i", nz, np.int64)
     cols = _vector(group, "p", nz, np.int64)
     x = _vector(group, "x", nz)
@@ -210,8 +223,10 @@ def read_any(path: str | os.PathLike[str]) -> LocalProblem | GlobalProblem:
     except FileFormatError as exc:
         if p.suffix.lower() not in HDF5_SUFFIXES:
             raise
-        raise FileFormatError(f"{p}: neither an HDF5 file (no HDF5 signature) nor a Siconos "
-                              f"text problem ({str(exc).removeprefix(f'{p}: ')})") from None
+        raise FileFormatError(
+            f"{p}: neither an HDF5 file (no HDF5 signature) nor a Siconos "
+            f"text problem ({str(exc).removeprefix(f'{p}: ')})"
+        ) from None
 
 
 def read_problem(path: str | os.PathLike[str]) -> LocalProblem:
@@ -296,7 +311,8 @@ def write_problem(path: str | os.PathLike[str], problem: LocalProblem) -> None:
     if problem.cohesion is not None and np.any(problem.cohesion > 0):
         raise UnsupportedProblemError(
             f"{path}: FCLIB has no field for cohesion; the problem's Mohr-Coulomb cohesion "
-            f"would be lost")
+            f"would be lost"
+        )
     h5py = _h5py()
     W = sp.csr_matrix(problem.W, copy=True)
     W.sort_indices()
@@ -341,8 +357,9 @@ def solution_source(path: str | os.PathLike[str]) -> str | None:
     return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
-def is_own_solution(path: str | os.PathLike[str],
-                    source: str | os.PathLike[str] | None = None) -> bool:
+def is_own_solution(
+    path: str | os.PathLike[str], source: str | os.PathLike[str] | None = None
+) -> bool:
     """True if ``path`` is a solution file written by ``write_solution(..., source=...)``.
 
     With ``source``, only if it was written for that input (compared as real paths).
@@ -358,9 +375,14 @@ def file_key(path: str | os.PathLike[str]) -> str:
     return os.path.normcase(os.path.realpath(path))
 
 
-def write_solution(path: str | os.PathLike[str], r: ArrayLike, u: ArrayLike,
-                   v: ArrayLike | None = None, *,
-                   source: str | os.PathLike[str] | None = None) -> None:
+def write_solution(
+    path: str | os.PathLike[str],
+    r: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike | None = None,
+    *,
+    source: str | os.PathLike[str] | None = None,
+) -> None:
     """Store a solution as ``/solution/{r,u[,v]}`` in an HDF5 file.
 
     Without ``source``: a missing file is created; an existing HDF5 file (e.g. the problem
@@ -404,8 +426,10 @@ def write_solution(path: str | os.PathLike[str], r: ArrayLike, u: ArrayLike,
     if p.exists() and not is_hdf5(p):
         raise FileFormatError(f"{p}: exists and is not an HDF5 file")
     if source is not None and p.exists() and not is_own_solution(p, source):
-        raise FileFormatError(f"{p}: exists and is not the solution file of {source} written by "
-                              f"contactqp; not overwritten")
+        raise FileFormatError(
+            f"{p}: exists and is not the solution file of {source} written by "
+            f"contactqp; not overwritten"
+        )
     try:
         with h5py.File(p, "a" if source is None else "w") as fh:
             if source is not None:

@@ -19,12 +19,21 @@ from numpy.typing import ArrayLike
 from ..errors import InvalidInputError
 from ..optional import require
 
-__all__ = ["plot_spring_chain", "plot_deflections", "DeflectionCase", "plot_point_maps",
-           "plot_statistics", "plot_sliding_curve", "save_figure", "subplots"]
+__all__ = [
+    "plot_spring_chain",
+    "plot_deflections",
+    "DeflectionCase",
+    "plot_point_maps",
+    "plot_statistics",
+    "plot_sliding_curve",
+    "save_figure",
+    "subplots",
+]
 
 
-def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] = (7, 4.5),
-             **options: Any) -> tuple[Any, Any]:
+def subplots(
+    nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] = (7, 4.5), **options: Any
+) -> tuple[Any, Any]:
     """``(figure, axes)`` as :func:`matplotlib.pyplot.subplots` gives, without pyplot.
 
     The :class:`matplotlib.figure.Figure` is written by :func:`save_figure` (Agg for raster
@@ -46,16 +55,19 @@ def save_figure(figure: Any, path: str | os.PathLike[str]) -> Path:
     path = Path(path)
     formats = figure.canvas.get_supported_filetypes()
     if path.suffix.lstrip(".").lower() not in formats:
-        raise InvalidInputError(f"{path}: a figure file needs a suffix among "
-                                f"{', '.join(sorted(formats))}")
+        raise InvalidInputError(
+            f"{path}: a figure file needs a suffix among {', '.join(sorted(formats))}"
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     return path
 
 
-def plot_spring_chain(forces: Sequence[float],
-                      displacements: Sequence[np.ndarray | Sequence[float]],
-                      path: str | os.PathLike[str]) -> Path:
+def plot_spring_chain(
+    forces: Sequence[float],
+    displacements: Sequence[np.ndarray | Sequence[float]],
+    path: str | os.PathLike[str],
+) -> Path:
     """Displacement of each body for each pulling force.
 
     Parameters
@@ -81,9 +93,14 @@ def plot_spring_chain(forces: Sequence[float],
     return save_figure(figure, path)
 
 
-def plot_point_maps(points: ArrayLike, panels: Sequence[tuple[ArrayLike, str, str]],
-                    path: str | os.PathLike[str], *, marked: ArrayLike | None = None,
-                    marked_label: str = "") -> Path:
+def plot_point_maps(
+    points: ArrayLike,
+    panels: Sequence[tuple[ArrayLike, str, str]],
+    path: str | os.PathLike[str],
+    *,
+    marked: ArrayLike | None = None,
+    marked_label: str = "",
+) -> Path:
     """Maps of values at points in a plane, one panel above the other, sharing the x axis.
 
     Parameters
@@ -104,8 +121,12 @@ def plot_point_maps(points: ArrayLike, panels: Sequence[tuple[ArrayLike, str, st
         shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
         figure.colorbar(shown, ax=ax)
         if marked is not None:
-            ax.plot(*(np.asarray(marked, dtype=float).reshape(-1, 2) * 1e3).T, "k+", ms=10,
-                    label=marked_label)
+            ax.plot(
+                *(np.asarray(marked, dtype=float).reshape(-1, 2) * 1e3).T,
+                "k+",
+                ms=10,
+                label=marked_label,
+            )
         ax.set_title(title)
         ax.set_ylabel("y (mm)")
         ax.set_aspect("equal")
@@ -129,16 +150,27 @@ def plot_statistics(statistics: Any, coordinates: ArrayLike, path: str | os.Path
         Output file; its suffix chooses the format.
     """
     samples = f", {statistics.samples} samples"
-    panels = [(np.asarray(statistics.mean) * 1e3, f"mean final gap (mm){samples}", "viridis"),
-              (np.asarray(statistics.quantiles[-1]) * 1e3,
-               f"{statistics.levels[-1]:.0%} quantile of the final gap (mm){samples}", "viridis"),
-              (statistics.contact_probability, f"probability of contact{samples}", "viridis")]
+    panels = [
+        (np.asarray(statistics.mean) * 1e3, f"mean final gap (mm){samples}", "viridis"),
+        (
+            np.asarray(statistics.quantiles[-1]) * 1e3,
+            f"{statistics.levels[-1]:.0%} quantile of the final gap (mm){samples}",
+            "viridis",
+        ),
+        (statistics.contact_probability, f"probability of contact{samples}", "viridis"),
+    ]
     return plot_point_maps(coordinates, panels, path)
 
 
-def plot_sliding_curve(relative: ArrayLike, load: ArrayLike, limit: float,
-                       path: str | os.PathLike[str], *, onset: int | None = None,
-                       title: str = "") -> Path:
+def plot_sliding_curve(
+    relative: ArrayLike,
+    load: ArrayLike,
+    limit: float,
+    path: str | os.PathLike[str],
+    *,
+    onset: int | None = None,
+    title: str = "",
+) -> Path:
     """Lateral load against the relative displacement of two layers, with the analytic limit.
 
     Parameters
@@ -182,9 +214,15 @@ class DeflectionCase(NamedTuple):
     contacts: Sequence[tuple[np.ndarray, np.ndarray]]
 
 
-def plot_deflections(x: ArrayLike, obstacle: ArrayLike, cases: Sequence[DeflectionCase],
-                     path: str | os.PathLike[str], *, clamp: float,
-                     xlabel: str = "x (mm)") -> Path:
+def plot_deflections(
+    x: ArrayLike,
+    obstacle: ArrayLike,
+    cases: Sequence[DeflectionCase],
+    path: str | os.PathLike[str],
+    *,
+    clamp: float,
+    xlabel: str = "x (mm)",
+) -> Path:
     """A beam deformed over its obstacle, one panel per load case, at true scale in mm.
 
     Parameters
@@ -202,8 +240,9 @@ def plot_deflections(x: ArrayLike, obstacle: ArrayLike, cases: Sequence[Deflecti
     xlabel : str
     """
     x, obstacle = np.asarray(x, dtype=float) * 1e3, np.asarray(obstacle, dtype=float) * 1e3
-    figure, panels = subplots(len(cases), 1, figsize=(8, 3.2 * len(cases)), sharex=True,
-                              squeeze=False)
+    figure, panels = subplots(
+        len(cases), 1, figsize=(8, 3.2 * len(cases)), sharex=True, squeeze=False
+    )
     arrow = clamp * 1e3
     for axes, case in zip(panels[:, 0], cases, strict=True):
         largest = max((np.hypot(*force) for _, force in case.loads), default=0.0)
@@ -215,14 +254,22 @@ def plot_deflections(x: ArrayLike, obstacle: ArrayLike, cases: Sequence[Deflecti
         axes.plot(deformed[:, 0], deformed[:, 1], color="C0", lw=2, label="full FE contact")
         axes.plot(nodes[:, 0], nodes[:, 1], "o", color="C1", label="reduced model (nodes)")
         axes.plot([x[-1]] * 2, [-arrow, arrow], color="k", lw=4)
-        for arrows, color, options in ((case.loads, "C3", {}), (case.contacts, "C2",
-                                                                  {"va": "top"})):
+        for arrows, color, options in (
+            (case.loads, "C3", {}),
+            (case.contacts, "C2", {"va": "top"}),
+        ):
             for point, force in arrows:
                 tip = np.asarray(point, dtype=float) * 1e3
                 tail = tip - np.asarray(force, dtype=float) * scale
-                axes.annotate(f"{np.hypot(*force):.3g} N", tuple(tip), tuple(tail), color=color,
-                              ha="center", arrowprops={"arrowstyle": "->", "color": color},
-                              **options)
+                axes.annotate(
+                    f"{np.hypot(*force):.3g} N",
+                    tuple(tip),
+                    tuple(tail),
+                    color=color,
+                    ha="center",
+                    arrowprops={"arrowstyle": "->", "color": color},
+                    **options,
+                )
         axes.set_title(case.title)
         axes.set_ylabel("y (mm)")
         axes.grid(True, alpha=0.3)

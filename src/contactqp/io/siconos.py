@@ -262,8 +262,9 @@ def _read_cs_dump(tk, rows, cols, what):
         raise FileLayoutError(f"{what}: cannot read the CSparse header {line.strip()!r}")
     m, n, _, nnz = (int(g) for g in head.groups())
     if (m, n) != (rows, cols):
-        raise FileLayoutError(f"{what}: CSparse size {m}x{n} differs from the block size "
-                              f"{rows}x{cols}")
+        raise FileLayoutError(
+            f"{what}: CSparse size {m}x{n} differs from the block size {rows}x{cols}"
+        )
     rr, cc, X = [], [], []
     outer = -1
     while True:
@@ -339,8 +340,9 @@ def _parse_local(tk: _Tokens, d: int, nc: int, title: str) -> LocalProblem:
     digits: dict[str, int] = {}
     W = _read(tk, digits, "W", lambda: _read_matrix(tk, "W"))
     if W.shape != (m, m):
-        raise FileLayoutError(f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, "
-                              f"nc={nc}")
+        raise FileLayoutError(
+            f"W is {W.shape[0]}x{W.shape[1]}, expected {m}x{m} for d={d}, nc={nc}"
+        )
     q = _read(tk, digits, "q", lambda: tk.floats(m, "q"))
     mu = tk.floats(nc, "mu")
     _check_end(tk)
@@ -364,8 +366,7 @@ def _parse_global(tk: _Tokens, d: int, nc: int, title: str) -> GlobalProblem:
     return GlobalProblem(M, H, f, w, mu, d, title, digits=digits)
 
 
-def parse_dat(text: str, name: str = "<string>",
-              title: str = "") -> LocalProblem | GlobalProblem:
+def parse_dat(text: str, name: str = "<string>", title: str = "") -> LocalProblem | GlobalProblem:
     """Parse the content of a Siconos ``.dat`` file.
 
     Parameters

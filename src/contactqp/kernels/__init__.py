@@ -18,8 +18,15 @@ from collections.abc import Mapping
 
 from ..errors import PureNumpyKernelsWarning
 
-__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix",
-           "IMPLEMENTATION", "FORCE_PURE_NUMPY", "pure_numpy_forced"]
+__all__ = [
+    "project_rows",
+    "natural_map_rows",
+    "alart_curnier_rows",
+    "sparse_newton_matrix",
+    "IMPLEMENTATION",
+    "FORCE_PURE_NUMPY",
+    "pure_numpy_forced",
+]
 
 #: Environment variable that selects the pure-numpy kernels even where the compiled ones exist.
 FORCE_PURE_NUMPY = "CONTACTQP_PURE_NUMPY"
@@ -56,7 +63,11 @@ else:
         )
 
         IMPLEMENTATION = "pure_numpy"
-        warnings.warn(f"contactqp's compiled kernels are not available ({_missing}): the "
-                      f"pure-numpy kernels are used, slower on small problems; reinstall with a C "
-                      f"compiler to build them", PureNumpyKernelsWarning, stacklevel=2)
+        warnings.warn(
+            f"contactqp's compiled kernels are not available ({_missing}): the "
+            f"pure-numpy kernels are used, slower on small problems; reinstall with a C "
+            f"compiler to build them",
+            PureNumpyKernelsWarning,
+            stacklevel=2,
+        )
         del _missing

@@ -10,12 +10,29 @@ import numpy as np
 __all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
 
 def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None: ...
-def natural_map_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray,
-                     squares: np.ndarray) -> float: ...
-def alart_curnier_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray, rho: np.ndarray,
-                       Phi: np.ndarray, A: np.ndarray, B: np.ndarray) -> None: ...
-def sparse_newton_matrix(A: np.ndarray, B: np.ndarray, W_blocks: np.ndarray,
-                         block_row: np.ndarray, block_col: np.ndarray, entries: np.ndarray,
-                         indptr: np.ndarray, indices: np.ndarray, renumber: np.ndarray,
-                         data: np.ndarray, new_indices: np.ndarray,
-                         new_indptr: np.ndarray) -> int: ...
+def natural_map_rows(
+    R: np.ndarray, U: np.ndarray, mu: np.ndarray, squares: np.ndarray
+) -> float: ...
+def alart_curnier_rows(
+    R: np.ndarray,
+    U: np.ndarray,
+    mu: np.ndarray,
+    rho: np.ndarray,
+    Phi: np.ndarray,
+    A: np.ndarray,
+    B: np.ndarray,
+) -> None: ...
+def sparse_newton_matrix(
+    A: np.ndarray,
+    B: np.ndarray,
+    W_blocks: np.ndarray,
+    block_row: np.ndarray,
+    block_col: np.ndarray,
+    entries: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    renumber: np.ndarray,
+    data: np.ndarray,
+    new_indices: np.ndarray,
+    new_indptr: np.ndarray,
+) -> int: ...

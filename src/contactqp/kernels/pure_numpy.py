@@ -60,8 +60,15 @@ def natural_map_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray, squares: np.n
     return float(np.sum(squares))
 
 
-def alart_curnier_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray, rho: np.ndarray,
-                       Phi: np.ndarray, A: np.ndarray, B: np.ndarray) -> None:
+def alart_curnier_rows(
+    R: np.ndarray,
+    U: np.ndarray,
+    mu: np.ndarray,
+    rho: np.ndarray,
+    Phi: np.ndarray,
+    A: np.ndarray,
+    B: np.ndarray,
+) -> None:
     """Alart-Curnier function of each contact into ``Phi``; with ``A``, ``B`` its Jacobian.
 
     ``X = R - rho U``; ``Phi_N = R_N - max(0, X_N)`` and
@@ -94,11 +101,20 @@ def alart_curnier_rows(R: np.ndarray, U: np.ndarray, mu: np.ndarray, rho: np.nda
     B[...] = rho[:, None, None] * C
 
 
-def sparse_newton_matrix(A: np.ndarray, B: np.ndarray, W_blocks: np.ndarray,
-                         block_row: np.ndarray, block_col: np.ndarray, entries: np.ndarray,
-                         indptr: np.ndarray, indices: np.ndarray, renumber: np.ndarray,
-                         data: np.ndarray, new_indices: np.ndarray,
-                         new_indptr: np.ndarray) -> int:
+def sparse_newton_matrix(
+    A: np.ndarray,
+    B: np.ndarray,
+    W_blocks: np.ndarray,
+    block_row: np.ndarray,
+    block_col: np.ndarray,
+    entries: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    renumber: np.ndarray,
+    data: np.ndarray,
+    new_indices: np.ndarray,
+    new_indptr: np.ndarray,
+) -> int:
     """CSC storage of ``A + B W`` on the kept unknowns; returns its number of entries.
 
     The arguments are those of :func:`contactqp.kernels.compiled.sparse_newton_matrix`: entry

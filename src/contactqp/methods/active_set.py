@@ -6,10 +6,10 @@ import time
 
 import numpy as np
 
-from ..errors import InvalidInputError
 from ..core.fastened import FastenedProblem
 from ..core.model import iteration_cap, positive_tolerance
 from ..core.operators import as_operator
+from ..errors import InvalidInputError
 from .box_qp import solve_box_qp
 from .fastened import solve_fastened_box_qp
 
@@ -73,14 +73,23 @@ def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 50
     if r0 is None:
         r0 = cold_start(W, dual.b)
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite x
-        solution = solve_box_qp(W, -dual.b, lower=0.0, x0=r0, tol=tol,
-                                max_iter=max_iter, check_finite=False)  # W: validated model
+        solution = solve_box_qp(
+            W, -dual.b, lower=0.0, x0=r0, tol=tol, max_iter=max_iter, check_finite=False
+        )  # W: validated model
     forces = solution.x
     displacements = dual.displacements(forces)
     elapsed = time.perf_counter() - start
     return problem.make_result(
-        displacements, forces, method="active-set", converged=solution.converged,
-        message=solution.message, iterations=solution.iterations, seconds=elapsed,
-        info={"factorizations": solution.factorizations, "updates": solution.updates,
-              "residual": solution.residual},
+        displacements,
+        forces,
+        method="active-set",
+        converged=solution.converged,
+        message=solution.message,
+        iterations=solution.iterations,
+        seconds=elapsed,
+        info={
+            "factorizations": solution.factorizations,
+            "updates": solution.updates,
+            "residual": solution.residual,
+        },
     )

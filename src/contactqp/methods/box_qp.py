@@ -88,10 +88,16 @@ def _validated(W, c, lower, upper, x0, check_finite):
     entries = W.matrix if isinstance(W, DenseOperator) else W.diagonal()
     if not (np.all(np.isfinite(c)) and (not check_finite or np.all(np.isfinite(entries)))):
         raise InvalidInputError("W or c contains NaN or inf")
-    lower = np.full(n, -np.inf) if lower is None else np.broadcast_to(
-        np.asarray(lower, dtype=float), (n,)).copy()
-    upper = np.full(n, np.inf) if upper is None else np.broadcast_to(
-        np.asarray(upper, dtype=float), (n,)).copy()
+    lower = (
+        np.full(n, -np.inf)
+        if lower is None
+        else np.broadcast_to(np.asarray(lower, dtype=float), (n,)).copy()
+    )
+    upper = (
+        np.full(n, np.inf)
+        if upper is None
+        else np.broadcast_to(np.asarray(upper, dtype=float), (n,)).copy()
+    )
     if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
         raise InvalidInputError("bounds must satisfy lower <= upper with no NaN")
     if x0 is not None:
@@ -112,8 +118,10 @@ class _BoxQP:
         self.tol = tol
         self.blocks = FreeBlockSolver(W)
         bounds = np.concatenate([lower[np.isfinite(lower)], upper[np.isfinite(upper)]])
-        self.x_scale = max(self.sigma * float(np.max(np.abs(c), initial=0.0)),
-                           float(np.max(np.abs(bounds), initial=0.0)))
+        self.x_scale = max(
+            self.sigma * float(np.max(np.abs(c), initial=0.0)),
+            float(np.max(np.abs(bounds), initial=0.0)),
+        )
 
     def gradient(self, x):
         return self.W @ x + self.c
@@ -172,8 +180,11 @@ def _active_set_phase(qp: _BoxQP, x, max_iter):
             x, g, f = full_step, product + qp.c, value
             continue
         direction = newton - x
-        trials = np.clip(x[:, None] + direction[:, None] * _SHORTER_STEPS[None, :],
-                         qp.lower[:, None], qp.upper[:, None])
+        trials = np.clip(
+            x[:, None] + direction[:, None] * _SHORTER_STEPS[None, :],
+            qp.lower[:, None],
+            qp.upper[:, None],
+        )
         products = qp.W @ trials
         values = np.einsum("ij,ij->j", trials, 0.5 * products + qp.c[:, None])
         best = int(np.argmin(values))
@@ -181,8 +192,13 @@ def _active_set_phase(qp: _BoxQP, x, max_iter):
             return x, g, iteration, False, "active set step gave no decrease"
         x, g, f = trials[:, best], products[:, best] + qp.c, float(values[best])
     converged = qp.residual(x, g) <= qp.tol
-    return x, g, max_iter, converged, ("active set converged" if converged
-                                    else "active set iteration limit")
+    return (
+        x,
+        g,
+        max_iter,
+        converged,
+        ("active set converged" if converged else "active set iteration limit"),
+    )
 
 
 def _projected_newton_phase(qp: _BoxQP, x, max_iter):
@@ -194,7 +210,7 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
         if qp.residual(x, g) <= qp.tol:
             return x, g, iteration - 1, True, "projected Newton converged"
         epsilon = min(float(np.max(np.abs(step))), 1e-3 * max(qp.x_scale, 1e-300))
-        binding = (((x <= qp.lower + epsilon) & (g > 0)) | ((x >= qp.upper - epsilon) & (g < 0)))
+        binding = ((x <= qp.lower + epsilon) & (g > 0)) | ((x >= qp.upper - epsilon) & (g < 0))
         free = ~binding
         direction = -qp.sigma * g
         if free.any():
@@ -203,8 +219,9 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
         alpha = 1.0
         while True:
             trial = qp.project(x + alpha * direction)
-            expected = (alpha * -(g[free] @ direction[free])
-                        + g[binding] @ (x[binding] - trial[binding]))
+            expected = alpha * -(g[free] @ direction[free]) + g[binding] @ (
+                x[binding] - trial[binding]
+            )
             if f0 - qp.objective(trial) >= 1e-4 * expected:
                 break
             alpha *= 0.5
@@ -213,12 +230,26 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
         x = trial
     g = qp.gradient(x)
     converged = qp.residual(x, g) <= qp.tol
-    return x, g, max_iter, converged, ("projected Newton converged" if converged
-                                    else "iteration limit reached")
+    return (
+        x,
+        g,
+        max_iter,
+        converged,
+        ("projected Newton converged" if converged else "iteration limit reached"),
+    )
 
 
-def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
-                 max_iter: int = 500, check_finite: bool = True) -> BoxQPSolution:
+def solve_box_qp(
+    W,
+    c,
+    lower=None,
+    upper=None,
+    x0=None,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 500,
+    check_finite: bool = True,
+) -> BoxQPSolution:
     """Minimise ``1/2 x^T W x + c^T x`` subject to ``lower <= x <= upper``.
 
     Parameters
@@ -264,7 +295,14 @@ def solve_box_qp(W, c, lower=None, upper=None, x0=None, *, tol: float = 1e-10,
         iterations += more
         message = f"active set did not settle; {message}"
     state = np.where(x <= lower, AT_LOWER, np.where(x >= upper, AT_UPPER, FREE)).astype(np.int8)
-    return BoxQPSolution(x=x, gradient=g, state=state, converged=converged, iterations=iterations,
-                         factorizations=qp.blocks.factorizations,
-                         updates=qp.blocks.updates, residual=qp.residual(x, g),
-                         message=message)
+    return BoxQPSolution(
+        x=x,
+        gradient=g,
+        state=state,
+        converged=converged,
+        iterations=iterations,
+        factorizations=qp.blocks.factorizations,
+        updates=qp.blocks.updates,
+        residual=qp.residual(x, g),
+        message=message,
+    )

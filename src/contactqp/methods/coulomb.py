@@ -57,11 +57,15 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from .. import kernels
-from ..errors import InvalidInputError
-from ..core.local_problem import (LocalProblem, better_dense, check_positive_semidefinite,
-                     natural_map_residual)
+from ..core.local_problem import (
+    LocalProblem,
+    better_dense,
+    check_positive_semidefinite,
+    natural_map_residual,
+)
 from ..core.model import finite_array, iteration_cap, positive_tolerance
 from ..core.operators import as_operator
+from ..errors import InvalidInputError
 from .local_global import finish
 from .pgs import GaussSeidel
 
@@ -149,8 +153,13 @@ class _Newton:
         self.block_row = np.repeat(np.arange(nc, dtype=np.int64), np.diff(blocks.indptr))
         self.block_col = blocks.indices.astype(np.int64)
         positions = sp.bsr_matrix(
-            (np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape), blocks.indices,
-             blocks.indptr), shape=(m, m)).tocsc()
+            (
+                np.arange(1.0, blocks.data.size + 1).reshape(blocks.data.shape),
+                blocks.indices,
+                blocks.indptr,
+            ),
+            shape=(m, m),
+        ).tocsc()
         pattern = positions.copy()
         pattern.data[:] = 1.0
         pattern.setdiag(float(m))  # diagonally dominant: only the ordering is wanted here
@@ -164,8 +173,9 @@ class _Newton:
 
     def residual(self, r):
         u = self.W @ r + self.q
-        Phi = alart_curnier(r.reshape(self.nc, self.d), u.reshape(self.nc, self.d), self.mu,
-                            self.rho)
+        Phi = alart_curnier(
+            r.reshape(self.nc, self.d), u.reshape(self.nc, self.d), self.mu, self.rho
+        )
         return u, Phi.reshape(-1)
 
     def direction(self, r, u, eta):
@@ -220,9 +230,20 @@ class _Newton:
         data = np.empty(self.csc_indices.size)
         indices = np.empty_like(self.csc_indices)
         indptr = np.empty(n + 1, dtype=self.csc_indptr.dtype)
-        count = kernels.sparse_newton_matrix(A, B, self.W_blocks, self.block_row, self.block_col,
-                                             self.csc_entries, self.csc_indptr, self.csc_indices,
-                                             renumber, data, indices, indptr)
+        count = kernels.sparse_newton_matrix(
+            A,
+            B,
+            self.W_blocks,
+            self.block_row,
+            self.block_col,
+            self.csc_entries,
+            self.csc_indptr,
+            self.csc_indices,
+            renumber,
+            data,
+            indices,
+            indptr,
+        )
         J = sp.csc_matrix((data[:count], indices[:count], indptr), shape=(n, n))
         rows = self.order[kept_unknowns]
         with warnings.catch_warnings():
@@ -247,8 +268,9 @@ class _Newton:
             trial = r + t * step
             u, Phi = self.residual(trial)
             measures = self.measure(trial, u)
-            if (0.5 * float(Phi @ Phi) <= reference - ARMIJO * t * merit
-                    or (t == 1.0 and measures[0] < residual)):
+            if 0.5 * float(Phi @ Phi) <= reference - ARMIJO * t * merit or (
+                t == 1.0 and measures[0] < residual
+            ):
                 return trial, u, Phi, measures
             t *= 0.5
         return None
@@ -314,8 +336,15 @@ def _check_options(problem, r0, tol, max_iter):
     return r
 
 
-def solve_coulomb(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
-                  max_iter: int = MAX_ITER, check_psd: bool = True, per_contact: bool = False):
+def solve_coulomb(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = MAX_ITER,
+    check_psd: bool = True,
+    per_contact: bool = False,
+):
     """Solve a local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
 
     Semismooth Newton on the Alart-Curnier formulation with a non-monotone line search, and
@@ -403,5 +432,13 @@ def solve_coulomb(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
         if iterations >= max_iter:
             stages.append(f"max_iter = {max_iter} reached")
             break
-    return finish(problem, r - shift, tol, iterations, start, ", ".join(stages),
-                  method="coulomb", per_contact=per_contact)
+    return finish(
+        problem,
+        r - shift,
+        tol,
+        iterations,
+        start,
+        ", ".join(stages),
+        method="coulomb",
+        per_contact=per_contact,
+    )

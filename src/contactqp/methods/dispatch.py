@@ -30,8 +30,9 @@ def _is_frictionless(problem, kind: str) -> bool:
     return False
 
 
-def resolve(problem, method: str | None = None, options: dict | None = None
-            ) -> tuple[str, Method, dict]:
+def resolve(
+    problem, method: str | None = None, options: dict | None = None
+) -> tuple[str, Method, dict]:
     """``(kind, method, options)`` that :func:`solve` runs for ``problem``.
 
     The kind's option defaults (:attr:`~contactqp.methods.registry.Kind.defaults`) are added
@@ -52,10 +53,8 @@ def resolve(problem, method: str | None = None, options: dict | None = None
     check_options(entry, kind, options)
     if entry.name == spec.default and _is_frictionless(problem, kind):
         entry = METHODS[FRICTIONLESS_ROUTE]
-        options = {name: value for name, value in options.items()
-                   if name in entry.option_names}
-    defaults = {name: value for name, value in spec.defaults.items()
-                if name in entry.option_names}
+        options = {name: value for name, value in options.items() if name in entry.option_names}
+    defaults = {name: value for name, value in spec.defaults.items() if name in entry.option_names}
     return kind, entry, {**defaults, **options}
 
 

@@ -25,21 +25,32 @@ __all__ = ["solve_lawson_hanson", "solve_nnls", "solve_fastened_box_qp"]
 
 def _checked(problem) -> FastenedProblem:
     if not isinstance(problem, FastenedProblem):
-        raise InvalidInputError(
-            f"problem must be a FastenedProblem, got {type(problem).__name__}")
+        raise InvalidInputError(f"problem must be a FastenedProblem, got {type(problem).__name__}")
     return problem
 
 
-def _result(problem: FastenedProblem, name: str, forces, converged: bool, message: str,
-            nit: int, factorizations: int, start: float) -> FastenedResult:
+def _result(
+    problem: FastenedProblem,
+    name: str,
+    forces,
+    converged: bool,
+    message: str,
+    nit: int,
+    factorizations: int,
+    start: float,
+) -> FastenedResult:
     return problem.make_result(
-        forces, method=name, converged=converged, message=message,
-        iterations=nit, seconds=time.perf_counter() - start,
-        info={"factorizations": factorizations})
+        forces,
+        method=name,
+        converged=converged,
+        message=message,
+        iterations=nit,
+        seconds=time.perf_counter() - start,
+        info={"factorizations": factorizations},
+    )
 
 
-def solve_lawson_hanson(problem: FastenedProblem, *, r0=None,
-                        tol: float = 1e-10) -> FastenedResult:
+def solve_lawson_hanson(problem: FastenedProblem, *, r0=None, tol: float = 1e-10) -> FastenedResult:
     """Lawson and Hanson's active set on ``S``, one contact at a time, from the support of ``r0``.
 
     Parameters
@@ -54,25 +65,40 @@ def solve_lawson_hanson(problem: FastenedProblem, *, r0=None,
     problem = _checked(problem)
     positive_tolerance(tol)
     q = problem.contact_rhs()
-    solution = solve_nonnegative_qp(problem.schur, q, problem.contact_start(r0), tol,
-                                    max_iter=3 * len(q))
+    solution = solve_nonnegative_qp(
+        problem.schur, q, problem.contact_start(r0), tol, max_iter=3 * len(q)
+    )
     forces, converged = solution.x, solution.converged
     nit, factorizations = solution.iterations, solution.factorizations
     message = f"Lawson-Hanson {'converged' if converged else 'did not converge'}"
-    return _result(problem, "lawson-hanson", forces, converged, message, nit, factorizations,
-                   start)
+    return _result(problem, "lawson-hanson", forces, converged, message, nit, factorizations, start)
 
 
-def solve_fastened_box_qp(problem: FastenedProblem, *, r0=None, tol: float = 1e-10,
-                          max_iter: int = 500) -> FastenedResult:
+def solve_fastened_box_qp(
+    problem: FastenedProblem, *, r0=None, tol: float = 1e-10, max_iter: int = 500
+) -> FastenedResult:
     """The project's primal-dual box-QP solver on ``S``, warm started from ``r0``."""
     start = time.perf_counter()
     problem = _checked(problem)
-    solution = solve_box_qp(problem.schur, -problem.contact_rhs(), lower=0.0,
-                            x0=problem.contact_start(r0), tol=tol, max_iter=max_iter,
-                            check_finite=False)
-    return _result(problem, "active-set", solution.x, solution.converged, solution.message,
-                   solution.iterations, solution.factorizations, start)
+    solution = solve_box_qp(
+        problem.schur,
+        -problem.contact_rhs(),
+        lower=0.0,
+        x0=problem.contact_start(r0),
+        tol=tol,
+        max_iter=max_iter,
+        check_finite=False,
+    )
+    return _result(
+        problem,
+        "active-set",
+        solution.x,
+        solution.converged,
+        solution.message,
+        solution.iterations,
+        solution.factorizations,
+        start,
+    )
 
 
 def solve_nnls(problem: FastenedProblem) -> FastenedResult:

@@ -60,8 +60,9 @@ class _Plan:
         if self.C is not None:
             y = np.concatenate([y, _forward(self.L_S, extended[n_base:] - self.C.T @ y)])
         if self.V is not None:
-            multipliers = scipy.linalg.cho_solve((self.L_G, True), -(self.V.T @ y),
-                                                 check_finite=False)
+            multipliers = scipy.linalg.cho_solve(
+                (self.L_G, True), -(self.V.T @ y), check_finite=False
+            )
             y = y + self.V @ multipliers
         if self.C is not None:
             z_added = _backward(self.L_S, y[n_base:])
@@ -124,8 +125,8 @@ class FreeBlockSolver:
             dropped = np.flatnonzero(self.base[self.base_index] & ~free[self.base_index])
             n_free, n_base = int(np.count_nonzero(free)), self.base_index.size
             a, d = added.size, dropped.size
-            cost = n_base ** 2 * (a + d) + n_base * (a * a + d * d) + (a ** 3 + d ** 3) / 3
-            if self.update_cost + cost <= n_free ** 3 / 3:
+            cost = n_base**2 * (a + d) + n_base * (a * a + d * d) + (a**3 + d**3) / 3
+            if self.update_cost + cost <= n_free**3 / 3:
                 plan = self._updated_plan(free, added, dropped)
                 if plan is not None:
                     self.update_cost += cost
@@ -151,8 +152,9 @@ class FreeBlockSolver:
                 C = _forward(L, self.matrix.block(base_index, added))
                 schur = self.matrix.block(added, added) - C.T @ C
                 if factor.shifted:
-                    schur[np.diag_indices_from(schur)] += (factor.uniform
-                                                           + factor.relative * self.diagonal[added])
+                    schur[np.diag_indices_from(schur)] += (
+                        factor.uniform + factor.relative * self.diagonal[added]
+                    )
                 L_S = _cholesky(schur)
             if dropped.size:
                 unit = np.zeros((base_index.size, dropped.size))

@@ -30,7 +30,8 @@ def _start(problem: FrictionalProblem, r0) -> np.ndarray | None:
     if start.shape != (problem.n_contacts * problem.dim,):
         raise InvalidInputError(
             f"r0 must hold {problem.dim} local forces per contact "
-            f"({problem.n_contacts * problem.dim} values), got shape {np.shape(r0)}")
+            f"({problem.n_contacts * problem.dim} values), got shape {np.shape(r0)}"
+        )
     return start
 
 
@@ -51,7 +52,12 @@ def solve_frictional(problem: FrictionalProblem, method, options: dict) -> Frict
         options["r0"] = (r0 + shift) / unit
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite r
         solution = method.function(local, **options)
-    return problem.make_result(unit * solution.forces - shift, method=method.name,
-                               converged=solution.success, message=solution.message,
-                               iterations=solution.iterations,
-                               seconds=time.perf_counter() - start, step=step)
+    return problem.make_result(
+        unit * solution.forces - shift,
+        method=method.name,
+        converged=solution.success,
+        message=solution.message,
+        iterations=solution.iterations,
+        seconds=time.perf_counter() - start,
+        step=step,
+    )

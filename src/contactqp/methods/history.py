@@ -14,9 +14,14 @@ from .dispatch import resolve, solve
 __all__ = ["solve_history"]
 
 
-def solve_history(problem: FrictionalProblem, loads, method: str | None = None, *,
-                  progress: Callable[[int, int], None] | None = None,
-                  **options) -> HistoryResult:
+def solve_history(
+    problem: FrictionalProblem,
+    loads,
+    method: str | None = None,
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+) -> HistoryResult:
     """Solve a frictional problem along a history of loads, step by step.
 
     Each step is ``solve(problem.with_loads(P_k, previous=result_k-1), method, **options)``,
@@ -43,12 +48,14 @@ def solve_history(problem: FrictionalProblem, loads, method: str | None = None, 
     """
     if not isinstance(problem, FrictionalProblem):
         raise InvalidInputError(
-            f"problem must be a FrictionalProblem, got {type(problem).__name__}")
+            f"problem must be a FrictionalProblem, got {type(problem).__name__}"
+        )
     history = finite_array(loads, "loads", 2)
     if history.shape[1] != problem.model.n_freedoms or history.shape[0] == 0:
         raise InvalidInputError(
             f"loads must have shape (K, {problem.model.n_freedoms}) with K >= 1, got "
-            f"{history.shape}")
+            f"{history.shape}"
+        )
     resolve(problem, method, options)  # a bad method or option fails before any step
     steps, previous = [], problem.previous
     for P in history:

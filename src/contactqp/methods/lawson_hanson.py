@@ -94,8 +94,9 @@ def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None
         j = int(np.argmax(gradient))
         if gradient[j] <= threshold:
             return NonnegativeQPSolution(x, True, iteration, factorizations)
-        border = (scipy.linalg.lapack.dtrtrs(L, S[passive, j], lower=1)[0] if passive
-                  else np.zeros(0))
+        border = (
+            scipy.linalg.lapack.dtrtrs(L, S[passive, j], lower=1)[0] if passive else np.zeros(0)
+        )
         pivot = S[j, j] - border @ border
         if not pivot > 0:
             return NonnegativeQPSolution(x, False, iteration, factorizations)

@@ -41,10 +41,22 @@ from .box_qp import solve_box_qp
 __all__ = ["certify_global", "finish", "local_result", "solve_frictionless"]
 
 
-def local_result(problem: LocalProblem, r, u, *, converged: bool, error: float, tol: float,
-                 iterations: int, seconds: float, message: str, method: str,
-                 limits: AccuracyLimits | None = None, equilibrium: float | None = None,
-                 v: np.ndarray | None = None) -> LocalResult:
+def local_result(
+    problem: LocalProblem,
+    r,
+    u,
+    *,
+    converged: bool,
+    error: float,
+    tol: float,
+    iterations: int,
+    seconds: float,
+    message: str,
+    method: str,
+    limits: AccuracyLimits | None = None,
+    equilibrium: float | None = None,
+    v: np.ndarray | None = None,
+) -> LocalResult:
     """The :class:`~contactqp.core.result.LocalResult` of reactions ``r`` and velocities ``u``
     (shape (m,)) of ``problem``, with the contact status computed from them.
 
@@ -54,14 +66,27 @@ def local_result(problem: LocalProblem, r, u, *, converged: bool, error: float, 
     r = np.asarray(r, dtype=float)
     u = np.asarray(u, dtype=float)
     certificate = LocalCertificate(
-        natural_map=float(error), equilibrium=equilibrium, tol=float(tol),
-        limits=AccuracyLimits(0.0, 0.0) if limits is None else limits)
+        natural_map=float(error),
+        equilibrium=equilibrium,
+        tol=float(tol),
+        limits=AccuracyLimits(0.0, 0.0) if limits is None else limits,
+    )
     return LocalResult(
-        displacements=u, forces=r, nodal_forces=r, gaps=u[::problem.dim],
-        contact_status=contact_status(problem, r, u), energy=float("nan"),
-        success=bool(converged), status=SUCCESS if converged else NOT_CONVERGED,
-        message=message, iterations=int(iterations), seconds=float(seconds), method=method,
-        certificate=certificate, v=v)
+        displacements=u,
+        forces=r,
+        nodal_forces=r,
+        gaps=u[:: problem.dim],
+        contact_status=contact_status(problem, r, u),
+        energy=float("nan"),
+        success=bool(converged),
+        status=SUCCESS if converged else NOT_CONVERGED,
+        message=message,
+        iterations=int(iterations),
+        seconds=float(seconds),
+        method=method,
+        certificate=certificate,
+        v=v,
+    )
 
 
 def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
@@ -72,6 +97,7 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     active set steps on the unsymmetric normal block (least squares where it is singular) remove
     that error; the best point by natural-map error is kept.
     """
+
     def error_of(x):
         r = np.zeros(problem.W.shape[0])
         r[normal] = x
@@ -107,9 +133,15 @@ def _columns(W, index):
     return operator.block(None, index)
 
 
-def solve_frictionless(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
-                       max_iter: int | None = None, check_psd: bool = True,
-                       per_contact: bool = False) -> LocalResult:
+def solve_frictionless(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int | None = None,
+    check_psd: bool = True,
+    per_contact: bool = False,
+) -> LocalResult:
     """Solve a local problem with ``mu = 0`` on every contact to natural-map error ``tol``.
 
     The cones are rays, the tangential reactions vanish and the normal part is the
@@ -163,27 +195,51 @@ def solve_frictionless(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
     else:
         first = finite_array(r0, "r0", 1)
         if first.shape != (problem.W.shape[0],):
-            raise InvalidInputError(f"r0 must have shape ({problem.W.shape[0]},), got "
-                                    f"{first.shape}")
+            raise InvalidInputError(
+                f"r0 must have shape ({problem.W.shape[0]},), got {first.shape}"
+            )
         first = np.maximum(first[normal], 0.0)
     try:  # the box-QP's own factorisations of free blocks validate them
-        solution = solve_box_qp(W_sym, q_n, lower=0.0, x0=first,
-                                tol=min(tol, 1e-10) * 1e-2,
-                                max_iter=500 if max_iter is None else max_iter,
-                                check_finite=False)  # W: validated by LocalProblem
+        solution = solve_box_qp(
+            W_sym,
+            q_n,
+            lower=0.0,
+            x0=first,
+            tol=min(tol, 1e-10) * 1e-2,
+            max_iter=500 if max_iter is None else max_iter,
+            check_finite=False,
+        )  # W: validated by LocalProblem
     except NotPositiveDefiniteError as exc:
         raise NotPositiveDefiniteError(f"W's normal block: {exc}") from None
     # a symmetric W_NN: the QP's minimiser solves the complementarity problem, nothing to polish
     reactions = solution.x if symmetric else _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
-    return finish(problem, r, tol, solution.iterations, start, solution.message,
-                  method="normal-qp", per_contact=per_contact, columns=columns)
+    return finish(
+        problem,
+        r,
+        tol,
+        solution.iterations,
+        start,
+        solution.message,
+        method="normal-qp",
+        per_contact=per_contact,
+        columns=columns,
+    )
 
 
-def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
-           detail: str, *, method: str, per_contact: bool = False,
-           columns=None) -> LocalResult:
+def finish(
+    problem: LocalProblem,
+    r,
+    tol: float,
+    iterations: int,
+    start: float,
+    detail: str,
+    *,
+    method: str,
+    per_contact: bool = False,
+    columns=None,
+) -> LocalResult:
     """The :class:`~contactqp.core.result.LocalResult` of reactions ``r``, checked by the
     natural-map error.
 
@@ -206,11 +262,23 @@ def finish(problem: LocalProblem, r, tol: float, iterations: int, start: float,
     verdict = "converged" if converged else f"not converged to {tol:g}"
     limits = limits or accuracy_limits(problem, r, u)
     return local_result(
-        problem, r, u, converged=converged, error=error, tol=tol, iterations=iterations,
-        seconds=time.perf_counter() - start, method=method, limits=limits,
-        message=_with_limits(f"{verdict}: {detail}; natural-map error {error:.2e}"
-                             + (" (largest of the problem's and each contact's)"
-                                if per_contact else ""), limits, tol))
+        problem,
+        r,
+        u,
+        converged=converged,
+        error=error,
+        tol=tol,
+        iterations=iterations,
+        seconds=time.perf_counter() - start,
+        method=method,
+        limits=limits,
+        message=_with_limits(
+            f"{verdict}: {detail}; natural-map error {error:.2e}"
+            + (" (largest of the problem's and each contact's)" if per_contact else ""),
+            limits,
+            tol,
+        ),
+    )
 
 
 def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
@@ -218,8 +286,9 @@ def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
     return f"{message}; {notes}" if notes else message
 
 
-def certify_global(problem: GlobalProblem, local: LocalResult, tol: float,
-                   start: float) -> LocalResult:
+def certify_global(
+    problem: GlobalProblem, local: LocalResult, tol: float, start: float
+) -> LocalResult:
     """The solution ``local`` of ``problem.condense()`` judged on the global equations as written.
 
     ``v`` solves ``M v = H r + f`` (``M`` as given), ``u = H^T v + w``, and the certificate's
@@ -234,10 +303,22 @@ def certify_global(problem: GlobalProblem, local: LocalResult, tol: float,
     error, equilibrium = certificate.error, certificate.equilibrium
     converged = bool(error <= tol and equilibrium <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
-    message = (f"{verdict} on the global equations as written: natural-map error {error:.2e}, "
-               f"equilibrium residual {equilibrium:.1e} (condensed problem: {local.message})")
+    message = (
+        f"{verdict} on the global equations as written: natural-map error {error:.2e}, "
+        f"equilibrium residual {equilibrium:.1e} (condensed problem: {local.message})"
+    )
     return local_result(
-        problem.condense(), r, certificate.u, converged=converged, error=error, tol=tol,
-        iterations=local.iterations, seconds=time.perf_counter() - start, method=local.method,
-        message=_with_limits(message, certificate.limits, tol), limits=certificate.limits,
-        equilibrium=equilibrium, v=certificate.v)
+        problem.condense(),
+        r,
+        certificate.u,
+        converged=converged,
+        error=error,
+        tol=tol,
+        iterations=local.iterations,
+        seconds=time.perf_counter() - start,
+        method=local.method,
+        message=_with_limits(message, certificate.limits, tol),
+        limits=certificate.limits,
+        equilibrium=equilibrium,
+        v=certificate.v,
+    )

@@ -45,7 +45,7 @@ def _greedy_colours(graph):
     n = graph.shape[0]
     colour = np.full(n, -1)
     for i in range(n):
-        taken = colour[graph.indices[graph.indptr[i]:graph.indptr[i + 1]]]
+        taken = colour[graph.indices[graph.indptr[i] : graph.indptr[i + 1]]]
         used = np.zeros(taken.size + 2, dtype=bool)
         used[taken[(taken >= 0) & (taken < used.size)]] = True
         colour[i] = int(np.argmin(used))
@@ -89,7 +89,7 @@ class GaussSeidel:
             self.diag_blocks[br[on_diag]] = bsr.data[on_diag]
         else:
             self.diag_blocks = operator.diagonal_blocks(d)
-        norms = np.sqrt(np.sum(self.diag_blocks ** 2, axis=(1, 2)))
+        norms = np.sqrt(np.sum(self.diag_blocks**2, axis=(1, 2)))
         self.rho = 1.0 / np.where(norms > 0, norms, 1.0)
 
     def _local_solve(self, Wb, b, mu, rho, R):

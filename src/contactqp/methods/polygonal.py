@@ -38,9 +38,9 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..core.friction import polygon_normals
-from ..errors import SolverError
 from ..core.local_problem import LocalProblem
 from ..core.result import LocalResult
+from ..errors import SolverError
 from .qp import backend_options, installed_backend, run_backend
 from .tresca import (
     FixedPointData,
@@ -51,6 +51,7 @@ from .tresca import (
 )
 
 __all__ = ["solve_polygonal"]
+
 
 class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
@@ -79,16 +80,24 @@ class _PolygonalTresca:
         lower[normal] = 0.0
         G = h = None
         if d == 2:  # the exact segment |x_T| <= s as two facets
-            G = sp.csc_matrix((np.repeat([1.0, -1.0], bound.size),
-                               (np.arange(2 * bound.size), np.tile(tangent[:, 0], 2))),
-                              shape=(2 * bound.size, keep.size))
+            G = sp.csc_matrix(
+                (
+                    np.repeat([1.0, -1.0], bound.size),
+                    (np.arange(2 * bound.size), np.tile(tangent[:, 0], 2)),
+                ),
+                shape=(2 * bound.size, keep.size),
+            )
             h = np.tile(bound, 2)
         elif bound.size:
             sides = self.normals.shape[0]
             rows = np.arange(bound.size * sides)
-            G = sp.csc_matrix((np.tile(self.normals, (bound.size, 1)).ravel(),
-                               (np.repeat(rows, 2), np.repeat(tangent, sides, axis=0).ravel())),
-                              shape=(rows.size, keep.size))
+            G = sp.csc_matrix(
+                (
+                    np.tile(self.normals, (bound.size, 1)).ravel(),
+                    (np.repeat(rows, 2), np.repeat(tangent, sides, axis=0).ravel()),
+                ),
+                shape=(rows.size, keep.size),
+            )
             h = self.inradius * np.repeat(bound, sides)
         if G is not None and not self.sparse:
             G = G.toarray()
@@ -98,12 +107,19 @@ class _PolygonalTresca:
             # An inexact status (e.g. Clarabel's "AlmostSolved" at the tight tolerances) is
             # judged by the outer loop, which measures every iterate itself.
             warnings.simplefilter("ignore", UserWarning)
-            x = run_backend(self.qpsolvers, problem, self.backend, self.options,
-                            "the polygonal Tresca problem", chosen=self.chosen).x
+            x = run_backend(
+                self.qpsolvers,
+                problem,
+                self.backend,
+                self.options,
+                "the polygonal Tresca problem",
+                chosen=self.chosen,
+            ).x
         if x is None or not np.all(np.isfinite(x)):
             raise SolverError(
                 f"backend {self.backend!r} found no solution of the polygonal Tresca problem "
-                f"(is W positive semidefinite?)")
+                f"(is W positive semidefinite?)"
+            )
         x = np.asarray(x)
         if d == 3 and G is not None:
             x = _polish_active_set(P, q[keep] / (f * self.w), G, h, normal, x)
@@ -130,15 +146,23 @@ def _polish_active_set(P, c, G, h, normal, x):
     set was right); otherwise ``x`` is returned.
     """
     G = sp.csr_matrix(G)
-    scale = max(float(np.max(np.abs(x), initial=0.0)), float(np.max(np.abs(h), initial=0.0)),
-                np.finfo(float).tiny)
+    scale = max(
+        float(np.max(np.abs(x), initial=0.0)),
+        float(np.max(np.abs(h), initial=0.0)),
+        np.finfo(float).tiny,
+    )
     tiny = _ACTIVE_RTOL * scale
     facets = np.flatnonzero(h - G @ x <= tiny)
     bounds = normal[x[normal] <= tiny]
     n = x.size
-    C = sp.vstack([G[facets], sp.csr_matrix((-np.ones(bounds.size), (np.arange(bounds.size),
-                                                                      bounds)),
-                                            shape=(bounds.size, n))]).tocsc()
+    C = sp.vstack(
+        [
+            G[facets],
+            sp.csr_matrix(
+                (-np.ones(bounds.size), (np.arange(bounds.size), bounds)), shape=(bounds.size, n)
+            ),
+        ]
+    ).tocsc()
     kkt = sp.bmat([[sp.csc_matrix(P), C.T], [C, None]], format="csc")
     rhs = np.concatenate([-c, h[facets], np.zeros(bounds.size)])
     try:
@@ -148,14 +172,26 @@ def _polish_active_set(P, c, G, h, normal, x):
     except RuntimeError:  # exactly singular (degenerate active set)
         return x
     refined, multipliers = solution[:n], solution[n:]
-    feasible = (np.all(np.isfinite(solution)) and np.all(G @ refined <= h + tiny)
-                and np.all(refined[normal] >= -tiny) and np.all(multipliers >= -tiny))
+    feasible = (
+        np.all(np.isfinite(solution))
+        and np.all(G @ refined <= h + tiny)
+        and np.all(refined[normal] >= -tiny)
+        and np.all(multipliers >= -tiny)
+    )
     return refined if feasible else x
 
 
-def solve_polygonal(problem: LocalProblem, *, r0=None, facets: int = 8, backend: str = "clarabel",
-                    tol: float = 1e-8, max_iter: int = 50, per_contact: bool = False,
-                    **options) -> LocalResult:
+def solve_polygonal(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    facets: int = 8,
+    backend: str = "clarabel",
+    tol: float = 1e-8,
+    max_iter: int = 50,
+    per_contact: bool = False,
+    **options,
+) -> LocalResult:
     """Solve a local problem with polygonal friction cones by a fixed point of QPs (qpsolvers).
 
     Parameters
@@ -200,6 +236,14 @@ def solve_polygonal(problem: LocalProblem, *, r0=None, facets: int = 8, backend:
     polygon_normals(facets)
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
     data = FixedPointData(problem)
-    return run_fixed_point(problem, data, _PolygonalTresca(data, facets, backend, options),
-                           tol=tol, max_iter=max_iter, r0=start, exact=problem.dim == 2,
-                           per_contact=per_contact, method="polygonal")
+    return run_fixed_point(
+        problem,
+        data,
+        _PolygonalTresca(data, facets, backend, options),
+        tol=tol,
+        max_iter=max_iter,
+        r0=start,
+        exact=problem.dim == 2,
+        per_contact=per_contact,
+        method="polygonal",
+    )

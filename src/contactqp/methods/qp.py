@@ -15,15 +15,27 @@ import scipy.sparse
 from ..errors import InvalidInputError, SolverError
 from ..optional import require, require_backend
 
-__all__ = ["solve_qp", "available_backends", "backend_options", "refused_setting",
-           "installed_backend", "run_backend", "DEFAULT_BACKEND"]
+__all__ = [
+    "solve_qp",
+    "available_backends",
+    "backend_options",
+    "refused_setting",
+    "installed_backend",
+    "run_backend",
+    "DEFAULT_BACKEND",
+]
 
 DEFAULT_BACKEND = "clarabel"
 
 #: Tight tolerances per backend, so that answers are comparable with the own solver's.
 _TIGHT = {
-    "clarabel": {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12,
-                 "tol_ktratio": 1e-10, "max_iter": 500},
+    "clarabel": {
+        "tol_gap_abs": 1e-12,
+        "tol_gap_rel": 1e-12,
+        "tol_feas": 1e-12,
+        "tol_ktratio": 1e-10,
+        "max_iter": 500,
+    },
     "piqp": {"eps_abs": 1e-11, "eps_rel": 1e-11, "max_iter": 500},
     "proxqp": {"eps_abs": 1e-11, "eps_rel": 0.0},
     "osqp": {"eps_abs": 1e-10, "eps_rel": 1e-10, "max_iter": 200000, "polishing": True},
@@ -53,8 +65,7 @@ def installed_backend(backend: str, purpose: str = "the 'qp' solver"):
     return qpsolvers
 
 
-def run_backend(qpsolvers, problem, backend: str, settings: dict, what: str, *,
-                chosen=()):
+def run_backend(qpsolvers, problem, backend: str, settings: dict, what: str, *, chosen=()):
     """``qpsolvers.solve_problem`` of ``problem`` with ``settings``.
 
     ``what`` names the problem in the messages (``"the contact QP"``), ``chosen`` the keys of
@@ -70,14 +81,17 @@ def run_backend(qpsolvers, problem, backend: str, settings: dict, what: str, *,
     """
     try:
         return qpsolvers.solve_problem(problem, solver=backend, **settings)
-    except Exception as exc:  # noqa: BLE001  (whatever a backend raises)
+    except Exception as exc:
         for key in chosen:
             reason = refused_setting(backend, key, settings[key])
             if reason:
-                raise InvalidInputError(f"backend {backend!r} refuses {key} = "
-                                        f"{settings[key]!r} ({reason})") from exc
-        raise SolverError(f"qp backend {backend!r} failed on {what}: {type(exc).__name__}: "
-                          f"{' '.join(str(exc).split())}") from exc
+                raise InvalidInputError(
+                    f"backend {backend!r} refuses {key} = {settings[key]!r} ({reason})"
+                ) from exc
+        raise SolverError(
+            f"qp backend {backend!r} failed on {what}: {type(exc).__name__}: "
+            f"{' '.join(str(exc).split())}"
+        ) from exc
 
 
 def available_backends() -> list[str]:
@@ -129,29 +143,38 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
         K_scaled, G = scipy.sparse.csc_matrix(K_scaled), A.tocsc()
     else:
         G = A.toarray()
-    qp = qpsolvers.Problem(P=K_scaled, q=-problem.loads / force_scale, G=G,
-                           h=problem.constraints.gaps / length_scale)
+    qp = qpsolvers.Problem(
+        P=K_scaled, q=-problem.loads / force_scale, G=G, h=problem.constraints.gaps / length_scale
+    )
     settings = backend_options(backend)
     settings.update(options)
     with warnings.catch_warnings(record=True) as said:  # a backend's warnings go in the message
         warnings.simplefilter("always")
-        solution = run_backend(qpsolvers, qp, backend, settings, "the contact QP",
-                               chosen=options)
+        solution = run_backend(qpsolvers, qp, backend, settings, "the contact QP", chosen=options)
     elapsed = time.perf_counter() - start
     notes = list(dict.fromkeys(" ".join(str(w.message).split()) for w in said))
     z = np.zeros(0) if solution.z is None and problem.n_constraints == 0 else solution.z
     if not all(v is not None and np.all(np.isfinite(v)) for v in (solution.x, z)):
-        raise SolverError(f"qp backend {backend!r} found no solution of the contact QP"
-                          + (f" ({'; '.join(notes)})" if notes else ""))
+        raise SolverError(
+            f"qp backend {backend!r} found no solution of the contact QP"
+            + (f" ({'; '.join(notes)})" if notes else "")
+        )
     found = solution.found is not False
     U = length_scale * np.asarray(solution.x)
     forces = force_scale * np.maximum(np.asarray(z), 0.0)
-    message = ("backend found a solution" if found
-               else "backend stopped without claiming a solution; its last point is returned")
+    message = (
+        "backend found a solution"
+        if found
+        else "backend stopped without claiming a solution; its last point is returned"
+    )
     return problem.make_result(
-        U, forces, method=f"qp:{backend}", converged=bool(found),
+        U,
+        forces,
+        method=f"qp:{backend}",
+        converged=bool(found),
         message=f"{message} ({'; '.join(notes)})" if notes else message,
-        iterations=int(getattr(solution, "extras", {}).get("iter", 0) or 0), seconds=elapsed,
+        iterations=int(getattr(solution, "extras", {}).get("iter", 0) or 0),
+        seconds=elapsed,
     )
 
 
@@ -174,7 +197,7 @@ def refused_setting(backend: str, key: str, value) -> str | None:
             try:
                 qpsolvers.solve_problem(probe, solver=backend, **{"verbose": verbose, **settings})
                 raised = None
-            except Exception as exc:  # noqa: BLE001  (what a backend raises on a bad setting)
+            except Exception as exc:
                 raised = f"{type(exc).__name__}: {exc}"
         if raised:
             said = [line for line in printed[0].splitlines() if "error" in line.lower()]

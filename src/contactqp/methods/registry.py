@@ -35,9 +35,23 @@ from .polygonal import solve_polygonal
 from .qp import DEFAULT_BACKEND, solve_qp
 from .tresca import solve_tresca_fixed_point
 
-__all__ = ["Option", "Method", "Kind", "METHODS", "KINDS", "EXTRA_MODULES", "get_method",
-           "get_kind", "kind_of", "methods_for", "default_method", "is_installed",
-           "method_options", "check_options", "FRICTIONLESS_ROUTE"]
+__all__ = [
+    "Option",
+    "Method",
+    "Kind",
+    "METHODS",
+    "KINDS",
+    "EXTRA_MODULES",
+    "get_method",
+    "get_kind",
+    "kind_of",
+    "methods_for",
+    "default_method",
+    "is_installed",
+    "method_options",
+    "check_options",
+    "FRICTIONLESS_ROUTE",
+]
 
 #: The method :func:`~contactqp.solve` takes instead of a kind's default when ``mu = 0`` on
 #: every contact.
@@ -124,13 +138,18 @@ def _frozen(**values) -> Mapping:
     return MappingProxyType(values)
 
 
-_R0_FRICTIONLESS = Option("r0", np.ndarray, None,
-                          "warm start: contact forces of a nearby problem (N), shape (m,)")
-_R0_LOCAL = Option("r0", np.ndarray, None,
-                   "warm start: local reactions, shape (d k,) (frictional: N, default the "
-                   "previous state's)")
-_PER_CONTACT = Option("per_contact", bool, False,
-                      "also converge on every contact's own scale (natural-map error)")
+_R0_FRICTIONLESS = Option(
+    "r0", np.ndarray, None, "warm start: contact forces of a nearby problem (N), shape (m,)"
+)
+_R0_LOCAL = Option(
+    "r0",
+    np.ndarray,
+    None,
+    "warm start: local reactions, shape (d k,) (frictional: N, default the previous state's)",
+)
+_PER_CONTACT = Option(
+    "per_contact", bool, False, "also converge on every contact's own scale (natural-map error)"
+)
 
 
 def _local_tol(default: float) -> Option:
@@ -138,70 +157,153 @@ def _local_tol(default: float) -> Option:
 
 
 #: Every method, by name (explicit registration: add a method here and nowhere else).
-METHODS: Mapping[str, Method] = MappingProxyType({method.name: method for method in (
-    Method("active-set", ("frictionless", "fastened"), solve_active_set,
-           (_R0_FRICTIONLESS,
-            Option("tol", float, 1e-10, "relative natural residual of the box QP"),
-            Option("max_iter", int, 500, "largest number of box-QP iterations")),
-           None, "exact",
-           "primal-dual active set on the dual QP (forces >= 0), never inverting R"),
-    Method("qp", ("frictionless",), solve_qp,
-           (Option("backend", str, DEFAULT_BACKEND, "the qpsolvers backend"),),
-           "qp", "cross-check",
-           "the primal QP on displacements through a qpsolvers backend (settings passed on)",
-           backend_settings=True),
-    Method("coulomb", ("frictional", "local", "global"), solve_coulomb,
-           (_R0_LOCAL, _local_tol(1e-8),
-            Option("max_iter", int, MAX_ITER, "budget of Newton iterations and Gauss-Seidel "
-                                              "sweeps"),
-            Option("check_psd", bool, True, "check that W is positive semidefinite"),
-            _PER_CONTACT),
-           None, "exact",
-           "semismooth Newton on Alart-Curnier, Gauss-Seidel fallback"),
-    Method("tresca", ("frictional", "local", "global"), solve_tresca_fixed_point,
-           (_R0_LOCAL, _local_tol(1e-8),
-            Option("max_iter", int, 50, "largest number of cone programs"), _PER_CONTACT),
-           "qp", "cross-check",
-           "fixed point on Tresca cone programs solved by Clarabel"),
-    Method("polygonal", ("frictional-polygonal", "local", "global"), solve_polygonal,
-           (_R0_LOCAL,
-            Option("facets", int, 8, "sides of the polygon inscribed in each friction disc"),
-            Option("backend", str, "clarabel", "the qpsolvers backend"),
-            _local_tol(1e-8),
-            Option("max_iter", int, 50, "largest number of quadratic programs"), _PER_CONTACT),
-           "qp", "exact",
-           "polygonal (linearised) cones: fixed point of QPs through qpsolvers",
-           backend_settings=True),
-    Method("normal-qp", ("frictional", "frictional-polygonal", "local", "global"),
-           solve_frictionless,
-           (_R0_LOCAL, _local_tol(1e-8),
-            Option("max_iter", int, None, "cap on the box-QP iterations (None: 500)"),
-            Option("check_psd", bool, True, "check that W is positive semidefinite"),
-            _PER_CONTACT),
-           None, "exact",
-           "mu = 0 on every contact: the box QP on the normal block (taken for the default)"),
-    Method("lawson-hanson", ("fastened",), solve_lawson_hanson,
-           (Option("r0", np.ndarray, None, "warm start: multipliers of a nearby state, shape "
-                                           "(m,)"),
-            Option("tol", float, 1e-10, "on q - S x, relative to max|q|")),
-           None, "exact",
-           "Lawson and Hanson's active set on the Schur complement, one contact at a time"),
-    Method("nnls", ("fastened",), solve_nnls, (), None, "cross-check",
-           "scipy's NNLS on the Cholesky factor of the Schur complement (cold start)"),
-)})
+METHODS: Mapping[str, Method] = MappingProxyType(
+    {
+        method.name: method
+        for method in (
+            Method(
+                "active-set",
+                ("frictionless", "fastened"),
+                solve_active_set,
+                (
+                    _R0_FRICTIONLESS,
+                    Option("tol", float, 1e-10, "relative natural residual of the box QP"),
+                    Option("max_iter", int, 500, "largest number of box-QP iterations"),
+                ),
+                None,
+                "exact",
+                "primal-dual active set on the dual QP (forces >= 0), never inverting R",
+            ),
+            Method(
+                "qp",
+                ("frictionless",),
+                solve_qp,
+                (Option("backend", str, DEFAULT_BACKEND, "the qpsolvers backend"),),
+                "qp",
+                "cross-check",
+                "the primal QP on displacements through a qpsolvers backend (settings passed on)",
+                backend_settings=True,
+            ),
+            Method(
+                "coulomb",
+                ("frictional", "local", "global"),
+                solve_coulomb,
+                (
+                    _R0_LOCAL,
+                    _local_tol(1e-8),
+                    Option(
+                        "max_iter",
+                        int,
+                        MAX_ITER,
+                        "budget of Newton iterations and Gauss-Seidel sweeps",
+                    ),
+                    Option("check_psd", bool, True, "check that W is positive semidefinite"),
+                    _PER_CONTACT,
+                ),
+                None,
+                "exact",
+                "semismooth Newton on Alart-Curnier, Gauss-Seidel fallback",
+            ),
+            Method(
+                "tresca",
+                ("frictional", "local", "global"),
+                solve_tresca_fixed_point,
+                (
+                    _R0_LOCAL,
+                    _local_tol(1e-8),
+                    Option("max_iter", int, 50, "largest number of cone programs"),
+                    _PER_CONTACT,
+                ),
+                "qp",
+                "cross-check",
+                "fixed point on Tresca cone programs solved by Clarabel",
+            ),
+            Method(
+                "polygonal",
+                ("frictional-polygonal", "local", "global"),
+                solve_polygonal,
+                (
+                    _R0_LOCAL,
+                    Option(
+                        "facets", int, 8, "sides of the polygon inscribed in each friction disc"
+                    ),
+                    Option("backend", str, "clarabel", "the qpsolvers backend"),
+                    _local_tol(1e-8),
+                    Option("max_iter", int, 50, "largest number of quadratic programs"),
+                    _PER_CONTACT,
+                ),
+                "qp",
+                "exact",
+                "polygonal (linearised) cones: fixed point of QPs through qpsolvers",
+                backend_settings=True,
+            ),
+            Method(
+                "normal-qp",
+                ("frictional", "frictional-polygonal", "local", "global"),
+                solve_frictionless,
+                (
+                    _R0_LOCAL,
+                    _local_tol(1e-8),
+                    Option("max_iter", int, None, "cap on the box-QP iterations (None: 500)"),
+                    Option("check_psd", bool, True, "check that W is positive semidefinite"),
+                    _PER_CONTACT,
+                ),
+                None,
+                "exact",
+                "mu = 0 on every contact: the box QP on the normal block (taken for the default)",
+            ),
+            Method(
+                "lawson-hanson",
+                ("fastened",),
+                solve_lawson_hanson,
+                (
+                    Option(
+                        "r0",
+                        np.ndarray,
+                        None,
+                        "warm start: multipliers of a nearby state, shape (m,)",
+                    ),
+                    Option("tol", float, 1e-10, "on q - S x, relative to max|q|"),
+                ),
+                None,
+                "exact",
+                "Lawson and Hanson's active set on the Schur complement, one contact at a time",
+            ),
+            Method(
+                "nnls",
+                ("fastened",),
+                solve_nnls,
+                (),
+                None,
+                "cross-check",
+                "scipy's NNLS on the Cholesky factor of the Schur complement (cold start)",
+            ),
+        )
+    }
+)
 
 _FRICTIONAL_DEFAULTS = _frozen(tol=1e-10, per_contact=True, check_psd=False)
 
 #: The problem kinds, by name.
-KINDS: Mapping[str, Kind] = MappingProxyType({kind.name: kind for kind in (
-    Kind("frictionless", "ContactProblem", "active-set"),
-    Kind("frictional", "FrictionalProblem", "coulomb", _FRICTIONAL_DEFAULTS),
-    Kind("frictional-polygonal", "FrictionalProblem with facets", "polygonal",
-         _FRICTIONAL_DEFAULTS, fixed=("facets",)),
-    Kind("local", "LocalProblem", "coulomb"),
-    Kind("global", "GlobalProblem", "coulomb"),
-    Kind("fastened", "FastenedProblem", "lawson-hanson"),
-)})
+KINDS: Mapping[str, Kind] = MappingProxyType(
+    {
+        kind.name: kind
+        for kind in (
+            Kind("frictionless", "ContactProblem", "active-set"),
+            Kind("frictional", "FrictionalProblem", "coulomb", _FRICTIONAL_DEFAULTS),
+            Kind(
+                "frictional-polygonal",
+                "FrictionalProblem with facets",
+                "polygonal",
+                _FRICTIONAL_DEFAULTS,
+                fixed=("facets",),
+            ),
+            Kind("local", "LocalProblem", "coulomb"),
+            Kind("global", "GlobalProblem", "coulomb"),
+            Kind("fastened", "FastenedProblem", "lawson-hanson"),
+        )
+    }
+)
 
 #: The modules each extra brings that methods need (what :func:`is_installed` looks for).
 EXTRA_MODULES: Mapping[str, tuple[str, ...]] = _frozen(qp=("qpsolvers", "clarabel"))
@@ -212,8 +314,9 @@ def get_kind(name: str) -> Kind:
     try:
         return KINDS[name]
     except (KeyError, TypeError):
-        raise InvalidInputError(f"unknown problem kind {name!r}; kinds: "
-                                f"{', '.join(KINDS)}") from None
+        raise InvalidInputError(
+            f"unknown problem kind {name!r}; kinds: {', '.join(KINDS)}"
+        ) from None
 
 
 def kind_of(problem) -> str:
@@ -222,7 +325,8 @@ def kind_of(problem) -> str:
     if not isinstance(kind, str) or kind not in KINDS:
         raise InvalidInputError(
             f"cannot solve a {type(problem).__name__}: give one of "
-            f"{', '.join(dict.fromkeys(k.problem.split()[0] for k in KINDS.values()))}")
+            f"{', '.join(dict.fromkeys(k.problem.split()[0] for k in KINDS.values()))}"
+        )
     return kind
 
 
@@ -240,8 +344,9 @@ def default_method(kind: str) -> str:
 
 def _listing(kind: str) -> str:
     default = default_method(kind)
-    return ", ".join(f"{m.name} (default)" if m.name == default else m.name
-                     for m in methods_for(kind))
+    return ", ".join(
+        f"{m.name} (default)" if m.name == default else m.name for m in methods_for(kind)
+    )
 
 
 def get_method(name: str | None, kind: str | None = None) -> Method:
@@ -265,7 +370,8 @@ def get_method(name: str | None, kind: str | None = None) -> Method:
     if kind is not None and kind not in method.kinds:
         raise InvalidInputError(
             f"method {name!r} does not solve {kind} problems (it solves "
-            f"{', '.join(method.kinds)}); methods for {kind} problems: {listing}")
+            f"{', '.join(method.kinds)}); methods for {kind} problems: {listing}"
+        )
     return method
 
 
@@ -273,8 +379,11 @@ def method_options(name: str | None, kind: str) -> dict[str, object]:
     """``{option: default}`` of method ``name`` on ``kind``: the kind's defaults applied, the
     options the problem sets (:attr:`Kind.fixed`) left out."""
     method, spec = get_method(name, kind), get_kind(kind)
-    return {option.name: spec.defaults.get(option.name, option.default)
-            for option in method.options if option.name not in spec.fixed}
+    return {
+        option.name: spec.defaults.get(option.name, option.default)
+        for option in method.options
+        if option.name not in spec.fixed
+    }
 
 
 def check_options(method: Method, kind: str, options: Mapping) -> None:
@@ -284,12 +393,13 @@ def check_options(method: Method, kind: str, options: Mapping) -> None:
     for name in options:
         if name in spec.fixed:
             raise InvalidInputError(
-                f"option {name!r} is set by the {spec.problem} itself, not given to "
-                f"{method.name!r}")
+                f"option {name!r} is set by the {spec.problem} itself, not given to {method.name!r}"
+            )
         if name not in method.option_names and not method.backend_settings:
             valid = ", ".join(n for n in method.option_names if n not in spec.fixed) or "none"
             raise InvalidInputError(
-                f"unknown option {name!r} for method {method.name!r}; its options: {valid}")
+                f"unknown option {name!r} for method {method.name!r}; its options: {valid}"
+            )
 
 
 def is_installed(name: str) -> bool:

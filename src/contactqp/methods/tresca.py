@@ -41,12 +41,12 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
-from ..errors import InvalidInputError, SolverError
 from ..core.local_problem import LocalProblem, natural_map_error
 from ..core.model import iteration_cap, positive_tolerance
 from ..core.operators import as_operator
-from ..optional import require
 from ..core.result import LocalResult
+from ..errors import InvalidInputError, SolverError
+from ..optional import require
 from .local_global import local_result
 
 __all__ = ["solve_tresca_fixed_point"]
@@ -71,7 +71,8 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     start = np.asarray(r0, dtype=float)
     if start.shape != (m,) or not np.all(np.isfinite(start)):
         raise InvalidInputError(
-            f"r0 must be a finite array of shape ({m},), got shape {start.shape}")
+            f"r0 must be a finite array of shape ({m},), got shape {start.shape}"
+        )
     return start
 
 
@@ -119,8 +120,9 @@ class FixedPointData:
         self.dim, self.n_contacts = problem.dim, problem.n_contacts
 
 
-def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, method: str,
-                    per_contact=False):
+def run_fixed_point(
+    problem, data, tresca, *, tol, max_iter, r0, exact, method: str, per_contact=False
+):
     """Iterate ``s = mu r'_N`` over a Tresca sub-solver; the loop shared by the fixed-point routes.
 
     Parameters
@@ -196,17 +198,28 @@ def run_fixed_point(problem, data, tresca, *, tol, max_iter, r0, exact, method: 
             change = np.linalg.norm(r - previous) / max(np.linalg.norm(r), np.finfo(float).tiny)
             if change <= tol or error <= tol:
                 converged = True
-                message = (f"fixed point reached (relative change {change:.1e}); natural-map "
-                           f"error against the exact cones {error:.2e}")
+                message = (
+                    f"fixed point reached (relative change {change:.1e}); natural-map "
+                    f"error against the exact cones {error:.2e}"
+                )
                 break
     if not message:
         message = f"max_iter = {max_iter} reached, natural-map error {best[0]:.2e}"
     error, r = best
     r = r - data.shift
     u = np.asarray(problem.W @ r).ravel() + problem.q
-    return local_result(problem, r, u, converged=converged, error=error, tol=tol,
-                        iterations=solved, seconds=time.perf_counter() - start_time,
-                        message=message, method=method)
+    return local_result(
+        problem,
+        r,
+        u,
+        converged=converged,
+        error=error,
+        tol=tol,
+        iterations=solved,
+        seconds=time.perf_counter() - start_time,
+        message=message,
+        method=method,
+    )
 
 
 def _rescaled(scale: float, r) -> float:
@@ -337,8 +350,9 @@ class _ClarabelTresca:
         keep, sliding, normal, tangent = free_unknowns(s, d)
         n_slide = tangent.shape[0]
         # rows: -x_N <= 0 (nonnegative cone), then per sliding contact (s_i, x_T) in the SOC
-        rows = np.concatenate([np.arange(nc),
-                               nc + (d * np.arange(n_slide)[:, None] + np.arange(1, d)).ravel()])
+        rows = np.concatenate(
+            [np.arange(nc), nc + (d * np.arange(n_slide)[:, None] + np.arange(1, d)).ravel()]
+        )
         cols = np.concatenate([normal, tangent.ravel()])
         A = sp.csc_matrix((-np.ones(rows.size), (rows, cols)), shape=(nc + d * n_slide, keep.size))
         b = np.zeros(nc + d * n_slide)
@@ -346,23 +360,30 @@ class _ClarabelTresca:
         clarabel = self._clarabel
         cones = [clarabel.NonnegativeConeT(nc)] + [clarabel.SecondOrderConeT(d)] * n_slide
         P = self.P[keep][:, keep]
-        solver = clarabel.DefaultSolver(P, q[keep] / (f * self.w), A, b, cones,
-                                        self.settings)
+        solver = clarabel.DefaultSolver(P, q[keep] / (f * self.w), A, b, cones, self.settings)
         try:
             solution = solver.solve()
-        except Exception as exc:  # noqa: BLE001  (whatever the backend raises: no answer)
-            raise SolverError(f"Clarabel failed on the Tresca cone program: "
-                              f"{type(exc).__name__}: {exc}") from exc
+        except Exception as exc:
+            raise SolverError(
+                f"Clarabel failed on the Tresca cone program: {type(exc).__name__}: {exc}"
+            ) from exc
         x = np.zeros(m)
         x[keep] = np.asarray(solution.x)
         if not np.all(np.isfinite(x)):
-            raise SolverError(f"Clarabel found no solution of the Tresca cone program "
-                              f"(status {solution.status})")
+            raise SolverError(
+                f"Clarabel found no solution of the Tresca cone program (status {solution.status})"
+            )
         return f * polish(self.W, q / (f * self.w), s / f, x, d)
 
 
-def solve_tresca_fixed_point(problem: LocalProblem, *, r0=None, tol: float = 1e-8,
-                             max_iter: int = 50, per_contact: bool = False) -> LocalResult:
+def solve_tresca_fixed_point(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = 50,
+    per_contact: bool = False,
+) -> LocalResult:
     """Solve a local Coulomb problem by a fixed point on Tresca cone programs (Clarabel).
 
     Each iteration solves the Tresca problem with the bounds ``s_i = mu_i r_N,i`` of the
@@ -406,5 +427,14 @@ def solve_tresca_fixed_point(problem: LocalProblem, *, r0=None, tol: float = 1e-
     """
     start = check_fixed_point_arguments(problem, tol, max_iter, r0)
     data = FixedPointData(problem)
-    return run_fixed_point(problem, data, _ClarabelTresca(data), tol=tol, max_iter=max_iter,
-                           r0=start, exact=True, per_contact=per_contact, method="tresca")
+    return run_fixed_point(
+        problem,
+        data,
+        _ClarabelTresca(data),
+        tol=tol,
+        max_iter=max_iter,
+        r0=start,
+        exact=True,
+        per_contact=per_contact,
+        method="tresca",
+    )

@@ -13,6 +13,16 @@ from .sources import GapSamples, GaussianGapField, load_gap_samples
 from .statistics import GapStatistics, gap_statistics
 from .store import BatchData, load_batch
 
-__all__ = ["BatchData", "BatchSummary", "GapSamples", "GapStatistics", "GapVariation",
-           "GaussianGapField", "check_scheduler", "gap_statistics", "load_batch",
-           "load_gap_samples", "run_batch"]
+__all__ = [
+    "BatchData",
+    "BatchSummary",
+    "GapSamples",
+    "GapStatistics",
+    "GapVariation",
+    "GaussianGapField",
+    "check_scheduler",
+    "gap_statistics",
+    "load_batch",
+    "load_gap_samples",
+    "run_batch",
+]

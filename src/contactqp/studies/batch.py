@@ -67,8 +67,13 @@ class BatchSummary:
         return self.computed + self.reused == self.samples
 
     def as_dict(self) -> dict:
-        return {"samples": self.samples, "computed": self.computed, "reused": self.reused,
-                "failed": self.failed, "seconds": self.seconds}
+        return {
+            "samples": self.samples,
+            "computed": self.computed,
+            "reused": self.reused,
+            "failed": self.failed,
+            "seconds": self.seconds,
+        }
 
 
 def _store_all(results, store_chunk):
@@ -97,10 +102,18 @@ def _store_all(results, store_chunk):
         results.close()
 
 
-def run_batch(case: StudyCase, source: GapSource, n_samples: int, path: str | os.PathLike[str],
-              *, workers: int = 1, scheduler: str | None = None,
-              chunk_size: int = DEFAULT_CHUNK, limit: int | None = None,
-              progress: Callable[[int, int], None] | None = None) -> BatchSummary:
+def run_batch(
+    case: StudyCase,
+    source: GapSource,
+    n_samples: int,
+    path: str | os.PathLike[str],
+    *,
+    workers: int = 1,
+    scheduler: str | None = None,
+    chunk_size: int = DEFAULT_CHUNK,
+    limit: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> BatchSummary:
     """Solve samples ``0 .. n_samples-1`` of ``source`` with ``case``; store and resume.
 
     Parameters
@@ -130,27 +143,35 @@ def run_batch(case: StudyCase, source: GapSource, n_samples: int, path: str | os
     BatchSummary
     """
     start = time.perf_counter()
-    if (isinstance(n_samples, bool) or int(n_samples) != n_samples
-            or not 1 <= n_samples <= MAX_SAMPLES):
-        raise InvalidInputError(f"n_samples must be an integer from 1 to {MAX_SAMPLES:g}, got "
-                                f"{n_samples!r}")
+    if (
+        isinstance(n_samples, bool)
+        or int(n_samples) != n_samples
+        or not 1 <= n_samples <= MAX_SAMPLES
+    ):
+        raise InvalidInputError(
+            f"n_samples must be an integer from 1 to {MAX_SAMPLES:g}, got {n_samples!r}"
+        )
     n_samples = int(n_samples)
     if source.n_available is not None and n_samples > source.n_available:
-        raise InvalidInputError(f"asked for {n_samples} samples, the source has "
-                                f"{source.n_available}")
+        raise InvalidInputError(
+            f"asked for {n_samples} samples, the source has {source.n_available}"
+        )
     if int(workers) < 1 or int(chunk_size) < 1:
         raise InvalidInputError(f"workers and chunk_size must be >= 1, got {workers}, {chunk_size}")
     if scheduler is not None:
         check_scheduler(scheduler)
     width = np.shape(source.realisations([0]))[-1]
     if width != case.n_contacts:  # before a store is made for a study that cannot run
-        raise InvalidInputError(f"gap fields have {width} values, the case has "
-                                f"{case.n_contacts} contacts")
+        raise InvalidInputError(
+            f"gap fields have {width} values, the case has {case.n_contacts} contacts"
+        )
     path = Path(path)
     with BatchStore.open(path, case, source, n_samples, int(chunk_size)) as store:
         reused = int(np.count_nonzero(store.done(n_samples)))
-        tasks = [(run, None if record is None else case.warm_start(record))
-                 for run, record in store.pending(n_samples, case.fields(), limit)]
+        tasks = [
+            (run, None if record is None else case.warm_start(record))
+            for run, record in store.pending(n_samples, case.fields(), limit)
+        ]
         results = executor((case, source), tasks, workers=int(workers), scheduler=scheduler)
         stored = {}  # first sample of each chunk stored by this call: its length
 
@@ -167,5 +188,3 @@ def run_batch(case: StudyCase, source: GapSource, n_samples: int, path: str | os
         computed = sum(stored.values())
         failed = store.failed(n_samples)
     return BatchSummary(n_samples, computed, reused, failed, time.perf_counter() - start, path)
-
-

@@ -32,7 +32,8 @@ class GapVariation:
     def __init__(self, problem: ContactProblem, **options):
         if not isinstance(problem, ContactProblem):
             raise InvalidInputError(
-                f"problem must be a ContactProblem, got {type(problem).__name__}")
+                f"problem must be a ContactProblem, got {type(problem).__name__}"
+            )
         self.problem = problem
         self.options = {"tol": 1e-10, **options}
         problem.dual()
@@ -45,19 +46,27 @@ class GapVariation:
     def fields(self) -> dict:
         """``{name: (shape, dtype)}`` of one sample's record."""
         m = (self.n_contacts,)
-        return {"gap": (m, "f8"), "force": (m, "f8"), "closed": (m, "?"), "success": ((), "?"),
-                "iterations": ((), "i8")}
+        return {
+            "gap": (m, "f8"),
+            "force": (m, "f8"),
+            "closed": (m, "?"),
+            "success": ((), "?"),
+            "iterations": ((), "i8"),
+        }
 
     @staticmethod
     def _record(result) -> dict:
-        return {"gap": result.gaps, "force": result.forces,
-                "closed": result.contact_status == ContactStatus.CLOSED,
-                "success": result.success, "iterations": result.iterations}
+        return {
+            "gap": result.gaps,
+            "force": result.forces,
+            "closed": result.contact_status == ContactStatus.CLOSED,
+            "success": result.success,
+            "iterations": result.iterations,
+        }
 
     def solve_sample(self, gaps, warm):
         """Solve one sample: ``(record, warm start of the next sample)``."""
-        result = solve(self.problem.variant(gaps=gaps), "active-set", r0=warm,
-                       **self.options)
+        result = solve(self.problem.variant(gaps=gaps), "active-set", r0=warm, **self.options)
         return self._record(result), result.forces
 
     def warm_start(self, record) -> np.ndarray:
@@ -69,8 +78,12 @@ class GapVariation:
         answer depends on all three), the certificate's tolerance and the options."""
         problem = self.problem
         dual = problem.dual()
-        return {"type": type(self).__name__, "contacts": self.n_contacts,
-                "digest": digest(dual.W, problem.loads,
-                                 problem.constraints.matrix @ dual.free_displacements),
-                "certificate_tol": repr(problem.certificate_tol),
-                "options": {k: repr(v) for k, v in sorted(self.options.items())}}
+        return {
+            "type": type(self).__name__,
+            "contacts": self.n_contacts,
+            "digest": digest(
+                dual.W, problem.loads, problem.constraints.matrix @ dual.free_displacements
+            ),
+            "certificate_tol": repr(problem.certificate_tol),
+            "options": {k: repr(v) for k, v in sorted(self.options.items())},
+        }

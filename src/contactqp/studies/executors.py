@@ -52,8 +52,9 @@ def serial(state: State, tasks: Sequence[Task]) -> Iterator[Chunk]:
         yield solve_chunk(state, indices, warm)
 
 
-def executor(state: State, tasks: Sequence[Task], *, workers: int = 1,
-             scheduler: str | None = None) -> Iterator[Chunk]:
+def executor(
+    state: State, tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None = None
+) -> Iterator[Chunk]:
     """The executor for ``tasks``: the Dask cluster at ``scheduler`` if given, else a pool of
     ``workers`` processes when there are several workers and chunks, else :func:`serial`."""
     if tasks and scheduler is not None:
@@ -153,8 +154,10 @@ def check_scheduler(scheduler: str) -> str:
     from distributed.comm.addressing import parse_address, parse_host_port
 
     if not isinstance(scheduler, str):
-        raise InvalidInputError("scheduler must be an address string like tcp://host:port, got "
-                                f"{type(scheduler).__name__}")
+        raise InvalidInputError(
+            "scheduler must be an address string like tcp://host:port, got "
+            f"{type(scheduler).__name__}"
+        )
     try:
         scheme, location = parse_address(scheduler)
         if scheme in _SOCKET_SCHEMES:
@@ -164,18 +167,21 @@ def check_scheduler(scheduler: str) -> str:
         elif scheme not in distributed.comm.registry.backends:
             raise ValueError(f"unknown scheme {scheme!r}")
     except (ValueError, TypeError) as exc:
-        raise InvalidInputError(f"Dask scheduler {scheduler!r} is not an address like "
-                                f"tcp://host:port: {exc}") from None
+        raise InvalidInputError(
+            f"Dask scheduler {scheduler!r} is not an address like tcp://host:port: {exc}"
+        ) from None
     if scheme in _SOCKET_SCHEMES:
         import dask
 
         timeout = dask.utils.parse_timedelta(
-            dask.config.get("distributed.comm.timeouts.connect"), default="seconds")
+            dask.config.get("distributed.comm.timeouts.connect"), default="seconds"
+        )
         try:
             socket.create_connection((host, port), timeout=timeout).close()
         except OSError as exc:
-            raise InvalidInputError(f"cannot reach the Dask scheduler {scheduler!r}: "
-                                    f"{exc.strerror or exc}") from None
+            raise InvalidInputError(
+                f"cannot reach the Dask scheduler {scheduler!r}: {exc.strerror or exc}"
+            ) from None
     return scheduler
 
 
@@ -189,8 +195,9 @@ def dask_cluster(state: State, tasks: Sequence[Task], scheduler: str) -> Iterato
         raise InvalidInputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
     with client:
         shared = client.scatter(state, broadcast=True)
-        futures = [client.submit(solve_chunk, shared, indices, warm, pure=False)
-                   for indices, warm in tasks]
+        futures = [
+            client.submit(solve_chunk, shared, indices, warm, pure=False) for indices, warm in tasks
+        ]
         try:
             for future in distributed.as_completed(futures):
                 yield future.result()

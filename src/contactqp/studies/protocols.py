@@ -36,8 +36,9 @@ class StudyCase(Protocol):
         """``{name: (shape, dtype)}`` of one sample's record."""
         ...
 
-    def solve_sample(self, gaps: np.ndarray,
-                     warm: np.ndarray | None) -> tuple[Record, np.ndarray | None]:
+    def solve_sample(
+        self, gaps: np.ndarray, warm: np.ndarray | None
+    ) -> tuple[Record, np.ndarray | None]:
         """``(record, warm start of the next sample)`` of the sample of gap field ``gaps``."""
         ...
 

@@ -49,16 +49,25 @@ class GaussianGapField:
         Root of the per-sample seed sequences.
     """
 
-    def __init__(self, coordinates: ArrayLike, amplitude: float, correlation_length: float,
-                 mean: ArrayLike = 0.0, seed: int = 0) -> None:
+    def __init__(
+        self,
+        coordinates: ArrayLike,
+        amplitude: float,
+        correlation_length: float,
+        mean: ArrayLike = 0.0,
+        seed: int = 0,
+    ) -> None:
         self.coordinates = finite_array(coordinates, "coordinates", 2)
         m = len(self.coordinates)
         if not (np.isfinite(amplitude) and 0 <= amplitude <= MAX_MAGNITUDE):
-            raise InvalidInputError(f"amplitude must be >= 0 and at most {MAX_MAGNITUDE:g} m, "
-                                    f"got {amplitude!r}")
+            raise InvalidInputError(
+                f"amplitude must be >= 0 and at most {MAX_MAGNITUDE:g} m, got {amplitude!r}"
+            )
         if not (np.isfinite(correlation_length) and 0 < correlation_length <= MAX_MAGNITUDE):
-            raise InvalidInputError(f"correlation_length must be > 0 and at most "
-                                    f"{MAX_MAGNITUDE:g} m, got {correlation_length!r}")
+            raise InvalidInputError(
+                f"correlation_length must be > 0 and at most "
+                f"{MAX_MAGNITUDE:g} m, got {correlation_length!r}"
+            )
         self.amplitude, self.correlation_length = float(amplitude), float(correlation_length)
         self.mean = np.broadcast_to(finite_array(np.atleast_1d(mean), "mean", 1), (m,)).copy()
         if isinstance(seed, bool) or int(seed) != seed or seed < 0:
@@ -76,7 +85,7 @@ class GaussianGapField:
         """``C`` (m^2), shape (m, m)."""
         diff = self.coordinates[:, None, :] - self.coordinates[None, :, :]
         squared = np.einsum("ijk,ijk->ij", diff, diff)
-        return self.amplitude ** 2 * np.exp(-squared / (2.0 * self.correlation_length ** 2))
+        return self.amplitude**2 * np.exp(-squared / (2.0 * self.correlation_length**2))
 
     def _square_root(self) -> np.ndarray:
         """``L`` with ``L L^T = C``, from the eigenvectors (``C`` is often numerically singular).
@@ -109,13 +118,18 @@ class GaussianGapField:
         for row, k in zip(fields, indices, strict=True):
             stream = np.random.SeedSequence(self.seed, spawn_key=(int(k),))
             row[:] = self.mean + _fixed_order_product(
-                factor, np.random.default_rng(stream).standard_normal(len(self.mean)))
+                factor, np.random.default_rng(stream).standard_normal(len(self.mean))
+            )
         return fields
 
     def describe(self) -> dict:
-        return {"type": "gaussian", "amplitude": self.amplitude,
-                "correlation_length": self.correlation_length, "seed": self.seed,
-                "digest": digest(self.coordinates, self.mean)}
+        return {
+            "type": "gaussian",
+            "amplitude": self.amplitude,
+            "correlation_length": self.correlation_length,
+            "seed": self.seed,
+            "digest": digest(self.coordinates, self.mean),
+        }
 
 
 def _fixed_order_product(matrix: np.ndarray, vector: np.ndarray, rows: int = 256) -> np.ndarray:
@@ -126,8 +140,8 @@ def _fixed_order_product(matrix: np.ndarray, vector: np.ndarray, rows: int = 256
     """
     out = np.empty(len(matrix))
     for start in range(0, len(matrix), rows):
-        block = matrix[start:start + rows]
-        np.add.reduce(block * vector, axis=1, out=out[start:start + rows])
+        block = matrix[start : start + rows]
+        np.add.reduce(block * vector, axis=1, out=out[start : start + rows])
     return out
 
 
@@ -147,8 +161,7 @@ class GapSamples:
         return self.samples[np.asarray(indices, dtype=int)]
 
     def describe(self) -> dict:
-        return {"type": "array", "shape": list(self.samples.shape),
-                "digest": digest(self.samples)}
+        return {"type": "array", "shape": list(self.samples.shape), "digest": digest(self.samples)}
 
 
 def load_gap_samples(path: str | os.PathLike[str]) -> GapSamples:

@@ -37,8 +37,9 @@ class GapStatistics:
     contact_probability: np.ndarray
 
 
-def gap_statistics(fields: Mapping[str, np.ndarray],
-                   levels: Sequence[float] = (0.05, 0.5, 0.95)) -> GapStatistics:
+def gap_statistics(
+    fields: Mapping[str, np.ndarray], levels: Sequence[float] = (0.05, 0.5, 0.95)
+) -> GapStatistics:
     """:class:`GapStatistics` of the records ``fields`` (one row per sample).
 
     Parameters
@@ -59,5 +60,10 @@ def gap_statistics(fields: Mapping[str, np.ndarray],
         raise InvalidInputError("no successful sample to compute statistics from")
     gaps, closed = fields["gap"][ok], fields["closed"][ok]
     probabilities = np.asarray(levels, dtype=float)
-    return GapStatistics(int(ok.sum()), gaps.mean(axis=0), probabilities,
-                         np.quantile(gaps, probabilities, axis=0), closed.mean(axis=0))
+    return GapStatistics(
+        int(ok.sum()),
+        gaps.mean(axis=0),
+        probabilities,
+        np.quantile(gaps, probabilities, axis=0),
+        closed.mean(axis=0),
+    )

@@ -54,8 +54,9 @@ class BatchStore:
             A store of another study.
         """
         h5py = _h5py()
-        identity = json.dumps({"case": case.describe(), "source": source.describe()},
-                              sort_keys=True)
+        identity = json.dumps(
+            {"case": case.describe(), "source": source.describe()}, sort_keys=True
+        )
         fields = {"initial_gap": ((case.n_contacts,), "f8"), **case.fields()}
         try:
             store = h5py.File(path, "a")
@@ -67,22 +68,32 @@ class BatchStore:
         try:
             ours = store.attrs.get("format") == FORMAT  # written first when a store is made
             if not ours and (len(store) or len(store.attrs)):
-                raise FileFormatError(f"{path} is not a contactqp batch store (it holds other "
-                                      "HDF5 data, left as it is): give another output")
+                raise FileFormatError(
+                    f"{path} is not a contactqp batch store (it holds other "
+                    "HDF5 data, left as it is): give another output"
+                )
             if "done" not in store:  # new, or its creation was interrupted: nothing stored yet
                 for name in list(store):
                     del store[name]
                 store.attrs.update({"format": FORMAT, "identity": identity, "chunk": chunk})
                 store.flush()
                 for name, (shape, dtype) in fields.items():
-                    store.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
-                                         dtype=dtype, chunks=(chunk, *shape))
+                    store.create_dataset(
+                        name,
+                        shape=(0, *shape),
+                        maxshape=(None, *shape),
+                        dtype=dtype,
+                        chunks=(chunk, *shape),
+                    )
                 # last: its presence says the store is complete
-                store.create_dataset("done", shape=(0,), maxshape=(None,), dtype="?",
-                                     chunks=(chunk,))
+                store.create_dataset(
+                    "done", shape=(0,), maxshape=(None,), dtype="?", chunks=(chunk,)
+                )
             elif store.attrs.get("format") != FORMAT or store.attrs.get("identity") != identity:
-                raise InvalidInputError(f"{path} holds another study (other model, options or "
-                                        "gap source): give another output")
+                raise InvalidInputError(
+                    f"{path} holds another study (other model, options or "
+                    "gap source): give another output"
+                )
             for name in (*fields, "done"):  # each, in case an earlier resize was interrupted
                 if store[name].shape[0] < n_samples:
                     store[name].resize(n_samples, axis=0)
@@ -111,8 +122,7 @@ class BatchStore:
 
     def failed(self, n_samples: int) -> int:
         """Samples among the first ``n_samples`` done whose solve failed."""
-        return int(np.count_nonzero(self.done(n_samples)
-                                    & ~self._file["success"][:n_samples]))
+        return int(np.count_nonzero(self.done(n_samples) & ~self._file["success"][:n_samples]))
 
     def pending(self, n_samples: int, fields, limit: int | None = None) -> list:
         """The samples to compute, as runs of consecutive samples within one chunk.
@@ -134,7 +144,7 @@ class BatchStore:
         done = self.done(n_samples)
         todo = np.flatnonzero(~done)
         if limit is not None:
-            todo = todo[:max(int(limit), 0)]
+            todo = todo[: max(int(limit), 0)]
         chunk, runs = self.chunk, []
         for run in _runs(todo, chunk):
             before = run[0] - 1

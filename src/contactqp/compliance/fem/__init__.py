@@ -18,5 +18,13 @@ from .elastic import ElasticModel, NodeSelection, elastic_compliance
 from .meshes import bar, block, plate, read_mesh
 from .selection import Box
 
-__all__ = ["ElasticModel", "NodeSelection", "elastic_compliance", "Box", "bar", "block", "plate",
-           "read_mesh"]
+__all__ = [
+    "ElasticModel",
+    "NodeSelection",
+    "elastic_compliance",
+    "Box",
+    "bar",
+    "block",
+    "plate",
+    "read_mesh",
+]

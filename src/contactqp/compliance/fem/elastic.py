@@ -128,15 +128,24 @@ class ElasticModel:
     removed. ``model.mesh`` is the mesh as used, to which node indices refer.
     """
 
-    def __init__(self, mesh: skfem.Mesh, young: float, poisson: float, *,
-                 plane: str | None = None, thickness: float | None = None,
-                 order: int = 1) -> None:
-        cell = next((name for name, kind in SUPPORTED_MESHES.items() if isinstance(mesh, kind)),
-                    None)
+    def __init__(
+        self,
+        mesh: skfem.Mesh,
+        young: float,
+        poisson: float,
+        *,
+        plane: str | None = None,
+        thickness: float | None = None,
+        order: int = 1,
+    ) -> None:
+        cell = next(
+            (name for name, kind in SUPPORTED_MESHES.items() if isinstance(mesh, kind)), None
+        )
         if cell is None:
             raise UnsupportedProblemError(
                 f"mesh must be a scikit-fem triangle, quadrilateral, tetrahedron or hexahedron "
-                f"mesh, got {type(mesh).__name__}")
+                f"mesh, got {type(mesh).__name__}"
+            )
         mesh = straight_sided(mesh, cell)
         if np.unique(mesh.t).size < mesh.p.shape[1]:
             mesh = mesh.remove_unused_nodes()
@@ -148,13 +157,15 @@ class ElasticModel:
         self.poisson = ratio
         if self.dim == 2:
             if plane not in ("stress", "strain"):
-                raise InvalidInputError(f"plane must be 'stress' or 'strain' for a 2D mesh, "
-                                        f"got {plane!r}")
+                raise InvalidInputError(
+                    f"plane must be 'stress' or 'strain' for a 2D mesh, got {plane!r}"
+                )
             self.thickness = 1.0 if thickness is None else _positive(thickness, "thickness", "m")
         else:
             if plane is not None or thickness is not None:
-                raise InvalidInputError("plane and thickness apply to 2D meshes only; this mesh "
-                                        "is 3D")
+                raise InvalidInputError(
+                    "plane and thickness apply to 2D meshes only; this mesh is 3D"
+                )
             self.thickness = 1.0
         self.plane = plane
         if order not in (1, 2):
@@ -219,8 +230,9 @@ class ElasticModel:
         self._free_stiffness = None
         return self
 
-    def select_nodes(self, points: ArrayLike | None = None, *,
-                     where: Selector | None = None) -> NodeSelection:
+    def select_nodes(
+        self, points: ArrayLike | None = None, *, where: Selector | None = None
+    ) -> NodeSelection:
         """Mesh nodes nearest to ``points``, or all the nodes ``where`` picks.
 
         Parameters
@@ -258,12 +270,15 @@ class ElasticModel:
         if np.any(counts > 1):
             node = unique[np.argmax(counts > 1)]
             which = np.flatnonzero(nodes == node)
-            raise InvalidInputError(f"points {which.tolist()} share their nearest node {node}: "
-                                    "refine the mesh or move the points apart")
+            raise InvalidInputError(
+                f"points {which.tolist()} share their nearest node {node}: "
+                "refine the mesh or move the points apart"
+            )
         return NodeSelection(nodes, np.asarray(distances))
 
-    def solve(self, loads: ArrayLike | None = None, *,
-              tractions: Mapping[str, ArrayLike] | None = None) -> np.ndarray:
+    def solve(
+        self, loads: ArrayLike | None = None, *, tractions: Mapping[str, ArrayLike] | None = None
+    ) -> np.ndarray:
         """One full analysis: nodal displacements under loads (factorises at every call).
 
         Parameters
@@ -286,12 +301,15 @@ class ElasticModel:
         if loads is not None:
             forces = finite_array(loads, "loads", 2)
             if forces.shape != (self.n_nodes, self.dim):
-                raise InvalidInputError(f"loads must have shape ({self.n_nodes}, {self.dim}), "
-                                        f"got {forces.shape}")
+                raise InvalidInputError(
+                    f"loads must have shape ({self.n_nodes}, {self.dim}), got {forces.shape}"
+                )
             vector[self.basis.nodal_dofs] = forces.T
         if tractions is not None and not isinstance(tractions, dict):
-            raise InvalidInputError(f"tractions must be a dict {{boundary name: traction}}, got "
-                                    f"{type(tractions).__name__}")
+            raise InvalidInputError(
+                f"tractions must be a dict {{boundary name: traction}}, got "
+                f"{type(tractions).__name__}"
+            )
         for name, traction in (tractions or {}).items():
             vector += self._traction_load(name, traction)
         free, K = self.free_stiffness()
@@ -305,10 +323,12 @@ class ElasticModel:
             raise InvalidInputError(f"tractions keys must be boundary names, got {name!r}")
         value = finite_array(traction, f"tractions[{name!r}]", 1)
         if value.shape != (self.dim,):
-            raise InvalidInputError(f"tractions[{name!r}] must have shape ({self.dim},), got "
-                                    f"{value.shape}")
-        facets = skfem.FacetBasis(self.mesh, self.basis.elem,
-                                  facets=boundary_facets(self.mesh, name, "tractions"))
+            raise InvalidInputError(
+                f"tractions[{name!r}] must have shape ({self.dim},), got {value.shape}"
+            )
+        facets = skfem.FacetBasis(
+            self.mesh, self.basis.elem, facets=boundary_facets(self.mesh, name, "tractions")
+        )
 
         @skfem.LinearForm
         def work(v: skfem.DiscreteField, _: skfem.DiscreteField) -> skfem.DiscreteField:
@@ -316,8 +336,9 @@ class ElasticModel:
 
         return skfem.asm(work, facets) * self.thickness
 
-    def reduced_model(self, nodes: ArrayLike | NodeSelection, *,
-                      components: Sequence[int] | None = None) -> ReducedModel:
+    def reduced_model(
+        self, nodes: ArrayLike | NodeSelection, *, components: Sequence[int] | None = None
+    ) -> ReducedModel:
         """Flexibility of computational nodes by static condensation.
 
         Parameters
@@ -338,31 +359,41 @@ class ElasticModel:
             nodes = nodes.nodes
         ids = np.asarray(nodes)
         if ids.ndim != 1 or ids.size == 0 or not np.issubdtype(ids.dtype, np.integer):
-            raise InvalidInputError(f"nodes must be a non-empty 1-D array of node indices, got "
-                                    f"{nodes!r}")
+            raise InvalidInputError(
+                f"nodes must be a non-empty 1-D array of node indices, got {nodes!r}"
+            )
         if ids.min() < 0 or ids.max() >= self.n_nodes or np.unique(ids).size != ids.size:
             raise InvalidInputError(f"nodes must be distinct indices in 0..{self.n_nodes - 1}")
         axes = self._components(components, "components")
         freedoms = self.basis.nodal_dofs[axes][:, ids].T.ravel()
         held = freedoms[self._fixed[freedoms]]
         if held.size:
-            raise InvalidInputError(f"nodes: {self._freedom_name(held[0])} is fixed and has no "
-                                    "flexibility")
+            raise InvalidInputError(
+                f"nodes: {self._freedom_name(held[0])} is fixed and has no flexibility"
+            )
         free, K = self.free_stiffness()
         position = np.full(self.basis.N, -1)
         position[free] = np.arange(free.size)
         R = condense(K, position[freedoms], labels=_FreedomLabels(self, free))
-        return ReducedModel(flexibility=R, dofs_per_node=len(axes),
-                            coordinates=self.mesh.p[:, ids].T)
+        return ReducedModel(
+            flexibility=R, dofs_per_node=len(axes), coordinates=self.mesh.p[:, ids].T
+        )
 
     def _components(self, components: Sequence[int] | None, name: str) -> np.ndarray:
         if components is None:
             return np.arange(self.dim)
         axes = np.atleast_1d(np.asarray(components))
-        if (axes.ndim != 1 or axes.size == 0 or not np.issubdtype(axes.dtype, np.integer)
-                or axes.min() < 0 or axes.max() >= self.dim or np.unique(axes).size != axes.size):
-            raise InvalidInputError(f"{name} must be distinct directions in 0..{self.dim - 1}, "
-                                    f"got {components!r}")
+        if (
+            axes.ndim != 1
+            or axes.size == 0
+            or not np.issubdtype(axes.dtype, np.integer)
+            or axes.min() < 0
+            or axes.max() >= self.dim
+            or np.unique(axes).size != axes.size
+        ):
+            raise InvalidInputError(
+                f"{name} must be distinct directions in 0..{self.dim - 1}, got {components!r}"
+            )
         return axes
 
     def _freedom_name(self, freedom: int) -> str:
@@ -396,10 +427,13 @@ class ElasticModel:
         """Raise RigidBodyModeError naming the motions a connected body is free to make."""
         mesh = self.mesh
         cells = mesh.t.shape[1]
-        incidence = sp.csr_matrix((np.ones(mesh.t.size), (np.repeat(np.arange(cells),
-                                                                    mesh.t.shape[0]),
-                                                          mesh.t.T.ravel())),
-                                  shape=(cells, self.n_nodes))
+        incidence = sp.csr_matrix(
+            (
+                np.ones(mesh.t.size),
+                (np.repeat(np.arange(cells), mesh.t.shape[0]), mesh.t.T.ravel()),
+            ),
+            shape=(cells, self.n_nodes),
+        )
         count, part_of_node = connected_components(incidence.T @ incidence, directed=False)
         part_of_dof = np.full(self.basis.N, -1)
         part_of_dof[self.basis.element_dofs] = part_of_node[mesh.t[0]][None, :]
@@ -408,20 +442,34 @@ class ElasticModel:
             centre = points.mean(axis=1)
             scale = float(np.max(np.ptp(points, axis=1)))
             held = np.flatnonzero(self._fixed & (part_of_dof == part))
-            free = free_rigid_motions(self.basis.doflocs[:, held], self._component[held],
-                                      centre, scale)
+            free = free_rigid_motions(
+                self.basis.doflocs[:, held], self._component[held], centre, scale
+            )
             if free:
-                body = "the body" if count == 1 else (
-                    f"the part of the mesh around ({', '.join(f'{c:.4g}' for c in centre)})")
-                raise RigidBodyModeError(f"not enough fixations: {body} has rigid-body modes "
-                                         f"({', '.join(free)}); fix more freedoms")
+                body = (
+                    "the body"
+                    if count == 1
+                    else (f"the part of the mesh around ({', '.join(f'{c:.4g}' for c in centre)})")
+                )
+                raise RigidBodyModeError(
+                    f"not enough fixations: {body} has rigid-body modes "
+                    f"({', '.join(free)}); fix more freedoms"
+                )
 
 
-def elastic_compliance(mesh: skfem.Mesh, young: float, poisson: float, fixed: Selector,
-                       points: ArrayLike, *, plane: str | None = None,
-                       thickness: float | None = None, order: int = 1,
-                       where: Selector | None = None,
-                       components: Sequence[int] | None = None) -> ReducedModel:
+def elastic_compliance(
+    mesh: skfem.Mesh,
+    young: float,
+    poisson: float,
+    fixed: Selector,
+    points: ArrayLike,
+    *,
+    plane: str | None = None,
+    thickness: float | None = None,
+    order: int = 1,
+    where: Selector | None = None,
+    components: Sequence[int] | None = None,
+) -> ReducedModel:
     """Reduced model of an elastic body at the mesh nodes nearest to ``points``, in one call.
 
     Parameters

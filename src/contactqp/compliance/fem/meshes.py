@@ -25,8 +25,12 @@ if TYPE_CHECKING:
 __all__ = ["plate", "block", "bar", "read_mesh", "straight_sided", "SUPPORTED_MESHES"]
 
 #: Mesh types of scikit-fem that the elastic models accept, by cell name.
-SUPPORTED_MESHES = {"tri": skfem.MeshTri, "quad": skfem.MeshQuad, "tet": skfem.MeshTet,
-                    "hex": skfem.MeshHex}
+SUPPORTED_MESHES = {
+    "tri": skfem.MeshTri,
+    "quad": skfem.MeshQuad,
+    "tet": skfem.MeshTet,
+    "hex": skfem.MeshHex,
+}
 _CELLS_2D, _CELLS_3D = ("tri", "quad"), ("tet", "hex")
 
 
@@ -54,8 +58,11 @@ def _cell(cell: str, allowed: tuple[str, ...]) -> type[skfem.Mesh]:
 def _faces(extents: tuple[float, ...]) -> dict[str, Callable[[np.ndarray], np.ndarray]]:
     """Boundary predicates of the box ``[0, extents]`` (2 or 3 extents)."""
     tol = 1e-9 * max(extents)
-    axes = [("left", "right"), ("bottom", "top")] if len(extents) == 2 else [
-        ("left", "right"), ("front", "back"), ("bottom", "top")]
+    axes = (
+        [("left", "right"), ("bottom", "top")]
+        if len(extents) == 2
+        else [("left", "right"), ("front", "back"), ("bottom", "top")]
+    )
     faces = {}
     for axis, ((low, high), extent) in enumerate(zip(axes, extents, strict=True)):
         faces[low] = _plane(axis, 0.0, tol)
@@ -91,8 +98,9 @@ def plate(length: float, width: float, nx: int, ny: int, *, cell: str = "quad") 
     return mesh_type.init_tensor(*axes).with_boundaries(_faces(extents))
 
 
-def block(length: float, width: float, height: float, nx: int, ny: int, nz: int, *,
-          cell: str = "hex") -> skfem.Mesh:
+def block(
+    length: float, width: float, height: float, nx: int, ny: int, nz: int, *, cell: str = "hex"
+) -> skfem.Mesh:
     """Box ``[0, length] x [0, width] x [0, height]`` split into ``nx * ny * nz`` cells.
 
     Parameters
@@ -115,8 +123,14 @@ def block(length: float, width: float, height: float, nx: int, ny: int, nz: int,
     return mesh_type.init_tensor(*axes).with_boundaries(_faces(extents))
 
 
-def bar(length: float, height: float, width: float | None = None, *, across: int = 2,
-        cell: str | None = None) -> skfem.Mesh:
+def bar(
+    length: float,
+    height: float,
+    width: float | None = None,
+    *,
+    across: int = 2,
+    cell: str | None = None,
+) -> skfem.Mesh:
     """A bar along ``x`` meshed with nearly cubic cells: a :func:`plate` or a :func:`block`.
 
     Parameters
@@ -136,8 +150,15 @@ def bar(length: float, height: float, width: float | None = None, *, across: int
     along = max(1, round(_length(length, "length") / size))
     if width is None:
         return plate(length, height, along, across, cell=cell or "quad")
-    return block(length, width, height, along, max(1, round(_length(width, "width") / size)),
-                 across, cell=cell or "hex")
+    return block(
+        length,
+        width,
+        height,
+        along,
+        max(1, round(_length(width, "width") / size)),
+        across,
+        cell=cell or "hex",
+    )
 
 
 def straight_sided(mesh: skfem.Mesh, cell: str) -> skfem.Mesh:
@@ -160,8 +181,12 @@ def straight_sided(mesh: skfem.Mesh, cell: str) -> skfem.Mesh:
     linear = SUPPORTED_MESHES[cell]
     if type(mesh) is linear:
         return mesh
-    return linear(mesh.p[:, :mesh.nvertices], mesh.t, _boundaries=mesh._boundaries,
-                  _subdomains=mesh._subdomains)
+    return linear(
+        mesh.p[:, : mesh.nvertices],
+        mesh.t,
+        _boundaries=mesh._boundaries,
+        _subdomains=mesh._subdomains,
+    )
 
 
 def read_mesh(source: str | os.PathLike[str] | meshio.Mesh) -> skfem.Mesh:
@@ -194,15 +219,17 @@ def read_mesh(source: str | os.PathLike[str] | meshio.Mesh) -> skfem.Mesh:
         try:
             path = Path(source)
         except TypeError:
-            raise FileFormatError(f"a mesh must be a file path or a meshio.Mesh, got "
-                                  f"{type(source).__name__}") from None
+            raise FileFormatError(
+                f"a mesh must be a file path or a meshio.Mesh, got {type(source).__name__}"
+            ) from None
         if not path.is_file():
             raise FileFormatError(f"mesh file {str(path)!r} does not exist")
         try:
             source = meshio.read(path)
         except (Exception, SystemExit) as exc:  # meshio's legacy VTK reader exits on bad headers
-            raise FileFormatError(f"mesh file {str(path)!r} could not be read by meshio: "
-                                  f"{exc}") from None
+            raise FileFormatError(
+                f"mesh file {str(path)!r} could not be read by meshio: {exc}"
+            ) from None
     try:
         mesh = from_meshio(source)
     except Exception as exc:
@@ -210,5 +237,6 @@ def read_mesh(source: str | os.PathLike[str] | meshio.Mesh) -> skfem.Mesh:
     if not isinstance(mesh, tuple(SUPPORTED_MESHES.values())):
         raise UnsupportedProblemError(
             f"mesh of type {type(mesh).__name__} is not supported: give triangles, "
-            "quadrilaterals, tetrahedra or hexahedra")
+            "quadrilaterals, tetrahedra or hexahedra"
+        )
     return mesh

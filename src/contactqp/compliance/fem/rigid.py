@@ -18,8 +18,9 @@ _AXES = "xyz"
 _RANK_RTOL = 1e-8
 
 
-def rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.ndarray,
-                  scale: float) -> np.ndarray:
+def rigid_motions(
+    points: np.ndarray, components: np.ndarray, centre: np.ndarray, scale: float
+) -> np.ndarray:
     """Rigid-body displacements at freedoms.
 
     Parameters
@@ -60,8 +61,9 @@ def _direction(vector: np.ndarray) -> str:
     return "(" + ", ".join(f"{c:.2f}" for c in unit) + ")"
 
 
-def free_rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.ndarray,
-                       scale: float) -> list[str]:
+def free_rigid_motions(
+    points: np.ndarray, components: np.ndarray, centre: np.ndarray, scale: float
+) -> list[str]:
     """Names of the rigid motions that the fixed freedoms at ``points`` leave free.
 
     Parameters are those of :func:`rigid_motions`, for the fixed freedoms of one body.
@@ -79,7 +81,7 @@ def free_rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.nd
     if T.shape[0]:
         # numpy's stubs type every mode as QRResult, but mode="r" returns the array R alone
         triangle: np.ndarray = np.linalg.qr(T, mode="r")  # type: ignore[assignment]
-        square[:triangle.shape[0]] = triangle
+        square[: triangle.shape[0]] = triangle
     _, sigma, vt = np.linalg.svd(square)
     null = vt[sigma <= _RANK_RTOL * max(1.0, sigma[0])]
     names = []
@@ -88,8 +90,9 @@ def free_rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.nd
         if mode < dim:
             names.append(f"translation along {_AXES[mode]}")
         else:
-            names.append("rotation in the plane" if dim == 2
-                         else f"rotation about {_AXES[mode - dim]}")
+            names.append(
+                "rotation in the plane" if dim == 2 else f"rotation about {_AXES[mode - dim]}"
+            )
     if len(names) < null.shape[0]:
         canonical = np.eye(n_modes)[inside]
         rest = null - (null @ canonical.T) @ canonical
@@ -97,8 +100,11 @@ def free_rigid_motions(points: np.ndarray, components: np.ndarray, centre: np.nd
         for vector in vt[sigma > 1e-6]:
             rotation = vector[dim:]
             if np.linalg.norm(rotation) > 1e-6:
-                names.append("rotation in the plane" if dim == 2
-                             else f"rotation about an axis along {_direction(rotation)}")
+                names.append(
+                    "rotation in the plane"
+                    if dim == 2
+                    else f"rotation about an axis along {_direction(rotation)}"
+                )
             else:
                 names.append(f"translation along {_direction(vector[:dim])}")
     return names

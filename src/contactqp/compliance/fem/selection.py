@@ -57,7 +57,8 @@ class Box:
         low, high = finite_array(lower, "lower", 1), finite_array(upper, "upper", 1)
         if low.shape != high.shape or low.size not in (2, 3) or np.any(low > high):
             raise InvalidInputError(
-                f"Box needs lower <= upper of 2 or 3 coordinates, got {low} and {high}")
+                f"Box needs lower <= upper of 2 or 3 coordinates, got {low} and {high}"
+            )
         object.__setattr__(self, "lower", low)
         object.__setattr__(self, "upper", high)
 
@@ -65,7 +66,8 @@ class Box:
         """Mask of the points ``x`` (shape (dim, m)) inside the box."""
         if x.shape[0] != self.lower.size:
             raise InvalidInputError(
-                f"Box has {self.lower.size} coordinates but the mesh is {x.shape[0]}-D")
+                f"Box has {self.lower.size} coordinates but the mesh is {x.shape[0]}-D"
+            )
         tol = 1e-9 * max(1.0, float(np.max(np.abs(np.concatenate([self.lower, self.upper])))))
         inside = (x >= self.lower[:, None] - tol) & (x <= self.upper[:, None] + tol)
         return np.all(inside, axis=0)
@@ -77,35 +79,44 @@ def boundary_facets(mesh: skfem.Mesh, name: str, argument: str) -> np.ndarray:
         return mesh.boundary_facets()
     if not mesh.boundaries or name not in mesh.boundaries:
         known = ", ".join(sorted(mesh.boundaries or {})) or "none"
-        raise InvalidInputError(f"{argument}: the mesh has no boundary named {name!r} "
-                                f"(named boundaries: {known}; or 'boundary')")
+        raise InvalidInputError(
+            f"{argument}: the mesh has no boundary named {name!r} "
+            f"(named boundaries: {known}; or 'boundary')"
+        )
     return np.asarray(mesh.boundaries[name])
 
 
-def _predicate_mask(function: Callable[[np.ndarray], Any], x: np.ndarray,
-                    argument: str) -> np.ndarray:
+def _predicate_mask(
+    function: Callable[[np.ndarray], Any], x: np.ndarray, argument: str
+) -> np.ndarray:
     mask = np.asarray(function(x))
     if mask.shape != (x.shape[1],) or mask.dtype != bool:
-        raise InvalidInputError(f"{argument}: a selector function must return {x.shape[1]} "
-                                f"booleans for coordinates of shape {x.shape}, got "
-                                f"{mask.dtype} of shape {mask.shape}")
+        raise InvalidInputError(
+            f"{argument}: a selector function must return {x.shape[1]} "
+            f"booleans for coordinates of shape {x.shape}, got "
+            f"{mask.dtype} of shape {mask.shape}"
+        )
     return mask
 
 
 def _node_ids(selector: Selector, n_nodes: int, argument: str) -> np.ndarray:
     ids = np.asarray(selector)
     if ids.ndim != 1 or not (np.issubdtype(ids.dtype, np.integer) or ids.size == 0):
-        raise InvalidInputError(f"{argument} must be a boundary name, a Box, a function, a tuple "
-                                f"of them or a 1-D array of node indices, got {selector!r}")
+        raise InvalidInputError(
+            f"{argument} must be a boundary name, a Box, a function, a tuple "
+            f"of them or a 1-D array of node indices, got {selector!r}"
+        )
     if ids.size and (ids.min() < 0 or ids.max() >= n_nodes):
-        raise InvalidInputError(f"{argument}: node indices must lie in 0..{n_nodes - 1}, got "
-                                f"{ids.min()}..{ids.max()}")
+        raise InvalidInputError(
+            f"{argument}: node indices must lie in 0..{n_nodes - 1}, got {ids.min()}..{ids.max()}"
+        )
     return ids.astype(int)
 
 
 def _is_intersection(selector: Selector) -> TypeGuard[tuple[Selector, ...]]:
     return isinstance(selector, tuple) and not all(
-        isinstance(s, (int, np.integer)) for s in selector)
+        isinstance(s, (int, np.integer)) for s in selector
+    )
 
 
 def node_mask(selector: Selector, mesh: skfem.Mesh, argument: str = "selector") -> np.ndarray:

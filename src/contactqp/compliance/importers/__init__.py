@@ -42,9 +42,18 @@ from .csv_rows import read_unit_load_csv
 from .matrixmarket import mtx_matrix, read_matrix_market
 from .nastran import dmig_matrix, op4_matrix, read_dmig, read_op4
 
-__all__ = ["load_compliance", "read_ansys_full", "read_op4", "op4_matrix", "read_dmig",
-           "dmig_matrix", "read_matrix_market", "mtx_matrix", "read_unit_load_csv",
-           "READERS"]
+__all__ = [
+    "load_compliance",
+    "read_ansys_full",
+    "read_op4",
+    "op4_matrix",
+    "read_dmig",
+    "dmig_matrix",
+    "read_matrix_market",
+    "mtx_matrix",
+    "read_unit_load_csv",
+    "READERS",
+]
 
 #: File name endings and the reader :func:`load_compliance` chooses for them.
 READERS: dict[tuple[str, ...], Callable[..., ReducedModel]] = {

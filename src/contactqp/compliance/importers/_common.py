@@ -18,9 +18,21 @@ from ...errors import FileFormatError, InvalidInputError
 from ...optional import require
 from ..condensation import condense
 
-__all__ = ["KINDS", "existing_file", "about", "one_line", "backend", "node_major",
-           "freedom_indices", "index_list", "whole_numbers", "reduced_model", "StrPath",
-           "Matrix", "DofsPerNode"]
+__all__ = [
+    "KINDS",
+    "existing_file",
+    "about",
+    "one_line",
+    "backend",
+    "node_major",
+    "freedom_indices",
+    "index_list",
+    "whole_numbers",
+    "reduced_model",
+    "StrPath",
+    "Matrix",
+    "DofsPerNode",
+]
 
 #: A file name: what :class:`pathlib.Path` accepts.
 StrPath: TypeAlias = str | os.PathLike[str]
@@ -65,8 +77,9 @@ def backend(module: str, distribution: str, what: str, extra: str) -> ModuleType
     return require(module, f"reading {what}", extra, distribution)
 
 
-def node_major(nodes: Iterable[Hashable],
-               components: Iterable[Hashable]) -> list[tuple[Hashable, Hashable]]:
+def node_major(
+    nodes: Iterable[Hashable], components: Iterable[Hashable]
+) -> list[tuple[Hashable, Hashable]]:
     """The ``(node, component)`` pairs of the chosen nodes and components, node by node.
 
     Raises
@@ -84,9 +97,12 @@ def node_major(nodes: Iterable[Hashable],
     return [(node, component) for node in nodes for component in components]
 
 
-def freedom_indices(available: Sequence[tuple[Hashable, Hashable]],
-                    pairs: Iterable[Sequence[Hashable]], noun: str = "node",
-                    describe: Callable[[Hashable, Hashable], str] | None = None) -> np.ndarray:
+def freedom_indices(
+    available: Sequence[tuple[Hashable, Hashable]],
+    pairs: Iterable[Sequence[Hashable]],
+    noun: str = "node",
+    describe: Callable[[Hashable, Hashable], str] | None = None,
+) -> np.ndarray:
     """Positions in ``available`` of the ``(node, component)`` ``pairs``.
 
     Parameters
@@ -117,7 +133,8 @@ def freedom_indices(available: Sequence[tuple[Hashable, Hashable]],
         if (node, component) not in where:
             has = ", ".join(str(c) for c in present[node])
             raise InvalidInputError(
-                f"{describe(node, component)} is not in the file ({noun} {node} has {has})")
+                f"{describe(node, component)} is not in the file ({noun} {node} has {has})"
+            )
         indices.append(where[node, component])
     return np.asarray(indices, dtype=int)
 
@@ -129,8 +146,10 @@ def whole_numbers(values: Iterable[Any], name: str) -> list[int]:
         numbers = [int(item) for item in items]
     except (TypeError, ValueError):
         raise InvalidInputError(f"{name} must be a list of whole numbers, got {values!r}") from None
-    if any(isinstance(item, (bool, np.bool_)) or number != item
-           for item, number in zip(items, numbers, strict=True)):
+    if any(
+        isinstance(item, (bool, np.bool_)) or number != item
+        for item, number in zip(items, numbers, strict=True)
+    ):
         raise InvalidInputError(f"{name} must be a list of whole numbers, got {values!r}")
     return numbers
 
@@ -151,10 +170,16 @@ def _dense(matrix: Matrix) -> np.ndarray:
     return matrix if isinstance(matrix, np.ndarray) else matrix.toarray()
 
 
-def reduced_model(matrix: Matrix, kind: str, keep: ArrayLike | None = None,
-                  fixed: ArrayLike | None = None, labels: Sequence[str] | None = None,
-                  dofs_per_node: DofsPerNode = 1, coordinates: ArrayLike | None = None,
-                  symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def reduced_model(
+    matrix: Matrix,
+    kind: str,
+    keep: ArrayLike | None = None,
+    fixed: ArrayLike | None = None,
+    labels: Sequence[str] | None = None,
+    dofs_per_node: DofsPerNode = 1,
+    coordinates: ArrayLike | None = None,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> ReducedModel:
     """The reduced model of the freedoms ``keep`` of a stiffness or flexibility matrix.
 
     A flexibility is cut to the rows and columns of ``keep``. A stiffness loses the rows and
@@ -184,8 +209,9 @@ def reduced_model(matrix: Matrix, kind: str, keep: ArrayLike | None = None,
     if kind not in KINDS:
         raise InvalidInputError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
     if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
-        raise InvalidInputError(f"the matrix must be square and non-empty, got shape "
-                                f"{matrix.shape}")
+        raise InvalidInputError(
+            f"the matrix must be square and non-empty, got shape {matrix.shape}"
+        )
     n = matrix.shape[0]
     held = index_list([] if fixed is None else fixed, n, "fixed")
     if held.size and kind == "flexibility":
@@ -199,17 +225,27 @@ def reduced_model(matrix: Matrix, kind: str, keep: ArrayLike | None = None,
     if kept.size == 0:
         raise InvalidInputError("no freedom is chosen")
     if kind == "flexibility":
-        return ReducedModel(flexibility=_dense(matrix)[np.ix_(kept, kept)],
-                            dofs_per_node=dofs_per_node, coordinates=coordinates,
-                            symmetry_rtol=symmetry_rtol)
+        return ReducedModel(
+            flexibility=_dense(matrix)[np.ix_(kept, kept)],
+            dofs_per_node=dofs_per_node,
+            coordinates=coordinates,
+            symmetry_rtol=symmetry_rtol,
+        )
     if kept.size == free.size:
-        return ReducedModel(stiffness=_dense(matrix)[np.ix_(kept, kept)],
-                            dofs_per_node=dofs_per_node, coordinates=coordinates,
-                            symmetry_rtol=symmetry_rtol)
+        return ReducedModel(
+            stiffness=_dense(matrix)[np.ix_(kept, kept)],
+            dofs_per_node=dofs_per_node,
+            coordinates=coordinates,
+            symmetry_rtol=symmetry_rtol,
+        )
     K = sp.csc_matrix(matrix, dtype=float)[free][:, free]
     position = np.full(n, -1)
     position[free] = np.arange(free.size)
     free_labels = None if labels is None else [labels[i] for i in free]
     R = condense(K, position[kept], labels=free_labels, symmetry_rtol=symmetry_rtol)
-    return ReducedModel(flexibility=R, dofs_per_node=dofs_per_node, coordinates=coordinates,
-                        symmetry_rtol=symmetry_rtol)
+    return ReducedModel(
+        flexibility=R,
+        dofs_per_node=dofs_per_node,
+        coordinates=coordinates,
+        symmetry_rtol=symmetry_rtol,
+    )

@@ -52,15 +52,18 @@ class _Layout:
         self.words = np.memmap(path, dtype="<i4", mode="r", shape=(size // 4,))
         if self.words[0] != 100:
             if self.words[0].byteswap() == 100:
-                raise UnsupportedProblemError(f"{path}: a big-endian ANSYS file; "
-                                              "ansys-mapdl-reader reads little-endian files only")
+                raise UnsupportedProblemError(
+                    f"{path}: a big-endian ANSYS file; "
+                    "ansys-mapdl-reader reads little-endian files only"
+                )
             raise FileFormatError(f"{path}: not an ANSYS binary file (no standard header)")
         if self.words[2] != _FULL_FILE_TYPE:
             from ansys.mapdl.reader.common import ANSYS_BINARY_FILE_TYPES
 
             kind = ANSYS_BINARY_FILE_TYPES.get(int(self.words[2]), f"type {self.words[2]}")
-            raise FileFormatError(f"{path}: an ANSYS binary file of another kind ({kind}), "
-                                  "not a full file")
+            raise FileFormatError(
+                f"{path}: an ANSYS binary file of another kind ({kind}), not a full file"
+            )
 
     def record_end(self, pointer: int, what: str) -> int:
         """End (in words) of the record at ``pointer``, checked to lie within the file."""
@@ -84,20 +87,25 @@ class _Layout:
                 break
             position = values + 2 * rows + 3
         if position != block.size:
-            raise self.error(what, f"has record lengths that do not add up to the {n_terms} "
-                                   "terms of the header")
+            raise self.error(
+                what, f"has record lengths that do not add up to the {n_terms} terms of the header"
+            )
 
     def error(self, what: str, problem: str) -> FileFormatError:
-        return FileFormatError(f"{self.path}: truncated or corrupt ANSYS full file: the {what} "
-                               f"{problem} ({self.words.size} words)")
+        return FileFormatError(
+            f"{self.path}: truncated or corrupt ANSYS full file: the {what} "
+            f"{problem} ({self.words.size} words)"
+        )
 
 
-def _read(path: Path) -> tuple[sp.csc_matrix, list[tuple[int, str]], np.ndarray, dict[int, int],
-                              int]:
+def _read(
+    path: Path,
+) -> tuple[sp.csc_matrix, list[tuple[int, str]], np.ndarray, dict[int, int], int]:
     """Stiffness (full symmetric, CSC), ``(node, label)`` of each equation, constrained mask,
     the number of DOFs of each node and the size of the file's DOF set."""
-    full_module = backend("ansys.mapdl.reader.full", "ansys-mapdl-reader", "ANSYS full files",
-                          "ansys")
+    full_module = backend(
+        "ansys.mapdl.reader.full", "ansys-mapdl-reader", "ANSYS full files", "ansys"
+    )
     from ansys.mapdl.reader.common import two_ints_to_long
 
     layout = _Layout(path)
@@ -121,10 +129,18 @@ def _read(path: Path) -> tuple[sp.csc_matrix, list[tuple[int, str]], np.ndarray,
         n_nodes = np.asarray(full.read_record(dof_end)).size
         counts = np.asarray(full.read_record(header["ptrDOF"]))
         n_const = np.asarray(full.read_record(const_at)).size
-        if (counts.size > n_nodes or counts.sum() != n_equations or n_const != n_equations
-                or counts.min() < 0 or counts.max() > references.size):
-            raise layout.error("DOF count record", f"does not match the {n_equations} equations, "
-                               f"{n_nodes} nodes and {references.size} DOF kinds of the header")
+        if (
+            counts.size > n_nodes
+            or counts.sum() != n_equations
+            or n_const != n_equations
+            or counts.min() < 0
+            or counts.max() > references.size
+        ):
+            raise layout.error(
+                "DOF count record",
+                f"does not match the {n_equations} equations, "
+                f"{n_nodes} nodes and {references.size} DOF kinds of the header",
+            )
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="Missing mass matrix")
             dof_ref, upper, _ = full.load_km(as_sparse=True, sort=True)
@@ -145,9 +161,13 @@ def _read(path: Path) -> tuple[sp.csc_matrix, list[tuple[int, str]], np.ndarray,
     return stiffness, labels, constrained, per_node_count, references.size
 
 
-def read_ansys_full(path: StrPath, nodes: Sequence[int],
-                    components: Sequence[str] = ("UX", "UY", "UZ"), *,
-                    symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_ansys_full(
+    path: StrPath,
+    nodes: Sequence[int],
+    components: Sequence[str] = ("UX", "UY", "UZ"),
+    *,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> ReducedModel:
     """Flexibility of chosen nodes of an ANSYS model, from its full file (``Jobname.full``).
 
     The stiffness is read with ansys-mapdl-reader, the constrained freedoms (``D`` commands)
@@ -202,9 +222,17 @@ def read_ansys_full(path: StrPath, nodes: Sequence[int],
         if node in counts and counts[node] != n_dof_kinds:
             raise UnsupportedProblemError(
                 f"{path}: node {node} has {counts[node]} of the file's {n_dof_kinds} DOF kinds; "
-                "which ones cannot be told from the file")
+                "which ones cannot be told from the file"
+            )
     with about(path):
         keep = freedom_indices(labels, node_major(nodes, chosen_components))
         names = [f"node {n} {c}" for n, c in labels]
-        return reduced_model(stiffness, "stiffness", keep, np.flatnonzero(constrained), names,
-                             dofs_per_node=len(chosen_components), symmetry_rtol=symmetry_rtol)
+        return reduced_model(
+            stiffness,
+            "stiffness",
+            keep,
+            np.flatnonzero(constrained),
+            names,
+            dofs_per_node=len(chosen_components),
+            symmetry_rtol=symmetry_rtol,
+        )

@@ -46,8 +46,9 @@ def _is_number(token: str) -> bool:
 def _label(path: Path, token: str) -> tuple[int, str]:
     node, sep, component = token.strip().partition(":")
     if not sep or not component.strip() or not node.strip().isdigit():
-        raise FileFormatError(f"{path}: header label {token.strip()!r} is not NODE:COMPONENT "
-                              "(e.g. 12:UX)")
+        raise FileFormatError(
+            f"{path}: header label {token.strip()!r} is not NODE:COMPONENT (e.g. 12:UX)"
+        )
     return int(node), component.strip().upper()
 
 
@@ -91,10 +92,14 @@ def _node_counts(labels: list[tuple[int, str]]) -> list[int]:
     return counts
 
 
-def read_unit_load_csv(path: StrPath, nodes: Sequence[int] | None = None,
-                       components: Sequence[str] | None = None, *,
-                       dofs_per_node: DofsPerNode | None = None,
-                       symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_unit_load_csv(
+    path: StrPath,
+    nodes: Sequence[int] | None = None,
+    components: Sequence[str] | None = None,
+    *,
+    dofs_per_node: DofsPerNode | None = None,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> ReducedModel:
     """Flexibility from a table of unit-load responses (layout in the module docstring).
 
     Row ``j`` holds the displacements of all computational freedoms under a unit load on freedom
@@ -135,28 +140,36 @@ def read_unit_load_csv(path: StrPath, nodes: Sequence[int] | None = None,
     with about(path):
         rows, columns = table.shape
         if rows != columns:
-            raise InvalidInputError(f"the table has {rows} rows (unit loads) and {columns} "
-                                    "columns (freedoms); one row per freedom is needed")
+            raise InvalidInputError(
+                f"the table has {rows} rows (unit loads) and {columns} "
+                "columns (freedoms); one row per freedom is needed"
+            )
         if labels is None:
             if nodes is not None or components is not None:
-                raise InvalidInputError("choosing nodes or components needs a header row of "
-                                        "NODE:COMPONENT labels")
-            return reduced_model(table.T, "flexibility",
-                                 dofs_per_node=1 if dofs_per_node is None else dofs_per_node,
-                                 symmetry_rtol=symmetry_rtol)
+                raise InvalidInputError(
+                    "choosing nodes or components needs a header row of NODE:COMPONENT labels"
+                )
+            return reduced_model(
+                table.T,
+                "flexibility",
+                dofs_per_node=1 if dofs_per_node is None else dofs_per_node,
+                symmetry_rtol=symmetry_rtol,
+            )
         if dofs_per_node is not None:
             raise InvalidInputError("dofs_per_node comes from the header; do not give it too")
         if len(labels) != columns:
             raise InvalidInputError(f"the header has {len(labels)} labels for {columns} columns")
         counts = _node_counts(labels)
         if nodes is None and components is None:
-            return reduced_model(table.T, "flexibility", dofs_per_node=counts,
-                                 symmetry_rtol=symmetry_rtol)
+            return reduced_model(
+                table.T, "flexibility", dofs_per_node=counts, symmetry_rtol=symmetry_rtol
+            )
         order = list(dict.fromkeys(node for node, _ in labels))
         nodes = order if nodes is None else whole_numbers(nodes, "nodes")
         if components is None:
             components = [c for node, c in labels if node == order[0]]
         components = [str(c).upper() for c in components]
         keep = freedom_indices(labels, node_major(nodes, components))
-        return reduced_model(table.T, "flexibility", keep, dofs_per_node=len(components),
-                             symmetry_rtol=symmetry_rtol)
+        return reduced_model(
+            table.T, "flexibility", keep, dofs_per_node=len(components), symmetry_rtol=symmetry_rtol
+        )

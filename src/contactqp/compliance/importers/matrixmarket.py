@@ -14,9 +14,15 @@ from ._common import DofsPerNode, Matrix, StrPath, about, existing_file, one_lin
 __all__ = ["read_matrix_market", "mtx_matrix"]
 
 
-def read_matrix_market(path: StrPath, *, kind: str, freedoms: ArrayLike | None = None,
-                       fixed: ArrayLike | None = None, dofs_per_node: DofsPerNode = 1,
-                       symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_matrix_market(
+    path: StrPath,
+    *,
+    kind: str,
+    freedoms: ArrayLike | None = None,
+    fixed: ArrayLike | None = None,
+    dofs_per_node: DofsPerNode = 1,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> ReducedModel:
     """Reduced model from a MatrixMarket file (coordinate or array, ``symmetric`` included).
 
     Parameters
@@ -52,8 +58,9 @@ def read_matrix_market(path: StrPath, *, kind: str, freedoms: ArrayLike | None =
     path = existing_file(path)
     matrix: Matrix = mtx_matrix(path)
     with about(path):
-        return reduced_model(matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node,
-                             symmetry_rtol=symmetry_rtol)
+        return reduced_model(
+            matrix, kind, freedoms, fixed, dofs_per_node=dofs_per_node, symmetry_rtol=symmetry_rtol
+        )
 
 
 def mtx_matrix(path: StrPath) -> Matrix:
@@ -80,7 +87,8 @@ def mtx_matrix(path: StrPath) -> Matrix:
         read = scipy.io.mmread(str(path))
     except (OSError, ValueError, EOFError, UnicodeDecodeError, IndexError) as exc:
         raise FileFormatError(
-            f"{path}: not a readable MatrixMarket file: {one_line(exc)}") from None
+            f"{path}: not a readable MatrixMarket file: {one_line(exc)}"
+        ) from None
     if np.iscomplexobj(read.data if sp.issparse(read) else read):
         raise InvalidInputError(f"{path}: the matrix is complex; a real matrix is needed")
     return read.astype(float) if isinstance(read, np.ndarray) else sp.csc_matrix(read, dtype=float)

@@ -35,12 +35,15 @@ _BULK_START = "BEGIN BULK"
 def _which(path: Path, names: Sequence[str], name: str | None, what: str, plural: str) -> str:
     if name is None:
         if len(names) != 1:
-            raise InvalidInputError(f"{path}: the file holds {len(names)} {plural} "
-                                    f"({', '.join(names) or 'none'}); choose one by name")
+            raise InvalidInputError(
+                f"{path}: the file holds {len(names)} {plural} "
+                f"({', '.join(names) or 'none'}); choose one by name"
+            )
         return names[0]
     if name not in names:
-        raise InvalidInputError(f"{path}: no {what} named {name!r} (the file holds "
-                                f"{', '.join(names) or 'none'})")
+        raise InvalidInputError(
+            f"{path}: no {what} named {name!r} (the file holds {', '.join(names) or 'none'})"
+        )
     return name
 
 
@@ -73,8 +76,9 @@ def op4_matrix(path: StrPath, name: str | None = None) -> np.ndarray | sp.coo_ma
     except ContactError:
         raise
     except Exception as exc:  # whatever pyNastran raises on a foreign or truncated file
-        raise FileFormatError(f"{file}: not a readable OP4 file "
-                              f"({type(exc).__name__}: {one_line(exc)})") from None
+        raise FileFormatError(
+            f"{file}: not a readable OP4 file ({type(exc).__name__}: {one_line(exc)})"
+        ) from None
     name = _which(file, list(matrices), name, "matrix", "matrices")
     matrix = matrices[name].data
     if np.iscomplexobj(matrix):
@@ -90,9 +94,16 @@ def _log() -> logging.Logger:
     return log
 
 
-def read_op4(path: StrPath, name: str | None = None, *, kind: str,
-             freedoms: ArrayLike | None = None, fixed: ArrayLike | None = None,
-             dofs_per_node: DofsPerNode = 1, symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_op4(
+    path: StrPath,
+    name: str | None = None,
+    *,
+    kind: str,
+    freedoms: ArrayLike | None = None,
+    fixed: ArrayLike | None = None,
+    dofs_per_node: DofsPerNode = 1,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> ReducedModel:
     """Reduced model from a stiffness (``KAA``, ``KGG``, ...) or flexibility matrix in an OP4 file.
 
     Parameters
@@ -131,9 +142,14 @@ def read_op4(path: StrPath, name: str | None = None, *, kind: str,
     file = Path(path)
     matrix = op4_matrix(file, name)
     with about(file):
-        return reduced_model(matrix if isinstance(matrix, np.ndarray) else sp.csc_matrix(matrix),
-                             kind, freedoms, fixed, dofs_per_node=dofs_per_node,
-                             symmetry_rtol=symmetry_rtol)
+        return reduced_model(
+            matrix if isinstance(matrix, np.ndarray) else sp.csc_matrix(matrix),
+            kind,
+            freedoms,
+            fixed,
+            dofs_per_node=dofs_per_node,
+            symmetry_rtol=symmetry_rtol,
+        )
 
 
 def _bulk_only(path: Path, lines: list[str]):
@@ -143,15 +159,16 @@ def _bulk_only(path: Path, lines: list[str]):
     case control) and a file without it as bulk data only; a file that starts at ``BEGIN BULK``
     is neither, so its bulk data is read on its own.
     """
-    start = next(i for i, line in enumerate(lines)
-                 if line.upper().lstrip().startswith(_BULK_START))
+    start = next(i for i, line in enumerate(lines) if line.upper().lstrip().startswith(_BULK_START))
     if any(line.upper().lstrip().startswith("CEND") for line in lines[:start]):
         return None
-    bulk = lines[start + 1:]
+    bulk = lines[start + 1 :]
     if any(line.upper().lstrip().startswith("INCLUDE") for line in bulk):
-        raise FileFormatError(f"{path}: bulk data starting at BEGIN BULK, without executive and "
-                              "case control (CEND), cannot have INCLUDE statements here; remove "
-                              "the BEGIN BULK line or add the control decks")
+        raise FileFormatError(
+            f"{path}: bulk data starting at BEGIN BULK, without executive and "
+            "case control (CEND), cannot have INCLUDE statements here; remove "
+            "the BEGIN BULK line or add the control decks"
+        )
     return bulk
 
 
@@ -166,23 +183,27 @@ def _bulk(path: Path):
         model = bdf.BDF(log=_log())
         with contextlib.redirect_stdout(io.StringIO()):  # pyNastran prints the failing card
             if bulk is not None:
-                model.read_bdf(io.StringIO("".join(bulk) or "\n"), xref=False, punch=True,
-                               validate=False)
+                model.read_bdf(
+                    io.StringIO("".join(bulk) or "\n"), xref=False, punch=True, validate=False
+                )
             else:
                 model.read_bdf(str(path), xref=False, punch=not has_bulk_start, validate=False)
     except ContactError:
         raise
     except Exception as exc:  # pyNastran's errors on malformed cards or foreign files
-        raise FileFormatError(f"{path}: not a readable NASTRAN bulk-data file "
-                              f"({type(exc).__name__}: {one_line(exc)})") from None
+        raise FileFormatError(
+            f"{path}: not a readable NASTRAN bulk-data file ({type(exc).__name__}: {one_line(exc)})"
+        ) from None
     return model
 
 
 def _assemble(path: Path, dmig) -> tuple[sp.csc_matrix, list[tuple[int, int]]]:
     """The square matrix of a DMIG and the (grid, component) of each row, sorted."""
     if dmig.matrix_form not in (1, 6):
-        raise InvalidInputError(f"{path}: DMIG {dmig.name!r} has form IFO={dmig.matrix_form}; "
-                                "a square (1) or symmetric (6) matrix is needed")
+        raise InvalidInputError(
+            f"{path}: DMIG {dmig.name!r} has form IFO={dmig.matrix_form}; "
+            "a square (1) or symmetric (6) matrix is needed"
+        )
     rows = np.asarray(dmig.GCi, dtype=int).reshape(-1, 2)
     cols = np.asarray(dmig.GCj, dtype=int).reshape(-1, 2)
     values = np.asarray(dmig.Real, dtype=float)
@@ -190,14 +211,19 @@ def _assemble(path: Path, dmig) -> tuple[sp.csc_matrix, list[tuple[int, int]]]:
         raise InvalidInputError(f"{path}: DMIG {dmig.name!r} is complex; a real matrix is needed")
     labels, index = np.unique(np.vstack((rows, cols)), axis=0, return_inverse=True)
     index = index.reshape(-1)
-    i, j, n = index[: len(rows)], index[len(rows):], len(labels)
+    i, j, n = index[: len(rows)], index[len(rows) :], len(labels)
     if dmig.matrix_form == 6:  # each off-diagonal term given once, above or below the diagonal
         off = i != j
         if np.isin(j[off] * n + i[off], i[off] * n + j[off]).any():
-            raise FileFormatError(f"{path}: symmetric DMIG {dmig.name!r} gives a term both "
-                                  "above and below the diagonal")
-        i, j, values = (np.concatenate((i, j[off])), np.concatenate((j, i[off])),
-                        np.concatenate((values, values[off])))
+            raise FileFormatError(
+                f"{path}: symmetric DMIG {dmig.name!r} gives a term both "
+                "above and below the diagonal"
+            )
+        i, j, values = (
+            np.concatenate((i, j[off])),
+            np.concatenate((j, i[off])),
+            np.concatenate((values, values[off])),
+        )
     matrix = sp.csc_matrix((values, (i, j)), shape=(n, n))
     return matrix, [(int(g), int(c)) for g, c in labels]
 
@@ -237,10 +263,16 @@ def _load_dmig(path: Path, name: str):
     return (model, *_assemble(path, model.dmig[name]))
 
 
-def read_dmig(path: StrPath, name: str, nodes: Sequence[int] | None = None,
-              components: Sequence[int] = (1, 2, 3), *, kind: str,
-              fixed: Iterable[Sequence[int]] | None = None,
-              symmetry_rtol: float = SYMMETRY_RTOL) -> ReducedModel:
+def read_dmig(
+    path: StrPath,
+    name: str,
+    nodes: Sequence[int] | None = None,
+    components: Sequence[int] = (1, 2, 3),
+    *,
+    kind: str,
+    fixed: Iterable[Sequence[int]] | None = None,
+    symmetry_rtol: float = SYMMETRY_RTOL,
+) -> ReducedModel:
     """Reduced model of chosen grids from a DMIG matrix (``K2GG``, ``KAAX``, ...) in bulk data.
 
     Parameters
@@ -303,6 +335,7 @@ def read_dmig(path: StrPath, name: str, nodes: Sequence[int] | None = None,
     coordinates = None
     if all(grid is not None and grid.cp == 0 for grid in grids):
         coordinates = np.array([grid.xyz for grid in grids], dtype=float)
+
     def describe(grid: Hashable, component: Hashable) -> str:
         return f"grid {grid} component {component}"
 
@@ -312,6 +345,13 @@ def read_dmig(path: StrPath, name: str, nodes: Sequence[int] | None = None,
         if fixed is not None:
             fixed_index = freedom_indices(labels, fixed, "grid", describe)
         names = [describe(g, c) for g, c in labels]
-        return reduced_model(matrix, kind, keep, fixed_index, names,
-                             dofs_per_node=len(components), coordinates=coordinates,
-                             symmetry_rtol=symmetry_rtol)
+        return reduced_model(
+            matrix,
+            kind,
+            keep,
+            fixed_index,
+            names,
+            dofs_per_node=len(components),
+            coordinates=coordinates,
+            symmetry_rtol=symmetry_rtol,
+        )

@@ -53,8 +53,9 @@ def check_keys(where: Where, table: dict, allowed, key: str) -> None:
     for name in table:
         if name not in allowed:
             raise where.error(
-                key, f"unknown key '{name}' (allowed: {', '.join(sorted(allowed))})"
-                f"{close_match(name, allowed)}"
+                key,
+                f"unknown key '{name}' (allowed: {', '.join(sorted(allowed))})"
+                f"{close_match(name, allowed)}",
             )
 
 

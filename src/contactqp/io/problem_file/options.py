@@ -18,6 +18,7 @@ from .values import option
 
 __all__ = ["solver_options", "route_options", "solver_section"]
 
+
 def solver_options(name: str, kind: str) -> tuple[dict, bool]:
     """The options a problem file may give method ``name`` on problems of ``kind``, from the
     method registry, and whether the method passes extra ones on.
@@ -36,8 +37,9 @@ def solver_options(name: str, kind: str) -> tuple[dict, bool]:
     return named, get_method(name, kind).backend_settings
 
 
-def route_options(where: Where, section_table: dict, section: str, route: str, named: dict,
-                  extra: bool, reserved) -> dict:
+def route_options(
+    where: Where, section_table: dict, section: str, route: str, named: dict, extra: bool, reserved
+) -> dict:
     """The solver options in ``section_table`` (its keys beyond ``reserved``), checked against
     ``named`` (name: default); ``[section.backend_options]`` when the solver passes extra ones
     on."""
@@ -53,24 +55,33 @@ def route_options(where: Where, section_table: dict, section: str, route: str, n
                 f"{section}.{key}",
                 f"not an option of {route} (allowed: {', '.join(sorted(allowed))}){hint}",
             )
-    options = {key: option(where, key, section_table[key], named[key], f"{section}.{key}")
-               for key in section_table if key in named}
+    options = {
+        key: option(where, key, section_table[key], named[key], f"{section}.{key}")
+        for key in section_table
+        if key in named
+    }
     if BACKEND_OPTIONS in section_table:
         sub = f"[{section[1:-1]}.{BACKEND_OPTIONS}]"
         backend = as_table(where, section_table[BACKEND_OPTIONS], sub)
         for key, value in backend.items():
-            if isinstance(value, (dict, list)) or (isinstance(value, float)
-                                                   and not math.isfinite(value)):
-                raise where.error(f"{sub}.{key}",
-                                  f"must be a finite number, a string or a boolean, got "
-                                  f"{describe(value)}")
+            if isinstance(value, (dict, list)) or (
+                isinstance(value, float) and not math.isfinite(value)
+            ):
+                raise where.error(
+                    f"{sub}.{key}",
+                    f"must be a finite number, a string or a boolean, got {describe(value)}",
+                )
             if key in named or key in options:
                 raise where.error(f"{sub}.{key}", f"is an option of {route}: set it in {section}")
             option(where, key, value, None, f"{sub}.{key}")
             options[key] = value
     if "backend" in named:
-        _check_backend(where, section, options.get("backend", named["backend"]),
-                       {key: options[key] for key in section_table.get(BACKEND_OPTIONS, {})})
+        _check_backend(
+            where,
+            section,
+            options.get("backend", named["backend"]),
+            {key: options[key] for key in section_table.get(BACKEND_OPTIONS, {})},
+        )
     return options
 
 
@@ -86,28 +97,38 @@ def _check_backend(where: Where, section: str, backend, settings: dict) -> None:
     for key, value in settings.items():
         reason = refused_setting(backend, key, value)
         if reason:
-            raise where.error(f"[{section[1:-1]}.{BACKEND_OPTIONS}].{key}",
-                              f"backend '{backend}' refuses {key} = {value!r} ({reason})")
+            raise where.error(
+                f"[{section[1:-1]}.{BACKEND_OPTIONS}].{key}",
+                f"backend '{backend}' refuses {key} = {value!r} ({reason})",
+            )
 
 
 def solver_section(where: Where, doc: dict, frictional: bool) -> tuple[str, dict, float]:
     """``(solver, options, certificate_tol)`` of ``[solver]``; with friction only the
     certificate tolerance (the route and its options are ``[friction]``'s)."""
     section = as_table(where, doc.get("solver", {}), "[solver]")
-    certificate_tol = option(where, "certificate_tol",
-                             section.get("certificate_tol", CERTIFICATE_TOL), CERTIFICATE_TOL,
-                             "[solver].certificate_tol")
+    certificate_tol = option(
+        where,
+        "certificate_tol",
+        section.get("certificate_tol", CERTIFICATE_TOL),
+        CERTIFICATE_TOL,
+        "[solver].certificate_tol",
+    )
     if frictional:
         if "name" in section:
             raise where.error(
                 "[solver].name",
                 f"solver {section['name']!r} is frictionless but [friction] is given: remove "
                 "[solver].name and choose the route with [friction].solver (coulomb, tresca "
-                "or polygonal)")
+                "or polygonal)",
+            )
         for key in section:
             if key != "certificate_tol":
-                raise where.error(f"[solver].{key}", "with [friction], [solver] holds only "
-                                  "certificate_tol; solver options go in [friction]")
+                raise where.error(
+                    f"[solver].{key}",
+                    "with [friction], [solver] holds only "
+                    "certificate_tol; solver options go in [friction]",
+                )
         return "", {}, certificate_tol
     name = section.get("name", default_method(ContactProblem.kind))
     if not isinstance(name, str):
@@ -116,6 +137,7 @@ def solver_section(where: Where, doc: dict, frictional: bool) -> tuple[str, dict
         named, extra = solver_options(name, ContactProblem.kind)
     except InvalidInputError as exc:
         raise where.rewrap("[solver].name", exc) from None
-    options = route_options(where, section, "[solver]", f"solver '{name}'", named, extra,
-                            SOLVER_KEYS)
+    options = route_options(
+        where, section, "[solver]", f"solver '{name}'", named, extra, SOLVER_KEYS
+    )
     return name, options, certificate_tol

@@ -44,8 +44,9 @@ def _matrix(where: Where, model: dict) -> tuple[str, np.ndarray, str]:
     given = [name for name in ("flexibility", "stiffness") if name in model]
     if len(given) != 1:
         found = "both" if given else "neither"
-        raise where.error("[model]",
-                          f"give exactly one of flexibility and stiffness ({found} given)")
+        raise where.error(
+            "[model]", f"give exactly one of flexibility and stiffness ({found} given)"
+        )
     which = given[0]
     key = f"[model].{which}"
     value = model[which]
@@ -70,15 +71,16 @@ def _dofs_per_node(where: Where, value, n_freedoms: int):
                 key, f"the matrix has {n_freedoms} freedoms, not a multiple of {value}"
             )
         return value, n_freedoms // value
-    if not (isinstance(value, list) and value
-            and all(isinstance(v, int) and not isinstance(v, bool) for v in value)):
+    if not (
+        isinstance(value, list)
+        and value
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in value)
+    ):
         raise where.error(key, f"must be an integer or a list of integers, got {describe(value)}")
     if any(v not in (1, 2, 3) for v in value):
         raise where.error(key, "every entry must be 1, 2 or 3")
     if sum(value) != n_freedoms:
-        raise where.error(
-            key, f"sums to {sum(value)} freedoms, the matrix has {n_freedoms}"
-        )
+        raise where.error(key, f"sums to {sum(value)} freedoms, the matrix has {n_freedoms}")
     return list(value), len(value)
 
 
@@ -102,13 +104,15 @@ def _build_model(where: Where, doc: dict) -> ReducedModel:
         warnings.simplefilter("always")
         try:
             flexibility, stiffness = (matrix, None) if which == "flexibility" else (None, matrix)
-            built = ReducedModel(flexibility, stiffness, dofs_per_node=dofs,
-                                 coordinates=coordinates)
+            built = ReducedModel(
+                flexibility, stiffness, dofs_per_node=dofs, coordinates=coordinates
+            )
         except InvalidInputError as exc:
             raise where.rewrap(label, exc) from None
     for warning in caught:
-        warnings.warn(one_line(f"{where.path}: {label}: {warning.message}"), warning.category,
-                      stacklevel=3)
+        warnings.warn(
+            one_line(f"{where.path}: {label}: {warning.message}"), warning.category, stacklevel=3
+        )
     return built
 
 
@@ -141,8 +145,9 @@ def _loads(where: Where, doc: dict, model: ReducedModel) -> np.ndarray:
         entry = as_table(where, entry, key)
         check_keys(where, entry, LOAD_ENTRY_KEYS, key)
         value = entry.get("value")
-        if not (isinstance(value, (int, float)) and not isinstance(value, bool)
-                and math.isfinite(value)):
+        if not (
+            isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        ):
             raise where.error(key, f"value must be a finite number, got {describe(value)}")
         for name in ("freedom", "node", "component"):
             item = entry.get(name)
@@ -154,21 +159,24 @@ def _loads(where: Where, doc: dict, model: ReducedModel) -> np.ndarray:
             freedom = entry["freedom"]
             if not 0 <= freedom < n:
                 raise where.error(
-                    key, f"freedom {freedom} is outside 0..{n - 1} (the model has "
-                    f"{counted(n, 'freedom')})"
+                    key,
+                    f"freedom {freedom} is outside 0..{n - 1} (the model has "
+                    f"{counted(n, 'freedom')})",
                 )
         elif "node" in entry:
             node, component = entry["node"], entry.get("component", 0)
             if not 0 <= node < model.n_nodes:
                 raise where.error(
-                    key, f"node {node} is outside 0..{model.n_nodes - 1} (the model has "
-                    f"{counted(model.n_nodes, 'node')})"
+                    key,
+                    f"node {node} is outside 0..{model.n_nodes - 1} (the model has "
+                    f"{counted(model.n_nodes, 'node')})",
                 )
             count = int(model.dofs_per_node[node])
             if not 0 <= component < count:
                 raise where.error(
-                    key, f"component {component} is outside 0..{count - 1} (node {node} has "
-                    f"{counted(count, 'freedom')})"
+                    key,
+                    f"component {component} is outside 0..{count - 1} (node {node} has "
+                    f"{counted(count, 'freedom')})",
                 )
             freedom = int(model.offsets[node]) + component
         else:
@@ -187,8 +195,9 @@ def _nodes(where: Where, value, key: str, model: ReducedModel) -> np.ndarray:
     bad = nodes[(nodes < 0) | (nodes >= model.n_nodes)]
     if bad.size:
         raise where.error(
-            key, f"node {bad[0]} is outside 0..{model.n_nodes - 1} (the model has "
-            f"{counted(model.n_nodes, 'node')})"
+            key,
+            f"node {bad[0]} is outside 0..{model.n_nodes - 1} (the model has "
+            f"{counted(model.n_nodes, 'node')})",
         )
     return nodes
 
@@ -227,17 +236,21 @@ def _obstacle(where: Where, table, number: int, model: ReducedModel):
     table = as_table(where, table, key)
     kind = table.get("type")
     if kind is None:
-        raise where.error(key, f"missing 'type' (expected {', '.join(OBSTACLE_TYPES[:-1])} or "
-                               f"{OBSTACLE_TYPES[-1]})")
+        raise where.error(
+            key,
+            f"missing 'type' (expected {', '.join(OBSTACLE_TYPES[:-1])} or {OBSTACLE_TYPES[-1]})",
+        )
     if kind == "profile":
         raise where.error(
-            key, "type 'profile' cannot be given in a file (its profile is a Python function); "
-            "tabulate the gaps and use type = \"gaps\", or build a ProfileObstacle in Python"
+            key,
+            "type 'profile' cannot be given in a file (its profile is a Python function); "
+            'tabulate the gaps and use type = "gaps", or build a ProfileObstacle in Python',
         )
     if kind not in OBSTACLE_TYPES:
         raise where.error(
-            key, f"unknown type {kind!r} (expected {', '.join(OBSTACLE_TYPES[:-1])} or "
-            f"{OBSTACLE_TYPES[-1]})"
+            key,
+            f"unknown type {kind!r} (expected {', '.join(OBSTACLE_TYPES[:-1])} or "
+            f"{OBSTACLE_TYPES[-1]})",
         )
     check_keys(where, table, OBSTACLE_KEYS[kind], key)
     if kind == "gaps":
@@ -260,8 +273,9 @@ def _obstacle(where: Where, table, number: int, model: ReducedModel):
         _require(where, table, ("pairs", "gaps"), key, kind)
         pairs = array(where, table["pairs"], f"{key}.pairs", 2, integer=True)
         if pairs.shape[1] != 2 or pairs.shape[0] == 0:
-            raise where.error(f"{key}.pairs", f"must be a list of [a, b] pairs, got shape "
-                                              f"{pairs.shape}")
+            raise where.error(
+                f"{key}.pairs", f"must be a list of [a, b] pairs, got shape {pairs.shape}"
+            )
         _nodes(where, pairs.reshape(-1).tolist(), f"{key}.pairs", model)
         gaps = _gaps(where, table["gaps"], f"{key}.gaps", pairs.shape[0], "pair")
         dirs = _directions(where, table, key, pairs.shape[0])
@@ -278,8 +292,10 @@ def _obstacles(where: Where, doc: dict, model: ReducedModel) -> list:
         raise where.error("[[obstacle]]", "missing: give at least one [[obstacle]] table")
     tables = doc["obstacle"]
     if isinstance(tables, dict):
-        raise where.error("[[obstacle]]", "write [[obstacle]] (an array of tables, double "
-                                          "brackets), not [obstacle]")
+        raise where.error(
+            "[[obstacle]]",
+            "write [[obstacle]] (an array of tables, double brackets), not [obstacle]",
+        )
     if not isinstance(tables, list) or not tables:
         raise where.error("[[obstacle]]", "give at least one [[obstacle]] table")
     return [_obstacle(where, table, number, model) for number, table in enumerate(tables, 1)]
@@ -294,11 +310,13 @@ def _one_freedom_contacts(where: Where, model: ReducedModel, obstacles) -> None:
                 raise where.error(
                     "[friction]",
                     f"friction needs contact nodes with 2 or 3 freedoms (a tangent), but node "
-                    f"{node} of [[obstacle]] #{number} has 1 ([model].dofs_per_node)")
+                    f"{node} of [[obstacle]] #{number} has 1 ([model].dofs_per_node)",
+                )
 
 
-def _friction(where: Where, table, model: ReducedModel, loads: np.ndarray, obstacles,
-              certificate_tol: float) -> tuple[FrictionalProblem, str, dict]:
+def _friction(
+    where: Where, table, model: ReducedModel, loads: np.ndarray, obstacles, certificate_tol: float
+) -> tuple[FrictionalProblem, str, dict]:
     """The frictional problem of ``[friction]``, its route and the route's options."""
     table = as_table(where, table, "[friction]")
     if "mu" not in table:
@@ -324,11 +342,19 @@ def _friction(where: Where, table, model: ReducedModel, loads: np.ndarray, obsta
         named, extra = solver_options(route, kind)
     except InvalidInputError as exc:
         raise where.rewrap("[friction].solver", exc) from None
-    options = route_options(where, table, "[friction]", f"friction solver '{route}'", named,
-                            extra, FRICTION_KEYS)
+    options = route_options(
+        where, table, "[friction]", f"friction solver '{route}'", named, extra, FRICTION_KEYS
+    )
     try:
-        problem = FrictionalProblem(model, loads, obstacles, law.mu, law.cohesion, law.facets,
-                                    certificate_tol=certificate_tol)
+        problem = FrictionalProblem(
+            model,
+            loads,
+            obstacles,
+            law.mu,
+            law.cohesion,
+            law.facets,
+            certificate_tol=certificate_tol,
+        )
     except InvalidInputError as exc:
         raise where.rewrap("[friction]", exc) from None
     return problem, route, options
@@ -338,22 +364,25 @@ def _points(where: Where, value, n: int) -> np.ndarray:
     """``[loading].points``: a matrix, a file holding one, or a list of vectors and files."""
     key = "[loading].points"
     if isinstance(value, list) and any(is_file_ref(item) for item in value):
-        rows = [array(where, item, f"{key} #{number}", 1)
-                for number, item in enumerate(value, 1)]
+        rows = [array(where, item, f"{key} #{number}", 1) for number, item in enumerate(value, 1)]
         for number, row in enumerate(rows, 1):
             if row.size != n:
-                raise where.error(f"{key} #{number}", f"has {counted(row.size, 'value')}, the "
-                                                      f"model has {counted(n, 'freedom')}")
+                raise where.error(
+                    f"{key} #{number}",
+                    f"has {counted(row.size, 'value')}, the model has {counted(n, 'freedom')}",
+                )
         return np.array(rows)
     points = array(where, value, key, 2)
     if points.shape[1] != n or points.shape[0] == 0:
-        raise where.error(key, f"must have rows of {n} values (one per freedom), got shape "
-                               f"{points.shape}")
+        raise where.error(
+            key, f"must have rows of {n} values (one per freedom), got shape {points.shape}"
+        )
     return points
 
 
-def _loading(where: Where, table, loads: np.ndarray | None,
-             n: int) -> tuple[np.ndarray, np.ndarray | None]:
+def _loading(
+    where: Where, table, loads: np.ndarray | None, n: int
+) -> tuple[np.ndarray, np.ndarray | None]:
     """``(history, factors)`` of ``[loading]``: loads of each step (K, n) and, for
     ``factors``, each step's multiple of ``loads`` (K,), else None."""
     table = as_table(where, table, "[loading]")
@@ -370,8 +399,10 @@ def _loading(where: Where, table, loads: np.ndarray | None,
         turning = factors[:, None]
     else:
         if loads is not None:
-            raise where.error("[loading].points", "give the loads here or in [loads], not both "
-                                                  "(factors = [...] scales [loads])")
+            raise where.error(
+                "[loading].points",
+                "give the loads here or in [loads], not both (factors = [...] scales [loads])",
+            )
         turning = _points(where, table["points"], n)
     try:
         path = linear_path(turning, steps)
@@ -423,8 +454,11 @@ def load_problem_file(path: str | os.PathLike[str]) -> ProblemSpec:
         raise where.error("name", f"must be a string, got {describe(name)}")
     frictional = "friction" in doc
     if "loading" in doc and not frictional:
-        raise where.error("[loading]", "a load history needs [friction] (without friction the "
-                                       "answer does not depend on the load path)")
+        raise where.error(
+            "[loading]",
+            "a load history needs [friction] (without friction the "
+            "answer does not depend on the load path)",
+        )
     solver, options, certificate_tol = solver_section(where, doc, frictional)
     model = _build_model(where, doc)
     loading = as_table(where, doc.get("loading", {}), "[loading]")
@@ -442,12 +476,20 @@ def load_problem_file(path: str | os.PathLike[str]) -> ProblemSpec:
             history, factors = _loading(where, loading, loads, model.n_freedoms)
     problem: ContactProblem | FrictionalProblem
     if frictional:
-        problem, solver, options = _friction(where, doc["friction"], model, loads, obstacles,
-                                             certificate_tol)
+        problem, solver, options = _friction(
+            where, doc["friction"], model, loads, obstacles, certificate_tol
+        )
     else:
         try:
             problem = ContactProblem(model, loads, obstacles, certificate_tol=certificate_tol)
         except InvalidInputError as exc:
             raise where.rewrap("problem", exc) from None
-    return ProblemSpec(problem=problem, solver=solver, options=options, name=name, path=path,
-                       history=history, factors=factors)
+    return ProblemSpec(
+        problem=problem,
+        solver=solver,
+        options=options,
+        name=name,
+        path=path,
+        history=history,
+        factors=factors,
+    )

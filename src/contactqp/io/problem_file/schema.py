@@ -7,9 +7,21 @@ of ``[solver]`` and ``[friction]`` (:func:`~contactqp.io.problem_file.options.so
 
 from __future__ import annotations
 
-__all__ = ["TOP_KEYS", "MODEL_KEYS", "LOADS_KEYS", "LOAD_ENTRY_KEYS", "FILE_REF_KEYS",
-           "OBSTACLE_TYPES", "OBSTACLE_KEYS", "FRICTION_LAW_KEYS", "FRICTION_KEYS",
-           "LOADING_KEYS", "SOLVER_KEYS", "BACKEND_OPTIONS", "fixed_keys"]
+__all__ = [
+    "TOP_KEYS",
+    "MODEL_KEYS",
+    "LOADS_KEYS",
+    "LOAD_ENTRY_KEYS",
+    "FILE_REF_KEYS",
+    "OBSTACLE_TYPES",
+    "OBSTACLE_KEYS",
+    "FRICTION_LAW_KEYS",
+    "FRICTION_KEYS",
+    "LOADING_KEYS",
+    "SOLVER_KEYS",
+    "BACKEND_OPTIONS",
+    "fixed_keys",
+]
 
 TOP_KEYS = ("name", "model", "loads", "obstacle", "friction", "loading", "solver")
 MODEL_KEYS = ("flexibility", "stiffness", "dofs_per_node", "coordinates")

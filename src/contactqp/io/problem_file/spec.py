@@ -75,10 +75,12 @@ class ProblemSpec:
         """
         if self.history is not None:
             if not isinstance(self.problem, FrictionalProblem):  # files give [loading] no other
-                raise InvalidInputError(f"a load history needs a FrictionalProblem, got "
-                                        f"{type(self.problem).__name__}")
-            return solve_history(self.problem, self.history, self.solver, progress=progress,
-                                 **self.options)
+                raise InvalidInputError(
+                    f"a load history needs a FrictionalProblem, got {type(self.problem).__name__}"
+                )
+            return solve_history(
+                self.problem, self.history, self.solver, progress=progress, **self.options
+            )
         return solve(self.problem, self.solver, **self.options)
 
     def step_factor(self, step: int) -> float | None:
@@ -99,17 +101,23 @@ class ProblemSpec:
             return json_ready(result.summary())
         steps = result.steps
         last = steps[-1].summary()
-        return json_ready({
-            "success": result.success, "solver": self.solver, "steps": len(steps),
-            "failed_steps": [k for k, step in enumerate(steps) if not step.success],
-            "iterations": result.iterations, "seconds": result.seconds,
-            "dissipated": float(np.sum(result.dissipated)),
-            "certificate_worst": max(step.certificate.worst for step in steps),
-            "final": {status.label: last[status.label] for status in FrictionalResult.STATUSES},
-            "records": [{"step": k, "factor": self.step_factor(k), **step.summary()}
-                        for k, step in enumerate(steps)],
-        })
-
+        return json_ready(
+            {
+                "success": result.success,
+                "solver": self.solver,
+                "steps": len(steps),
+                "failed_steps": [k for k, step in enumerate(steps) if not step.success],
+                "iterations": result.iterations,
+                "seconds": result.seconds,
+                "dissipated": float(np.sum(result.dissipated)),
+                "certificate_worst": max(step.certificate.worst for step in steps),
+                "final": {status.label: last[status.label] for status in FrictionalResult.STATUSES},
+                "records": [
+                    {"step": k, "factor": self.step_factor(k), **step.summary()}
+                    for k, step in enumerate(steps)
+                ],
+            }
+        )
 
 
 def json_ready(value: Any) -> Any:

@@ -38,8 +38,9 @@ def _load_ref(where: Where, value, key: str) -> tuple[np.ndarray, str]:
     if not path.is_absolute():
         path = where.base / path
     if not path.exists():
-        raise where.error(key, f"file '{name}' not found (looked for {os.path.abspath(path)})",
-                          FileFormatError)
+        raise where.error(
+            key, f"file '{name}' not found (looked for {os.path.abspath(path)})", FileFormatError
+        )
     try:
         return read_array(path, npz_key, fmt), label
     except InvalidInputError as exc:

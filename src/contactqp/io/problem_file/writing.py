@@ -34,7 +34,6 @@ def _float_text(value) -> str:
     return repr(float(value))  # the shortest text that reads back to the same float
 
 
-
 def _expected_steps(spec: ProblemSpec, result: SpecResult) -> list:
     """The results of each step of ``result``, after checking its kind and shapes."""
     problem = spec.problem
@@ -44,18 +43,21 @@ def _expected_steps(spec: ProblemSpec, result: SpecResult) -> list:
     else:
         kind, steps = FrictionalResult if spec.frictional else ContactResult, [result]
     if type(result) is not kind:
-        raise InvalidInputError(f"result must be a {kind.__name__} for this problem, got "
-                                f"{type(result).__name__}")
+        raise InvalidInputError(
+            f"result must be a {kind.__name__} for this problem, got {type(result).__name__}"
+        )
     if spec.history is not None and len(steps) != len(spec.history):
-        raise InvalidInputError(f"result has {len(steps)} steps, the history has "
-                                f"{len(spec.history)}")
+        raise InvalidInputError(
+            f"result has {len(steps)} steps, the history has {len(spec.history)}"
+        )
     n, m = problem.model.n_freedoms, problem.constraints.n_constraints
     for step in steps:
         if np.shape(step.displacements) != (n,) or np.shape(step.forces)[:1] != (m,):
             raise InvalidInputError(
                 f"result has {np.size(step.displacements)} displacements and "
                 f"{len(step.forces)} contacts; "
-                f"the problem has {n} freedoms and {m} constraints")
+                f"the problem has {n} freedoms and {m} constraints"
+            )
     return steps
 
 
@@ -63,8 +65,9 @@ def _tangential_header(name: str, dim: int) -> list[str]:
     return [name] if dim == 2 else [f"{name}_{j}" for j in range(1, dim)]
 
 
-def write_results(spec: ProblemSpec, result: SpecResult,
-                  out_dir: str | os.PathLike[str]) -> list[Path]:
+def write_results(
+    spec: ProblemSpec, result: SpecResult, out_dir: str | os.PathLike[str]
+) -> list[Path]:
     """Write a solved problem's results to a directory (files, columns: docs/problem-files.md).
 
     Parameters
@@ -99,32 +102,69 @@ def write_results(spec: ProblemSpec, result: SpecResult,
     def rows_of(make):  # rows of every step, prefixed by the step index for a history
         return [[k] * history + row for k, step in enumerate(steps) for row in make(step)]
 
-    freedoms = [(node, int(freedom)) for node in range(model.n_nodes)
-                for freedom in model.freedoms(node)]
-    displacements = rows_of(lambda step: [[node, freedom,
-                                           _float_text(step.displacements[freedom])]
-                                          for node, freedom in freedoms])
+    freedoms = [
+        (node, int(freedom)) for node in range(model.n_nodes) for freedom in model.freedoms(node)
+    ]
+    displacements = rows_of(
+        lambda step: [
+            [node, freedom, _float_text(step.displacements[freedom])] for node, freedom in freedoms
+        ]
+    )
     base = ["row", "node", "label", "gap0", "gap"]
-    fixed = [[row, int(constraints.nodes[row]), constraints.labels[row],
-              _float_text(constraints.gaps[row])] for row in range(constraints.n_constraints)]
+    fixed = [
+        [
+            row,
+            int(constraints.nodes[row]),
+            constraints.labels[row],
+            _float_text(constraints.gaps[row]),
+        ]
+        for row in range(constraints.n_constraints)
+    ]
     fields: tuple[str, ...]
     if isinstance(problem, FrictionalProblem):
         dim = problem.dim
-        header = base + ["normal_force"] + [
-            column for name in ("tangential_force", "slip", "tangential_displacement")
-            for column in _tangential_header(name, dim)] + ["dissipated", "status"]
-        contacts = rows_of(lambda step: [
-            fixed[row] + [_float_text(v) for v in (
-                step.gaps[row], *step.forces[row], *step.slip[row],
-                *step.tangential_displacements[row], step.dissipation[row])]
-            + [step.status_labels[row]] for row in range(constraints.n_constraints)])
+        header = (
+            base
+            + ["normal_force"]
+            + [
+                column
+                for name in ("tangential_force", "slip", "tangential_displacement")
+                for column in _tangential_header(name, dim)
+            ]
+            + ["dissipated", "status"]
+        )
+        contacts = rows_of(
+            lambda step: [
+                fixed[row]
+                + [
+                    _float_text(v)
+                    for v in (
+                        step.gaps[row],
+                        *step.forces[row],
+                        *step.slip[row],
+                        *step.tangential_displacements[row],
+                        step.dissipation[row],
+                    )
+                ]
+                + [step.status_labels[row]]
+                for row in range(constraints.n_constraints)
+            ]
+        )
         fields = COMMON_FIELDS + ("slip", "tangential_displacements", "dissipation")
         arrays = {"normals": problem.frames.normals, "tangents": problem.frames.tangents}
     else:
         header = base + ["force", "status"]
-        contacts = rows_of(lambda step: [
-            fixed[row] + [_float_text(step.gaps[row]), _float_text(step.forces[row]),
-                          step.status_labels[row]] for row in range(constraints.n_constraints)])
+        contacts = rows_of(
+            lambda step: [
+                fixed[row]
+                + [
+                    _float_text(step.gaps[row]),
+                    _float_text(step.forces[row]),
+                    step.status_labels[row],
+                ]
+                for row in range(constraints.n_constraints)
+            ]
+        )
         fields = COMMON_FIELDS
         arrays = {}
     for name in fields:
@@ -158,14 +198,32 @@ def write_results(spec: ProblemSpec, result: SpecResult,
         if history:
             cumulative = np.cumsum([step.dissipated for step in steps])
             labels = [status.label for status in FrictionalResult.STATUSES]
-            write_rows(paths[4], ["step", "factor", *labels, "dissipated",
-                                  "cumulative_dissipated", "iterations", "certificate_worst",
-                                  "success"], [
-                [k, "" if spec.factors is None else _float_text(spec.factors[k]),
-                 *[status_counts(step.contact_status)[label] for label in labels],
-                 _float_text(step.dissipated), _float_text(cumulative[k]), step.iterations,
-                 _float_text(step.certificate.worst), step.success]
-                for k, step in enumerate(steps)])
+            write_rows(
+                paths[4],
+                [
+                    "step",
+                    "factor",
+                    *labels,
+                    "dissipated",
+                    "cumulative_dissipated",
+                    "iterations",
+                    "certificate_worst",
+                    "success",
+                ],
+                [
+                    [
+                        k,
+                        "" if spec.factors is None else _float_text(spec.factors[k]),
+                        *[status_counts(step.contact_status)[label] for label in labels],
+                        _float_text(step.dissipated),
+                        _float_text(cumulative[k]),
+                        step.iterations,
+                        _float_text(step.certificate.worst),
+                        step.success,
+                    ]
+                    for k, step in enumerate(steps)
+                ],
+            )
     except OSError as exc:
         raise FileFormatError(one_line(f"cannot write results to '{out}': {exc}")) from None
     return paths
