@@ -358,7 +358,9 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
 
 
 def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLimits:
-    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) on a local problem.
+    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` on a local problem.
+
+    ``r`` and ``u`` have shape (m,).
 
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and

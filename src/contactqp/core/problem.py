@@ -112,8 +112,10 @@ class ContactProblem:
     loads : array_like, shape (n_freedoms,)
         External forces ``P`` on the computational freedoms (N).
     obstacles : sequence
-        :class:`~contactqp.core.contact.GapObstacle`, :class:`~contactqp.core.contact.PlaneObstacle`,
-        :class:`~contactqp.core.contact.ProfileObstacle` or :class:`~contactqp.core.contact.NodePairs`.
+        :class:`~contactqp.core.contact.GapObstacle`,
+        :class:`~contactqp.core.contact.PlaneObstacle`,
+        :class:`~contactqp.core.contact.ProfileObstacle` or
+        :class:`~contactqp.core.contact.NodePairs`.
     certificate_tol : float
         Largest relative residual the certificate accepts.
 
@@ -333,8 +335,9 @@ class FrictionalProblem:
         u = W r + q - \begin{pmatrix} 0 \\ (H U_{prev})_T \end{pmatrix},
         \qquad u_N = \text{gap}, \quad u_T = s_T,
 
-    with ``r`` the total local forces, in the friction set of :class:`~contactqp.core.friction.FrictionLaw`
-    and complementary to ``u`` (FCLIB's Coulomb problem for the exact cone without cohesion).
+    with ``r`` the total local forces, in the friction set of
+    :class:`~contactqp.core.friction.FrictionLaw` and complementary to ``u`` (FCLIB's Coulomb
+    problem for the exact cone without cohesion).
 
     Parameters
     ----------

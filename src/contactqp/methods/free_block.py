@@ -4,18 +4,20 @@ An active-set method solves ``W_FF x = r`` for a sequence of free sets ``F`` tha
 indices from one step to the next. Factoring each block costs ``|F|^3 / 3``. Here one *base*
 block ``W_BB = L L^T`` is factored and a nearby ``F = (B \\ D) ∪ A`` is solved through it:
 
-* the added indices ``A`` border the factor, ``C = L^{-1} W_BA`` and ``S = W_AA - C^T C = L_S L_S^T``,
-  giving the factor :math:`\\mathcal{L} = [[L, 0], [C^T, L_S]]` of ``W`` on ``B ∪ A``;
+* the added indices ``A`` border the factor, ``C = L^{-1} W_BA`` and
+  ``S = W_AA - C^T C = L_S L_S^T``, giving the factor :math:`\\mathcal{L} = [[L, 0], [C^T, L_S]]`
+  of ``W`` on ``B ∪ A``;
 * the dropped indices ``D`` are held at zero by multipliers ``s``: with
   ``V = \\mathcal{L}^{-1} E_D`` and ``y = \\mathcal{L}^{-1} r``, ``s = -(V^T V)^{-1} V^T y`` and
   ``x = \\mathcal{L}^{-T} (y + V s)``.
 
-That costs about ``|B|^2 (|A| + |D|) + |B| (|A|^2 + |D|^2) + (|A|^3 + |D|^3) / 3``. Once the updates made since the base was factored would
-cost more in all than factoring ``W_FF`` (``|F|^3 / 3``), ``W_FF`` is factored and becomes the
-base: a free set that drifts far from the base cannot make every step expensive. Base blocks are
-factored by the operator (:meth:`~contactqp.core.operators.Operator.cholesky`, which also
-validates them): a block that is not numerically positive definite (``W`` only semidefinite) is
-factored with a diagonal shift, and the same shift is added to the indices that border it.
+That costs about ``|B|^2 (|A| + |D|) + |B| (|A|^2 + |D|^2) + (|A|^3 + |D|^3) / 3``. Once the updates
+made since the base was factored would cost more in all than factoring ``W_FF`` (``|F|^3 / 3``),
+``W_FF`` is factored and becomes the base: a free set that drifts far from the base cannot make
+every step expensive. Base blocks are factored by the operator
+(:meth:`~contactqp.core.operators.Operator.cholesky`, which also validates them): a block that is
+not numerically positive definite (``W`` only semidefinite) is factored with a diagonal shift, and
+the same shift is added to the indices that border it.
 """
 
 from __future__ import annotations
@@ -107,7 +109,7 @@ class FreeBlockSolver:
         self.updates = 0
 
     def solve(self, free: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """Solve with the block of the free set ``free`` (bool, shape (n,)); ``rhs`` in its order."""
+        """Solve with the block of free set ``free`` (bool, shape (n,)); ``rhs`` in its order."""
         key = np.packbits(free).tobytes()
         plan = self.plans.get(key)
         if plan is None:

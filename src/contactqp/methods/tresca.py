@@ -15,7 +15,8 @@ small ``mu`` (where the Coulomb solution is unique) and is a classical reference
 A slightly unsymmetric ``W`` (e.g. FCLIB files written with few digits) is split into its
 symmetric part, kept in the cone program, and its skew part, moved to the right-hand side with
 the previous reactions, so that a fixed point solves the problem with the given ``W``. Cohesion
-(:class:`~contactqp.core.local_problem.LocalProblem`) is handled by measuring reactions from the cone apex.
+(:class:`~contactqp.core.local_problem.LocalProblem`) is handled by measuring reactions from the
+cone apex.
 
 An interior-point solution is accurate to about 1e-9 relative, which leaves a 3-D fixed point
 stalling near a natural-map error of 1e-8; each cone program's answer is therefore polished by
@@ -398,7 +399,8 @@ def solve_tresca_fixed_point(
         2-D or 3-D; ``W`` symmetric positive semidefinite, or nearly so (its skew part is
         treated by the outer iteration, see the module notes).
     tol : float
-        Target natural-map error (:func:`~contactqp.core.local_problem.natural_map_error`), in (0, 1).
+        Target natural-map error
+        (:func:`~contactqp.core.local_problem.natural_map_error`), in (0, 1).
     max_iter : int
         Largest number of cone programs solved.
     r0 : array_like, shape (m,), optional
