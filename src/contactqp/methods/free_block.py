@@ -104,7 +104,7 @@ class FreeBlockSolver:
         self.base_index = np.empty(0, dtype=np.intp)
         self.base_factor: BlockFactor | None = None
         self.plans: OrderedDict[bytes, _Plan] = OrderedDict()
-        self.update_cost = 0  # flops spent on updates since the base was factored
+        self.update_cost = 0.0  # flops spent on updates since the base was factored
         self.factorizations = 0
         self.updates = 0
 
@@ -140,13 +140,14 @@ class FreeBlockSolver:
         factor = self.matrix.cholesky(index)
         self.factorizations += 1
         self.base, self.base_index, self.base_factor = free.copy(), index, factor
-        self.update_cost = 0
+        self.update_cost = 0.0
         self.plans.clear()
         return _Plan(factor.lower, np.arange(index.size))
 
     def _updated_plan(self, free, added, dropped) -> _Plan | None:
         """The plan through the base factor, or None when a bordered block is not definite."""
         factor, base_index = self.base_factor, self.base_index
+        assert factor is not None, "updates are planned only once a base is factored"
         L = factor.lower
         C = L_S = V = L_G = None
         try:

@@ -183,7 +183,7 @@ def solve_frictionless(
     normal = np.arange(problem.n_contacts) * problem.dim
     columns = (normal, _columns(problem.W, normal))  # W_NN, and W r, |W| |r| for finish
     W_nn = columns[1][normal]
-    W_nn = W_nn.toarray() if sp.issparse(W_nn) else W_nn
+    W_nn = W_nn if isinstance(W_nn, np.ndarray) else W_nn.toarray()
     symmetric = np.array_equal(W_nn, W_nn.T)
     W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
     if check_psd:

@@ -77,6 +77,21 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     return start
 
 
+_Matrix = np.ndarray | sp.csr_matrix | sp.csr_array
+
+
+def _split_skew(W: _Matrix) -> tuple[_Matrix, _Matrix | None]:
+    """``(W - S, S)``, ``S = (W - W^T) / 2`` stored as ``W`` is; ``(W, None)`` when ``S = 0``."""
+    if isinstance(W, np.ndarray):
+        skew = 0.5 * (W - W.T)
+        return (W, None) if np.count_nonzero(skew) == 0 else (W - skew, skew)
+    # CSR already (W.T is CSC, a difference takes W's format): tocsr() is a no-op for the stubs
+    sparse_skew = (0.5 * (W - W.T)).tocsr()
+    if sparse_skew.count_nonzero() == 0:
+        return W, None
+    return (W - sparse_skew).tocsr(), sparse_skew
+
+
 class FixedPointData:
     """What the fixed-point routes need from a problem, computed once.
 
@@ -108,11 +123,7 @@ class FixedPointData:
 
     def __init__(self, problem: LocalProblem):
         W = as_operator(problem.W).matrix  # the cone programs are built on the stored entries
-        skew = 0.5 * (W - W.T)
-        if (skew.count_nonzero() if sp.issparse(skew) else np.count_nonzero(skew)) == 0:
-            self.W_sym, self.skew = W, None
-        else:
-            self.W_sym, self.skew = W - skew, skew
+        self.W_sym, self.skew = _split_skew(W)
         self.shift = problem.apex_shift
         self.q = problem.q - np.asarray(W @ self.shift).ravel()
         diagonal = np.abs(self.W_sym.diagonal())
