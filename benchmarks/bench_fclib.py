@@ -1,12 +1,12 @@
 """Coulomb friction on the shared FCLIB problems: time per file beside the published figures.
 
 Every problem file in ``shared/data/fclib`` (or the files given) is read once, outside the timing,
-then solved by :func:`contactqp.methods.coulomb.solve_coulomb` from a cold start (``r = 0``) to
-the natural-map error ``--tol`` (default 1e-8, the README's measure). A global problem is
-condensed as given (outside the timing) and its error is that of the global equations as written
-(:meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``M v = H r + f``, ``u = H^T v + w``). The time is the best of
-repeated solves (runs shorter than 0.5 s are repeated, up to 7 times, 2 s in all), each including
-the positive-semidefiniteness check of ``W``.
+then solved by :func:`contactqp.methods.coulomb.solve_coulomb` from a cold start (``r = 0``) to the
+natural-map error ``--tol`` (default 1e-8, the README's measure). A global problem is condensed as
+given (outside the timing) and its error is that of the global equations as written
+(:meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``M v = H r + f``, ``u = H^T v + w``).
+The time is the best of repeated solves (runs shorter than 0.5 s are repeated, up to 7 times, 2 s in
+all), each including the positive-semidefiniteness check of ``W``.
 
 Beside it stands the published mean time of the fastest solver of the file's test family
 (Acary, Bremond and Huber 2018, as quoted in ``shared/data/fclib/README.md``) and the ratio

@@ -27,12 +27,12 @@ Problems:
 
 Each route is timed on its own call; a route taking less than 2 s is repeated (at least 3
 runs, up to 7 while they take less than 1 s in all) and its best time kept, so that routes of a
-millisecond are not timed on one cold call. Ratios are route time over coulomb time (x > 1: coulomb is faster); a ratio is
-marked ``*`` when the route did not meet ``--tol`` (for poly in 3-D: did not reach its fixed
-point within its 50 iterations). On a shared machine multi-threaded BLAS makes the dense
-factorisations' times erratic; ``OPENBLAS_NUM_THREADS=1`` gives steadier figures (Clarabel's
-factorisation is single-threaded anyway). Run ``python benchmarks/bench_friction_routes.py
---help`` for the options.
+millisecond are not timed on one cold call. Ratios are route time over coulomb time (x > 1: coulomb
+is faster); a ratio is marked ``*`` when the route did not meet ``--tol`` (for poly in 3-D: did not
+reach its fixed point within its 50 iterations). On a shared machine multi-threaded BLAS makes the
+dense factorisations' times erratic; ``OPENBLAS_NUM_THREADS=1`` gives steadier figures (Clarabel's
+factorisation is single-threaded anyway). Run ``python benchmarks/bench_friction_routes.py --help``
+for the options.
 """
 
 from __future__ import annotations

@@ -104,7 +104,7 @@ def build_problem(n_contacts: int, *, surface: str = "paraboloid") -> ContactPro
 
 
 def best_time(run, budget: float = 2.0, max_repeat: int = 7):
-    """Run ``run()`` once, repeat while short, and return ``(best seconds, first value, first s)``."""
+    """Run ``run()`` once, repeat while short; return ``(best seconds, first value, first s)``."""
     start = time.perf_counter()
     value = run()
     first = time.perf_counter() - start
@@ -145,7 +145,7 @@ def _backend_child(connection, backend, W, c, unscale):
 
 
 def run_backend(backend, W, c, unscale, timeout):
-    """Fork a child that times ``backend``; ``(seconds, forces, note)``, note "timeout" if killed."""
+    """Fork a child to time ``backend``; ``(seconds, forces, note)``, note "timeout" if killed."""
     context = multiprocessing.get_context("fork")
     parent, child = context.Pipe(duplex=False)
     process = context.Process(
@@ -177,11 +177,11 @@ def _fmt_seconds(seconds: float) -> str:
 
 def _print_table(headers, rows):
     widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
-    line = "  ".join(str(h).rjust(w) for h, w in zip(headers, widths))
+    line = "  ".join(str(h).rjust(w) for h, w in zip(headers, widths, strict=True))
     print(line)
     print("-" * len(line))
     for row in rows:
-        print("  ".join(str(v).rjust(w) for v, w in zip(row, widths)))
+        print("  ".join(str(v).rjust(w) for v, w in zip(row, widths, strict=True)))
 
 
 def main(argv=None) -> int:
@@ -273,16 +273,16 @@ def main(argv=None) -> int:
             w_scale, c_scale = float(np.mean(np.diag(W))), float(np.max(np.abs(c)))
             W_backend, c_backend, unscale = W / w_scale, c / c_scale, c_scale / w_scale
 
-        own_best, result, own_first = best_time(lambda: contactqp.solve(problem))
+        own_best, result, own_first = best_time(lambda problem=problem: contactqp.solve(problem))
         if not result.success:
             notes.append(f"{size}: own solver did not succeed: {result.message}")
         reference = result.forces
         scale = float(np.max(np.abs(reference)))
         core_best, core, _ = best_time(
-            lambda: solve_box_qp(W, c, lower=0.0, x0=cold_start(W, -c), check_finite=False)
+            lambda W=W, c=c: solve_box_qp(W, c, lower=0.0, x0=cold_start(W, -c), check_finite=False)
         )
         chol_best, _, _ = best_time(
-            lambda: scipy.linalg.cho_factor(W, lower=True, check_finite=False)
+            lambda W=W: scipy.linalg.cho_factor(W, lower=True, check_finite=False)
         )
 
         row = {
@@ -353,8 +353,8 @@ def main(argv=None) -> int:
     print(
         "\nown: contactqp.solve(problem), best of repeats; own 1st: its first call; core: "
         "solve_box_qp(W, -b) alone;\nit/fact/upd: core iterations / Cholesky factorisations / "
-        "updated factorisations of free blocks; chol: one cho_factor of the full W;\nbackend cells: best time and ratio to own "
-        "(x > 1: slower than own)."
+        "updated factorisations of free blocks; chol: one cho_factor of the full W;"
+        "\nbackend cells: best time and ratio to own (x > 1: slower than own)."
     )
     for note in notes:
         print(f"note: {note}")

@@ -1,11 +1,12 @@
 """Variation simulation of the riveted assembly: samples per second, cold and warm, 1 and 2 workers.
 
-The assembly is :class:`contactqp.applications.riveting.Assembly` with its defaults: two 200 x 100 x 2 mm
-aluminium plates, 25 x 21 = 525 contact pairs, 6 fasteners closing their pairs. Gap fields are
-:class:`contactqp.studies.sources.GaussianGapField` samples (mean 0.2 mm, sigma 0.1 mm, correlation length
-40 mm). Each row of the table runs :func:`contactqp.studies.batch.run_batch` into a fresh HDF5 store
-(writing and flushing included) and reports samples per second of wall time; building the
-model (assembly and condensation) is timed once, apart.
+The assembly is :class:`contactqp.applications.riveting.Assembly` with its defaults: two
+200 x 100 x 2 mm aluminium plates, 25 x 21 = 525 contact pairs, 6 fasteners closing their pairs.
+Gap fields are :class:`contactqp.studies.sources.GaussianGapField` samples (mean 0.2 mm,
+sigma 0.1 mm, correlation length 40 mm). Each row of the table runs
+:func:`contactqp.studies.batch.run_batch` into a fresh HDF5 store (writing and flushing included)
+and reports samples per second of wall time; building the model (assembly and condensation) is timed
+once, apart.
 
 Rows:
 

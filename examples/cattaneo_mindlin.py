@@ -1,11 +1,11 @@
 r"""Cattaneo-Mindlin: a sphere pressed on a half-space, then sheared by ``Q < mu P``.
 
 A rigid sphere (radius ``R_s``) is pushed a depth ``d`` into an elastic half-space, then moved
-tangentially by ``delta`` along x with the depth kept. The surface is cut into square cells of
-side ``h``, each with three unknowns: the normal reaction and the two tangential ones. Their
-flexibility is the half-space's (:func:`contactqp.compliance.influence_matrix`: Love, Cerruti);
-the contact is the local problem ``u = W r + q`` of :mod:`contactqp.core.local_problem`, one Coulomb cone per
-cell, solved by :func:`contactqp.methods.coulomb.solve_coulomb` (the Tresca fixed point of
+tangentially by ``delta`` along x with the depth kept. The surface is cut into square cells of side
+``h``, each with three unknowns: the normal reaction and the two tangential ones. Their flexibility
+is the half-space's (:func:`contactqp.compliance.influence_matrix`: Love, Cerruti); the contact is
+the local problem ``u = W r + q`` of :mod:`contactqp.core.local_problem`, one Coulomb cone per cell,
+solved by :func:`contactqp.methods.coulomb.solve_coulomb` (the Tresca fixed point of
 :mod:`contactqp.methods.tresca` with ``--solver tresca``, a cross-check), with
 
 * normal: gap ``u_N = r^2 / (2 R_s) - d + sum_j R_zz r_N,j`` (a compressive reaction sinks the

@@ -114,7 +114,7 @@ def test_fclib_frictionless_problems_are_solved(tmp_path):
     assert proc.returncode == 0, proc.stderr
     rows = [json.loads(line) for line in proc.stdout.splitlines()]
     assert [r["contacts"] for r in rows] == [2020, 296, 356, 5]
-    for path, row in zip(files, rows):
+    for path, row in zip(files, rows, strict=True):
         assert row["converged"] and row["error"] <= 1e-8
         with h5py.File(out / f"{path.name}.solution.hdf5") as solution:
             r, u = solution["solution/r"][()], solution["solution/u"][()]
@@ -129,7 +129,7 @@ def test_fclib_solves_every_shared_file_with_friction(tmp_path):
     assert proc.returncode == 0, proc.stderr
     rows = [json.loads(line) for line in proc.stdout.splitlines()]
     assert [Path(r["file"]).name for r in rows] == [p.name for p in files]
-    for path, row in zip(files, rows):
+    for path, row in zip(files, rows, strict=True):
         assert row["converged"] and row["error"] <= 1e-8
         assert row["open"] + row["stick"] + row["slip"] == row["contacts"]
         with h5py.File(out / f"{path.name}.solution.hdf5") as solution:

@@ -7,6 +7,7 @@ the scale for values that are zero by hand).
 """
 
 import csv
+import itertools
 import json
 import subprocess
 import sys
@@ -61,7 +62,7 @@ def cyclic_by_hand():
     turning = [0.0, 1.0, -1.0, 1.0]
     factors = np.concatenate(
         [[0.0]]
-        + [a + (b - a) * np.arange(1, STEPS + 1) / STEPS for a, b in zip(turning[:-1], turning[1:])]
+        + [a + (b - a) * np.arange(1, STEPS + 1) / STEPS for a, b in itertools.pairwise(turning)]
     )
     limit = MU * KY * INTERFERENCE
     force = factors[:, None] * AMPLITUDE

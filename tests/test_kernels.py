@@ -110,7 +110,7 @@ def test_alart_curnier_rows_agree(seed, n, d):
     pure_numpy.alart_curnier_rows(R, U, mu, rho, *actual)
     close(actual[0], expected[0])
     smooth = away_from_regime_changes(R, U, mu, rho)
-    for jacobian, reference in zip(actual[1:], expected[1:]):
+    for jacobian, reference in zip(actual[1:], expected[1:], strict=True):
         close(jacobian[smooth], reference[smooth])
     no_jacobian = np.empty((0, 3, 3))
     Phi = np.empty((n, d))

@@ -117,7 +117,7 @@ def test_methods_built_on_entries_refuse_a_matrix_free_operator():
     A, _ = gram(n=6, k=4)
     operator = GramOperator(A, 0.1)
     with pytest.raises(UnsupportedProblemError, match="explicit matrix"):
-        operator.matrix
+        _ = operator.matrix  # the property itself raises
     with pytest.raises(UnsupportedProblemError, match="GramOperator"):
         GaussSeidel(operator, np.zeros(6), np.zeros(2), 3)
 

@@ -197,14 +197,14 @@ def test_solve_history_checks_method_and_options_before_the_first_step():
         (
             frictional_problem,
             "qp",
-            r"method 'qp' does not solve frictional problems \(it solves frictionless\); methods for "
-            r"frictional problems: coulomb \(default\), tresca, normal-qp",
+            r"method 'qp' does not solve frictional problems \(it solves frictionless\); "
+            r"methods for frictional problems: coulomb \(default\), tresca, normal-qp",
         ),
         (
             lambda: frictional_problem(facets=8),
             "coulomb",
-            r"method 'coulomb' does not solve frictional-polygonal problems .*: polygonal \(default\), "
-            r"normal-qp",
+            r"method 'coulomb' does not solve frictional-polygonal problems .*: "
+            r"polygonal \(default\), normal-qp",
         ),
         (
             contact_problem,
@@ -414,7 +414,7 @@ def test_registry_options_match_the_function_signature(name):
         [inspect.Parameter.VAR_KEYWORD] if method.backend_settings else []
     )
     assert [p.name for p in keyword] == list(method.option_names)
-    for parameter, option in zip(keyword, method.options):
+    for parameter, option in zip(keyword, method.options, strict=True):
         assert parameter.default == option.default, (name, option.name)
         assert option.default is None or isinstance(option.default, option.type)
         assert option.doc and "\n" not in option.doc

@@ -208,16 +208,16 @@ def test_an_overlap_deeper_than_a_plate_is_refused(small, rough_gaps):
             ["--mean-gap", "-1e-3", "--amplitude", "0"],
             0,
             (
-                "contactqp: warning: --mean-gap -0.001 m is negative: the plates overlap by 1 mm at rest "
-                "(interference)\n"
+                "contactqp: warning: --mean-gap -0.001 m is negative: the plates overlap by 1 mm "
+                "at rest (interference)\n"
             ),
         ),
         (
             ["--mean-gap", "5e-3", "--amplitude", "0"],
             0,
             (
-                "contactqp: warning: nominal gap 5 mm exceeds the 2 mm plate thickness: far beyond small "
-                "deflections, where the linear plate model holds\n"
+                "contactqp: warning: nominal gap 5 mm exceeds the 2 mm plate thickness: far beyond "
+                "small deflections, where the linear plate model holds\n"
             ),
         ),
     ],

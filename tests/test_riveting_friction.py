@@ -102,7 +102,9 @@ def test_dissipation_is_non_negative_at_every_step(assembly):
     slipping = np.array([step.result.contact_status == ContactStatus.SLIP for step in steps])
     assert slipping.any()
     assert all(
-        step.result.dissipation.sum() > 1e-9 for step, slips in zip(steps, slipping) if slips.any()
+        step.result.dissipation.sum() > 1e-9
+        for step, slips in zip(steps, slipping, strict=True)
+        if slips.any()
     )
     assert np.all(dissipation[~slipping] < 1e-12)
 

@@ -1,4 +1,5 @@
-"""The Euler-Bernoulli frame against beam theory, and the rod over an obstacle against full FE contact.
+"""The Euler-Bernoulli frame against beam theory, and the rod over an obstacle against full FE
+contact.
 
 Tolerances: Euler-Bernoulli elements are exact at the nodes for nodal loads, so beam theory is met
 to round-off (1e-9 relative, the sparse solve of a stiffness whose entries span 12 decades). The
@@ -33,7 +34,7 @@ from contactqp.errors import InvalidInputError, RigidBodyModeError
 
 ROOT = Path(__file__).resolve().parents[1]
 E, A, L = 1e12, 0.2e-6, 0.04
-I = A**2 / (4 * np.pi)
+I_z = A**2 / (4 * np.pi)  # second moment of area of a circular section (A = pi r^2)
 
 
 def cantilever(n_elements=8, angle=0.0):
@@ -41,7 +42,7 @@ def cantilever(n_elements=8, angle=0.0):
     s = np.linspace(0.0, L, n_elements + 1)
     nodes = np.column_stack([s * np.cos(angle), s * np.sin(angle)])
     elements = np.column_stack([np.arange(n_elements), np.arange(1, n_elements + 1)])
-    return Frame2D(nodes, elements, E, A, I, fixed={-1: "xyr"})
+    return Frame2D(nodes, elements, E, A, I_z, fixed={-1: "xyr"})
 
 
 def test_cantilever_tip_load_meets_beam_theory_at_every_node():
@@ -49,10 +50,10 @@ def test_cantilever_tip_load_meets_beam_theory_at_every_node():
     P = 0.3
     u = frame.displacements(frame.load_vector([(0, 0.0, -P)]))
     a = L - frame.coordinates[:, 0]  # distance from the clamp
-    np.testing.assert_allclose(u[:, 1], -P * a**2 * (3 * L - a) / (6 * E * I), rtol=1e-9, atol=0)
-    assert u[0, 1] == pytest.approx(-P * L**3 / (3 * E * I), rel=1e-9)
-    np.testing.assert_allclose(u[:, 2], P * a * (2 * L - a) / (2 * E * I), rtol=1e-9, atol=0)
-    assert u[0, 2] == pytest.approx(P * L**2 / (2 * E * I), rel=1e-9)
+    np.testing.assert_allclose(u[:, 1], -P * a**2 * (3 * L - a) / (6 * E * I_z), rtol=1e-9, atol=0)
+    assert u[0, 1] == pytest.approx(-P * L**3 / (3 * E * I_z), rel=1e-9)
+    np.testing.assert_allclose(u[:, 2], P * a * (2 * L - a) / (2 * E * I_z), rtol=1e-9, atol=0)
+    assert u[0, 2] == pytest.approx(P * L**2 / (2 * E * I_z), rel=1e-9)
     np.testing.assert_array_equal(u[-1], 0.0)
 
 
@@ -73,8 +74,8 @@ def test_inclined_cantilever_is_the_rotated_one():
     u = frame.displacements(frame.load_vector([load]))[0]
     along, across = u[0] * c + u[1] * s, -u[0] * s + u[1] * c
     assert along == pytest.approx(axial * L / (E * A), rel=1e-9)  # pushed towards the clamp
-    assert across == pytest.approx(lateral * L**3 / (3 * E * I), rel=1e-9)
-    element = frame_element_stiffness([0, 0], [c, s], E, A, I)
+    assert across == pytest.approx(lateral * L**3 / (3 * E * I_z), rel=1e-9)
+    element = frame_element_stiffness([0, 0], [c, s], E, A, I_z)
     assert np.allclose(element, element.T) and np.allclose(element @ [c, s, 0, c, s, 0], 0)
 
 
@@ -84,7 +85,7 @@ def test_condensed_flexibility_is_the_cantilever_influence_function():
     R = frame.compliance(nodes, "xy")
     a = L - frame.coordinates[nodes, 0]
     near, far = np.minimum.outer(a, a), np.maximum.outer(a, a)
-    np.testing.assert_allclose(R[1::2, 1::2], near**2 * (3 * far - near) / (6 * E * I), rtol=1e-9)
+    np.testing.assert_allclose(R[1::2, 1::2], near**2 * (3 * far - near) / (6 * E * I_z), rtol=1e-9)
     np.testing.assert_allclose(R[0::2, 0::2], near / (E * A), rtol=1e-9)
     np.testing.assert_allclose(R[0::2, 1::2], 0.0, atol=1e-12 * np.abs(R).max())
 
@@ -92,15 +93,15 @@ def test_condensed_flexibility_is_the_cantilever_influence_function():
 def test_frame_errors_name_the_problem():
     nodes = [[0, 0], [1, 0]]
     with pytest.raises(RigidBodyModeError, match="rigid-body modes"):
-        Frame2D(nodes, [[0, 1]], E, A, I, fixed={0: "xy"}).compliance([1])
+        Frame2D(nodes, [[0, 1]], E, A, I_z, fixed={0: "xy"}).compliance([1])
     with pytest.raises(InvalidInputError, match="letters among"):
-        Frame2D(nodes, [[0, 1]], E, A, I, fixed={0: "xz"})
+        Frame2D(nodes, [[0, 1]], E, A, I_z, fixed={0: "xz"})
     with pytest.raises(InvalidInputError, match="young"):
-        Frame2D(nodes, [[0, 1]], -E, A, I)
+        Frame2D(nodes, [[0, 1]], -E, A, I_z)
     with pytest.raises(InvalidInputError, match="is fixed"):
-        Frame2D(nodes, [[0, 1]], E, A, I, fixed={0: "xyr"}).load_vector([(0, 1.0, 0.0)])
+        Frame2D(nodes, [[0, 1]], E, A, I_z, fixed={0: "xyr"}).load_vector([(0, 1.0, 0.0)])
     with pytest.raises(InvalidInputError, match="zero length"):
-        Frame2D([[0, 0], [0, 0]], [[0, 1]], E, A, I)
+        Frame2D([[0, 0], [0, 0]], [[0, 1]], E, A, I_z)
 
 
 @pytest.fixture(scope="module")
@@ -114,15 +115,15 @@ def test_one_force_contact_force_is_the_propped_cantilever(table):
     comparison = table[0]
     (load,) = comparison.case.loads
     a = rod.length - load.x
-    free_tip = -load.fy * a**2 * (3 * L - a) / (6 * E * I)
+    free_tip = -load.fy * a**2 * (3 * L - a) / (6 * E * I_z)
     # a normal force lam pushes the tip by lam c L^3/(3EI) up and lam s L/(EA) along the rod;
     # the tip on the obstacle, n . u = gap_free c with n = -(s, c), divided by c:
     # free_tip - lam (c L^3/(3EI) + (s^2 / c) L/(EA)) = gap_free, and s^2 / c = s slope
     c, s = 1 / np.hypot(1, rod.slope), rod.slope / np.hypot(1, rod.slope)
-    lam = (free_tip - rod.gap_free) / (c * L**3 / (3 * E * I) + s * rod.slope * L / (E * A))
+    lam = (free_tip - rod.gap_free) / (c * L**3 / (3 * E * I_z) + s * rod.slope * L / (E * A))
     assert comparison.reduced.forces[0] == pytest.approx(lam, rel=1e-8)
     # the axial term (3e-7 of lam) is resolved: without it the force is off by more than 1e-8
-    bending_only = (free_tip - rod.gap_free) / (c * L**3 / (3 * E * I))
+    bending_only = (free_tip - rod.gap_free) / (c * L**3 / (3 * E * I_z))
     assert comparison.reduced.forces[0] != pytest.approx(bending_only, rel=1e-8)
     assert comparison.reference.forces[0] == pytest.approx(lam, rel=1e-8)
     np.testing.assert_array_equal(comparison.reduced.forces[1:], 0.0)
@@ -206,9 +207,11 @@ def test_cli_json_schema_and_values():
     record = json.loads(proc.stdout)
     assert record["clamped_end"] == "right"
     assert [c["name"] for c in record["cases"]] == [c.name for c in DEFAULT_CASES]
-    for case, expected in zip(record["cases"], DEFAULT_CASES):
+    for case, expected in zip(record["cases"], DEFAULT_CASES, strict=True):
         assert {"name", "loads", "nodes", "max_eps", "t_reduced", "t_full"} <= set(case)
-        assert case["loads"] == [{"x": l.x, "fx": l.fx, "fy": l.fy} for l in expected.loads]
+        assert case["loads"] == [
+            {"x": load.x, "fx": load.fx, "fy": load.fy} for load in expected.loads
+        ]
         assert len(case["nodes"]) == 8
         largest = max(max(abs(n["ux_ref"]), abs(n["uy_ref"])) for n in case["nodes"])
         for node in case["nodes"]:
@@ -267,7 +270,7 @@ def test_cli_bad_input_is_one_line_and_exit_2(args):
 
 def test_displacements_of_a_frame_free_to_move_raise_instead_of_returning_garbage():
     """Only x and y held at one end: the rod can turn about it; no finite answer exists."""
-    frame = Frame2D([[0, 0], [L, 0]], [[0, 1]], E, A, I, fixed={0: "xy"})
+    frame = Frame2D([[0, 0], [L, 0]], [[0, 1]], E, A, I_z, fixed={0: "xy"})
     with pytest.raises(RigidBodyModeError, match="rigid-body modes"):
         frame.displacements(frame.load_vector([(1, 0.0, 1.0)]))
     with pytest.raises(InvalidInputError, match="load_vector must be 4 finite values"):
@@ -292,9 +295,9 @@ def test_a_fractional_node_is_refused_not_truncated():
         (lambda: Rod(length="40 mm"), "length must be finite and > 0"),
         (lambda: Rod(n_elements=None), "n_elements must be a whole number"),
         (lambda: Rod(nodes=("a",)), "nodes must be a non-empty list"),
-        (lambda: Frame2D.straight("1 m", 4, E, A, I), "length must be > 0"),
-        (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={"a": "xy"}), "fixed node"),
-        (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I, fixed={0: 1}), "letters among"),
+        (lambda: Frame2D.straight("1 m", 4, E, A, I_z), "length must be > 0"),
+        (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I_z, fixed={"a": "xy"}), "fixed node"),
+        (lambda: Frame2D([[0, 0], [1, 0]], [[0, 1]], E, A, I_z, fixed={0: 1}), "letters among"),
         (lambda: cantilever(2).load_vector([5]), "a load must be"),
         (lambda: cantilever(2).index(-1, "ux"), "outside 0..2"),
     ],

@@ -347,7 +347,15 @@ def certify_friction(
 def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
     if not (np.all(np.isfinite(U)) and np.all(np.isfinite(r))):
         return FrictionCertificate(
-            *[np.inf] * 7, exact_cone=problem.law.facets is None or problem.dim == 2, tol=tol
+            penetration=np.inf,
+            force_sign=np.inf,
+            cone=np.inf,
+            complementarity=np.inf,
+            dissipation=np.inf,
+            equilibrium=np.inf,
+            natural_map=np.inf,
+            exact_cone=problem.law.facets is None or problem.dim == 2,
+            tol=tol,
         )
     k, d = problem.n_contacts, problem.dim
     R = r.reshape(k, d)

@@ -42,7 +42,7 @@ class _Reduction:
         self.coupling = W[np.ix_(rows, contacts)]
         self.eliminated = scipy.linalg.cho_solve(self.factor, self.coupling)
         self.schur = W[np.ix_(contacts, contacts)] - self.coupling.T @ self.eliminated
-        self._schur_cholesky = None
+        self._schur_cholesky: np.ndarray | None = None
 
     def schur_cholesky(self) -> np.ndarray:
         """Lower Cholesky factor of ``S``, computed on first use and kept."""

@@ -68,7 +68,9 @@ def _as_matrix(name, value):
     """Return ``value`` as a csr_matrix (if sparse) or a 2-D float ndarray, checked finite."""
     try:
         if sp.issparse(value):
-            mat = sp.csr_matrix(value, dtype=float)
+            # scipy-stubs: issparse narrows only to SparseABC, and csr_matrix(x, dtype=d) is typed
+            # only for a d matching x's own scalar type; scipy converts any of its sparse types
+            mat = sp.csr_matrix(value, dtype=float)  # type: ignore[call-overload]
             data = mat.data
         else:
             mat = np.asarray(value, dtype=float)
@@ -160,17 +162,16 @@ class LocalProblem:
             raise InvalidInputError(
                 f"W must be square of size dim*n_contacts = {m}, got shape {W.shape}"
             )
-        if self.cohesion is None:
-            cohesion = 0.0
-        else:
-            cohesion = finite_array(self.cohesion, "cohesion", 1)
-            if cohesion.shape != (nc,):
+        given_cohesion: float | np.ndarray = 0.0
+        if self.cohesion is not None:
+            given_cohesion = finite_array(self.cohesion, "cohesion", 1)
+            if given_cohesion.shape != (nc,):
                 raise InvalidInputError(
-                    f"cohesion must have length n_contacts = {nc}, got shape {cohesion.shape}"
+                    f"cohesion must have length n_contacts = {nc}, got shape {given_cohesion.shape}"
                 )
         from .friction import FrictionLaw  # the law's own checks (mu, cohesion >= 0, apex)
 
-        law = FrictionLaw(mu, cohesion, n_contacts=nc)
+        law = FrictionLaw(mu, given_cohesion, n_contacts=nc)
         mu, cohesion = law.mu, law.cohesion
         if not isinstance(self.title, str):
             raise InvalidInputError(f"title must be a str, got {type(self.title).__name__}")
@@ -196,7 +197,7 @@ class LocalProblem:
         from .friction import apex_distance
 
         shift = np.zeros((self.n_contacts, self.dim))
-        shift[:, 0] = apex_distance(self.mu, self.cohesion)
+        shift[:, 0] = apex_distance(self.mu, self.law.cohesion)  # the field, as validated
         shift.flags.writeable = False
         return shift.reshape(-1)
 
@@ -318,9 +319,9 @@ def _abs_product(A, x) -> np.ndarray:
     """``|A| |x|`` for a dense or sparse ``A``; a dense ``A`` by blocks of rows, so that no copy
     of a large ``W`` is made."""
     ax = np.abs(np.asarray(x, dtype=float)).ravel()
-    if sp.issparse(A):
+    if not isinstance(A, np.ndarray):
         return _abs_sparse_product(sp.csr_matrix(A), ax)  # no copy of a CSR matrix
-    A = np.asarray(A)
+    A = np.asarray(A)  # e.g. a numpy.matrix
     rows = max(1, (1 << 22) // max(1, A.shape[1]))  # blocks of at most 32 MB
     return np.concatenate(
         [np.abs(A[start : start + rows]) @ ax for start in range(0, A.shape[0], rows)]
@@ -358,7 +359,9 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
 
 
 def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLimits:
-    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) on a local problem.
+    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` on a local problem.
+
+    ``r`` and ``u`` have shape (m,).
 
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
@@ -449,10 +452,14 @@ class _ScaledFactor:
         if n <= 100:
             inverse = self.lu.solve(np.eye(n))
             return norm * float(np.abs(inverse).sum(axis=0).max())
-        inverse = LinearOperator(
-            (n, n), matvec=self.lu.solve, dtype=float, rmatvec=lambda x: self.lu.solve(x, trans="T")
+        inverse_operator = LinearOperator(
+            (n, n),
+            matvec=self.lu.solve,
+            dtype=np.float64,
+            # scipy-stubs 1.17 leave out SuperLU.solve's ``trans`` argument (scipy has it)
+            rmatvec=lambda x: self.lu.solve(x, trans="T"),  # type: ignore[call-overload]
         )
-        return norm * float(onenormest(inverse))
+        return norm * float(onenormest(inverse_operator))
 
 
 @dataclass(frozen=True)
@@ -517,12 +524,13 @@ class GlobalProblem:
             return LocalProblem(W, wv, muv, dim, self.title)
         solve = self._factor.solve
         sparse_h = sp.issparse(Hm)
-        Hc = sp.csc_matrix(Hm) if sparse_h else Hm
+        Hc = Hm if isinstance(Hm, np.ndarray) else sp.csc_matrix(Hm)
         Wd = np.empty((m, m))
         block = max(1, (1 << 24) // ndof)  # at most ~128 MB of dense right-hand sides at once
         for start in range(0, m, block):
             stop = min(m, start + block)
-            rhs = Hc[:, start:stop].toarray() if sparse_h else np.array(Hc[:, start:stop])
+            columns = Hc[:, start:stop]
+            rhs = np.array(columns) if isinstance(columns, np.ndarray) else columns.toarray()
             Wd[:, start:stop] = Hc.T @ solve(rhs)
         qv = np.asarray(Hc.T @ solve(fv)).ravel() + wv
         if not (np.all(np.isfinite(Wd)) and np.all(np.isfinite(qv))):
@@ -825,13 +833,13 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     rv, uv = _candidate(problem, r, u)
     diagonal = np.abs(np.asarray(problem.W.diagonal(), dtype=float))
     w = float(diagonal.max(initial=0.0)) or 1.0
-    force = max(
+    largest = max(
         np.linalg.norm(rv),
         np.linalg.norm(rv + problem.apex_shift),
         np.linalg.norm(problem.q) / w,
         np.linalg.norm(uv) / w,
     )
-    force = force if force > 0 else 1.0
+    force = largest if largest > 0 else 1.0
     return problem.law.status(
         rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force, rtol * w * force
     )
@@ -869,7 +877,7 @@ def check_diagonal(S, name: str = "W") -> np.ndarray:
     zero_rows = np.flatnonzero(diag == 0)
     if zero_rows.size:
         rows = S[zero_rows]
-        if rows.count_nonzero() if sp.issparse(rows) else np.count_nonzero(rows):
+        if np.count_nonzero(rows) if isinstance(rows, np.ndarray) else rows.count_nonzero():
             raise NotPositiveDefiniteError(
                 f"{name} is not positive semidefinite: a row with a zero diagonal entry "
                 f"has nonzero off-diagonal entries"
@@ -898,14 +906,14 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
     import scipy.linalg
 
     S = 0.5 * (W + W.T)
-    if sp.issparse(S) and better_dense(S):
+    if not isinstance(S, np.ndarray) and better_dense(S):
         S = S.toarray()
     diag = check_diagonal(S, name)
     keep = np.flatnonzero(diag > 0)
     if keep.size == 0:
         return
     s = 1.0 / np.sqrt(diag[keep])
-    if sp.issparse(S):
+    if not isinstance(S, np.ndarray):
         from scipy.sparse.linalg import splu
 
         Sk = sp.csc_matrix(S)[keep][:, keep]

@@ -125,7 +125,7 @@ class Operator(ABC):
         indices (then in their order)."""
 
     @property
-    def matrix(self) -> np.ndarray | sp.csr_matrix:
+    def matrix(self) -> np.ndarray | sp.csr_matrix | sp.csr_array:
         """The explicit matrix, for methods built on its stored entries.
 
         Raises
@@ -307,6 +307,7 @@ def as_operator(W) -> Operator:
     """
     if isinstance(W, Operator):
         return W
+    operator: Operator
     if sp.issparse(W):
         operator = SparseOperator(W)
     else:

@@ -112,8 +112,10 @@ class ContactProblem:
     loads : array_like, shape (n_freedoms,)
         External forces ``P`` on the computational freedoms (N).
     obstacles : sequence
-        :class:`~contactqp.core.contact.GapObstacle`, :class:`~contactqp.core.contact.PlaneObstacle`,
-        :class:`~contactqp.core.contact.ProfileObstacle` or :class:`~contactqp.core.contact.NodePairs`.
+        :class:`~contactqp.core.contact.GapObstacle`,
+        :class:`~contactqp.core.contact.PlaneObstacle`,
+        :class:`~contactqp.core.contact.ProfileObstacle` or
+        :class:`~contactqp.core.contact.NodePairs`.
     certificate_tol : float
         Largest relative residual the certificate accepts.
 
@@ -132,7 +134,7 @@ class ContactProblem:
         self.model = model
         self.constraints = assemble_constraints(model, obstacles)
         self.certificate_tol = float(certificate_tol)
-        self._dual = None
+        self._dual: DualForm | None = None
 
     @property
     def n_constraints(self) -> int:
@@ -314,9 +316,11 @@ class FrictionStep:
         self.apex_shift = local.apex_shift
         W = local.W
         self.q_apex = local.q - W @ self.apex_shift
-        w = float(np.max(np.diag(W)))
+        w = float(np.max(W.diagonal()))
         length = float(np.max(np.abs(self.q_apex))) or 1.0
-        self.fclib = LocalProblem(W / w, self.q_apex / length, local.mu, local.dim)
+        # scipy-stubs type csr_matrix / float as any spmatrix format; it is CSR at runtime
+        scaled: scipy.sparse.csr_matrix | np.ndarray = W / w  # type: ignore[assignment]
+        self.fclib = LocalProblem(scaled, self.q_apex / length, local.mu, local.dim)
         self.force_unit = length / w
 
 
@@ -333,8 +337,9 @@ class FrictionalProblem:
         u = W r + q - \begin{pmatrix} 0 \\ (H U_{prev})_T \end{pmatrix},
         \qquad u_N = \text{gap}, \quad u_T = s_T,
 
-    with ``r`` the total local forces, in the friction set of :class:`~contactqp.core.friction.FrictionLaw`
-    and complementary to ``u`` (FCLIB's Coulomb problem for the exact cone without cohesion).
+    with ``r`` the total local forces, in the friction set of
+    :class:`~contactqp.core.friction.FrictionLaw` and complementary to ``u`` (FCLIB's Coulomb
+    problem for the exact cone without cohesion).
 
     Parameters
     ----------
@@ -408,7 +413,7 @@ class FrictionalProblem:
                 f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)"
             )
         self.certificate_tol = float(certificate_tol)
-        self._local = None
+        self._local: LocalForm | None = None
         self.previous = previous
         self._previous_tangential()  # checked now, not at the solve
 

@@ -161,10 +161,10 @@ def _active_set_phase(qp: _BoxQP, x, max_iter):
     """Primal-dual active set iterations made monotone by a search along the projected path.
 
     The projected Newton point of the current active set is tried first (the plain primal-dual
-    active set step, so nothing is lost where that converges). If it does not lower the objective, the best
-    of the projected points ``P(x + alpha d)``, ``alpha = 1/2, ..., 2^-11`` (evaluated together
-    in one matrix product) is taken if it does; so the objective decreases at every step and no
-    active set can cycle.
+    active set step, so nothing is lost where that converges). If it does not lower the objective,
+    the best of the projected points ``P(x + alpha d)``, ``alpha = 1/2, ..., 2^-11`` (evaluated
+    together in one matrix product) is taken if it does; so the objective decreases at every step
+    and no active set can cycle.
     """
     x = qp.project(x)
     g = qp.gradient(x)

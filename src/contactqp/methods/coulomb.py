@@ -8,15 +8,15 @@ Formulation (Alart and Curnier 1991). For each contact, with ``rho_i > 0``,
     \Phi_T = r_T - P_{B(0,\ \mu \max(0, r_N - \rho u_N))}(r_T - \rho u_T),
 
 and ``Phi(r) = 0`` (with ``u = W r + q``) is exactly the Coulomb law of
-:class:`~contactqp.core.local_problem.LocalProblem`. ``Phi`` is piecewise smooth; a generalised Jacobian is
-``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim`` block per
-contact, computed with ``Phi`` by one compiled loop over the contacts, :mod:`contactqp.kernels`;
-``rho_i`` = 1 / mean diagonal of ``W_ii``).
-A released contact's step is simply ``-Phi``: each Newton step factors only the block of the
-other contacts, with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W`` that
-:func:`~contactqp.core.local_problem.better_dense` prefers dense) or SuperLU (``scipy.sparse.linalg.splu``:
-the matrix is assembled on ``W``'s stored blocks straight into CSC storage, in a minimum-degree
-order computed once).
+:class:`~contactqp.core.local_problem.LocalProblem`. ``Phi`` is piecewise smooth; a generalised
+Jacobian is ``A + B W`` with ``A = dPhi/dr`` and ``B = dPhi/du`` block diagonal (one ``dim x dim``
+block per contact, computed with ``Phi`` by one compiled loop over the contacts,
+:mod:`contactqp.kernels`; ``rho_i`` = 1 / mean diagonal of ``W_ii``).
+A released contact's step is simply ``-Phi``: each Newton step factors only the block of the other
+contacts, with LAPACK (``numpy.linalg.solve``: dense ``W``, or sparse ``W`` that
+:func:`~contactqp.core.local_problem.better_dense` prefers dense) or SuperLU
+(``scipy.sparse.linalg.splu``: the matrix is assembled on ``W``'s stored blocks straight into CSC
+storage, in a minimum-degree order computed once).
 
 Safeguards, for the singular ``W`` of rigid multibody problems (more contact unknowns than body
 freedoms):
@@ -24,20 +24,20 @@ freedoms):
 * the Newton matrix is regularised as ``A + B (W + eta D)``, ``D`` the mean diagonal of each
   contact block, ``eta = min(1e-2, e)`` with ``e`` the current natural-map error (it vanishes at
   the solution, so convergence stays fast);
-* a full step is taken when it lowers the absolute natural-map residual (the numerator of the
-  error, :func:`~contactqp.core.local_problem.natural_map_residual`, which unlike the ratio cannot fall by
-  letting ``r`` grow); otherwise a non-monotone Armijo line search on the merit
-  ``1/2 ||Phi||^2`` (the reference is the largest merit of the last 5 iterations; Grippo,
-  Lampariello and Lucidi 1986), because the merit has kinks where contacts change status;
+* a full step is taken when it lowers the absolute natural-map residual (the numerator of the error,
+  :func:`~contactqp.core.local_problem.natural_map_residual`, which unlike the ratio cannot fall by
+  letting ``r`` grow); otherwise a non-monotone Armijo line search on the merit ``1/2 ||Phi||^2``
+  (the reference is the largest merit of the last 5 iterations; Grippo, Lampariello and Lucidi
+  1986), because the merit has kinks where contacts change status;
 * a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
   (``eta`` adapted to the success of full steps) then continues from the best point;
 * if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.methods.pgs`) and both
   Newton runs again, in at most 3 rounds.
 
-Convergence is decided only by :func:`~contactqp.core.local_problem.natural_map_error` (<= ``tol``), never by
-the solver's own residual. Cohesion is handled by translating each cone to its apex
-(:attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`): ``r~ = r + s`` solves the FCLIB problem with
-``q~ = q - W s``.
+Convergence is decided only by :func:`~contactqp.core.local_problem.natural_map_error` (<= ``tol``),
+never by the solver's own residual. Cohesion is handled by translating each cone to its apex
+(:attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`): ``r~ = r + s`` solves the FCLIB
+problem with ``q~ = q - W s``.
 
 References
 ----------
@@ -116,8 +116,8 @@ def alart_curnier(R, U, mu, rho, jacobian: bool = False):
 class _Newton:
     """Semismooth Newton iterations on the Alart-Curnier function of ``(W, q, mu)``.
 
-    ``W`` is a dense array, or a sparse matrix that :func:`~contactqp.core.local_problem.better_dense`
-    leaves sparse.
+    ``W`` is a dense array, or a sparse matrix that
+    :func:`~contactqp.core.local_problem.better_dense` leaves sparse.
     """
 
     def __init__(self, W, q, mu, dim, measure):
@@ -357,8 +357,8 @@ def solve_coulomb(
     r0 : array_like, shape (m,), optional
         Warm start (reactions); zero when not given.
     tol : float
-        Target of :func:`~contactqp.core.local_problem.natural_map_error` (relative; it adds reactions and
-        velocities, so give a problem whose ``W`` is O(1), e.g.
+        Target of :func:`~contactqp.core.local_problem.natural_map_error` (relative; it adds
+        reactions and velocities, so give a problem whose ``W`` is O(1), e.g.
         :attr:`~contactqp.core.problem.FrictionStep.fclib`, not one in newtons and metres).
     max_iter : int
         Total budget of Newton iterations and Gauss-Seidel sweeps over all stages (the

@@ -4,18 +4,20 @@ An active-set method solves ``W_FF x = r`` for a sequence of free sets ``F`` tha
 indices from one step to the next. Factoring each block costs ``|F|^3 / 3``. Here one *base*
 block ``W_BB = L L^T`` is factored and a nearby ``F = (B \\ D) ∪ A`` is solved through it:
 
-* the added indices ``A`` border the factor, ``C = L^{-1} W_BA`` and ``S = W_AA - C^T C = L_S L_S^T``,
-  giving the factor :math:`\\mathcal{L} = [[L, 0], [C^T, L_S]]` of ``W`` on ``B ∪ A``;
+* the added indices ``A`` border the factor, ``C = L^{-1} W_BA`` and
+  ``S = W_AA - C^T C = L_S L_S^T``, giving the factor :math:`\\mathcal{L} = [[L, 0], [C^T, L_S]]`
+  of ``W`` on ``B ∪ A``;
 * the dropped indices ``D`` are held at zero by multipliers ``s``: with
   ``V = \\mathcal{L}^{-1} E_D`` and ``y = \\mathcal{L}^{-1} r``, ``s = -(V^T V)^{-1} V^T y`` and
   ``x = \\mathcal{L}^{-T} (y + V s)``.
 
-That costs about ``|B|^2 (|A| + |D|) + |B| (|A|^2 + |D|^2) + (|A|^3 + |D|^3) / 3``. Once the updates made since the base was factored would
-cost more in all than factoring ``W_FF`` (``|F|^3 / 3``), ``W_FF`` is factored and becomes the
-base: a free set that drifts far from the base cannot make every step expensive. Base blocks are
-factored by the operator (:meth:`~contactqp.core.operators.Operator.cholesky`, which also
-validates them): a block that is not numerically positive definite (``W`` only semidefinite) is
-factored with a diagonal shift, and the same shift is added to the indices that border it.
+That costs about ``|B|^2 (|A| + |D|) + |B| (|A|^2 + |D|^2) + (|A|^3 + |D|^3) / 3``. Once the updates
+made since the base was factored would cost more in all than factoring ``W_FF`` (``|F|^3 / 3``),
+``W_FF`` is factored and becomes the base: a free set that drifts far from the base cannot make
+every step expensive. Base blocks are factored by the operator
+(:meth:`~contactqp.core.operators.Operator.cholesky`, which also validates them): a block that is
+not numerically positive definite (``W`` only semidefinite) is factored with a diagonal shift, and
+the same shift is added to the indices that border it.
 """
 
 from __future__ import annotations
@@ -102,12 +104,12 @@ class FreeBlockSolver:
         self.base_index = np.empty(0, dtype=np.intp)
         self.base_factor: BlockFactor | None = None
         self.plans: OrderedDict[bytes, _Plan] = OrderedDict()
-        self.update_cost = 0  # flops spent on updates since the base was factored
+        self.update_cost = 0.0  # flops spent on updates since the base was factored
         self.factorizations = 0
         self.updates = 0
 
     def solve(self, free: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """Solve with the block of the free set ``free`` (bool, shape (n,)); ``rhs`` in its order."""
+        """Solve with the block of free set ``free`` (bool, shape (n,)); ``rhs`` in its order."""
         key = np.packbits(free).tobytes()
         plan = self.plans.get(key)
         if plan is None:
@@ -138,13 +140,14 @@ class FreeBlockSolver:
         factor = self.matrix.cholesky(index)
         self.factorizations += 1
         self.base, self.base_index, self.base_factor = free.copy(), index, factor
-        self.update_cost = 0
+        self.update_cost = 0.0
         self.plans.clear()
         return _Plan(factor.lower, np.arange(index.size))
 
     def _updated_plan(self, free, added, dropped) -> _Plan | None:
         """The plan through the base factor, or None when a bordered block is not definite."""
         factor, base_index = self.base_factor, self.base_index
+        assert factor is not None, "updates are planned only once a base is factored"
         L = factor.lower
         C = L_S = V = L_G = None
         try:

@@ -70,7 +70,7 @@ def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None
         z = solve(L, q[passive])
         if np.all(z > 0):
             break
-        passive = [i for i, value in zip(passive, z) if value > 0]
+        passive = [i for i, value in zip(passive, z, strict=True) if value > 0]
         L = factor(passive)
     x[:] = 0.0
     if passive:

@@ -10,8 +10,8 @@ part is the bound-constrained QP
 A global problem is solved through its condensed form and the answer certified on the global
 equations as written (:func:`certify_global`,
 :meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
-Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far rounding (the
-conditioning of ``M``) and the data's written digits limit its error.
+Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far rounding
+(the conditioning of ``M``) and the data's written digits limit its error.
 """
 
 from __future__ import annotations
@@ -171,10 +171,10 @@ def solve_frictionless(
     InvalidInputError
         Some ``mu`` positive, or ``r0`` of the wrong shape.
     NotPositiveDefiniteError
-        Only the normal block ``W_NN`` is solved on, and it is validated at no extra cost: its diagonal
-        (:func:`~contactqp.core.local_problem.check_diagonal`), and each free block the box-QP
-        solver factors (:meth:`~contactqp.core.operators.Operator.cholesky`). An indefinite part
-        of ``W_NN`` that no free block reaches (contacts that stay open) is not looked for: the
+        Only the normal block ``W_NN`` is solved on, and it is validated at no extra cost: its
+        diagonal (:func:`~contactqp.core.local_problem.check_diagonal`), and each free block the
+        box-QP solver factors (:meth:`~contactqp.core.operators.Operator.cholesky`). An indefinite
+        part of ``W_NN`` that no free block reaches (contacts that stay open) is not looked for: the
         answer is then judged, like every answer, by the natural-map error on the whole ``W``.
     """
     if np.any(problem.mu > 0):
@@ -183,7 +183,7 @@ def solve_frictionless(
     normal = np.arange(problem.n_contacts) * problem.dim
     columns = (normal, _columns(problem.W, normal))  # W_NN, and W r, |W| |r| for finish
     W_nn = columns[1][normal]
-    W_nn = W_nn.toarray() if sp.issparse(W_nn) else W_nn
+    W_nn = W_nn if isinstance(W_nn, np.ndarray) else W_nn.toarray()
     symmetric = np.array_equal(W_nn, W_nn.T)
     W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
     if check_psd:

@@ -27,14 +27,14 @@ __all__ = ["GaussSeidel"]
 
 def _block_graph(W, nc, d):
     """CSR adjacency (nc x nc) of the contacts whose blocks ``W_ij`` are nonzero."""
-    if sp.issparse(W):
+    if isinstance(W, np.ndarray):
+        pattern = sp.csr_matrix(np.any(W.reshape(nc, d, nc, d) != 0, axis=(1, 3)))
+    else:
         coo = sp.coo_matrix(W)
         nz = coo.data != 0
         pattern = sp.csr_matrix(
             (np.ones(int(nz.sum())), (coo.row[nz] // d, coo.col[nz] // d)), shape=(nc, nc)
         )
-    else:
-        pattern = sp.csr_matrix(np.any(W.reshape(nc, d, nc, d) != 0, axis=(1, 3)))
     pattern = pattern + pattern.T
     pattern.sort_indices()
     return pattern
@@ -76,11 +76,11 @@ class GaussSeidel:
         colour = _greedy_colours(_block_graph(W, nc, d))
         self.groups = [np.flatnonzero(colour == c) for c in range(colour.max() + 1)] if nc else []
         rows = [(g[:, None] * d + np.arange(d)).ravel() for g in self.groups]
-        Wr = sp.csr_matrix(W) if sp.issparse(W) else W
+        Wr = W if isinstance(W, np.ndarray) else sp.csr_matrix(W)
         self.row_blocks = [Wr[rw] for rw in rows]
         self.q_blocks = [q[rw] for rw in rows]
         idx = np.arange(nc)
-        if sp.issparse(W):
+        if not isinstance(W, np.ndarray):
             bsr = sp.bsr_matrix(W, blocksize=(d, d))
             self.diag_blocks = np.zeros((nc, d, d))
             # block rows of a BSR matrix: pick each row's diagonal block if it is stored

@@ -64,10 +64,11 @@ class _PolygonalTresca:
         self.w = data.w
         self.sparse = backend in self.qpsolvers.sparse_solvers
         P = self.W = data.W_sym / self.w
+        self.P: sp.csc_matrix | np.ndarray
         if self.sparse:
             self.P = sp.csc_matrix(P)
         else:
-            self.P = P.toarray() if sp.issparse(P) else np.asarray(P)
+            self.P = P if isinstance(P, np.ndarray) else P.toarray()
         self.d, self.nc = data.dim, data.n_contacts
         self.normals = polygon_normals(facets) if self.d == 3 else None
         self.inradius = np.cos(np.pi / facets)
@@ -78,7 +79,8 @@ class _PolygonalTresca:
         bound = s[sliding] / f
         lower = np.full(keep.size, -np.inf)
         lower[normal] = 0.0
-        G = h = None
+        G: sp.csc_matrix | None = None
+        h: np.ndarray | None = None
         if d == 2:  # the exact segment |x_T| <= s as two facets
             G = sp.csc_matrix(
                 (
@@ -89,6 +91,7 @@ class _PolygonalTresca:
             )
             h = np.tile(bound, 2)
         elif bound.size:
+            assert self.normals is not None, "a 3-D problem has its facet normals"
             sides = self.normals.shape[0]
             rows = np.arange(bound.size * sides)
             G = sp.csc_matrix(
@@ -99,10 +102,9 @@ class _PolygonalTresca:
                 shape=(rows.size, keep.size),
             )
             h = self.inradius * np.repeat(bound, sides)
-        if G is not None and not self.sparse:
-            G = G.toarray()
+        G_backend = G.toarray() if G is not None and not self.sparse else G
         P = self.P[keep][:, keep] if self.sparse else self.P[np.ix_(keep, keep)]
-        problem = self.qpsolvers.Problem(P, q[keep] / (f * self.w), G, h, lb=lower)
+        problem = self.qpsolvers.Problem(P, q[keep] / (f * self.w), G_backend, h, lb=lower)
         with warnings.catch_warnings():
             # An inexact status (e.g. Clarabel's "AlmostSolved" at the tight tolerances) is
             # judged by the outer loop, which measures every iterate itself.

@@ -221,7 +221,7 @@ def _captured_output():
                 os.dup2(sink.fileno(), fd)
             yield text
         finally:
-            for fd, copy in zip((1, 2), saved):
+            for fd, copy in zip((1, 2), saved, strict=True):
                 os.dup2(copy, fd)
                 os.close(copy)
             sink.seek(0)

@@ -15,7 +15,8 @@ small ``mu`` (where the Coulomb solution is unique) and is a classical reference
 A slightly unsymmetric ``W`` (e.g. FCLIB files written with few digits) is split into its
 symmetric part, kept in the cone program, and its skew part, moved to the right-hand side with
 the previous reactions, so that a fixed point solves the problem with the given ``W``. Cohesion
-(:class:`~contactqp.core.local_problem.LocalProblem`) is handled by measuring reactions from the cone apex.
+(:class:`~contactqp.core.local_problem.LocalProblem`) is handled by measuring reactions from the
+cone apex.
 
 An interior-point solution is accurate to about 1e-9 relative, which leaves a 3-D fixed point
 stalling near a natural-map error of 1e-8; each cone program's answer is therefore polished by
@@ -76,6 +77,21 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     return start
 
 
+_Matrix = np.ndarray | sp.csr_matrix | sp.csr_array
+
+
+def _split_skew(W: _Matrix) -> tuple[_Matrix, _Matrix | None]:
+    """``(W - S, S)``, ``S = (W - W^T) / 2`` stored as ``W`` is; ``(W, None)`` when ``S = 0``."""
+    if isinstance(W, np.ndarray):
+        skew = 0.5 * (W - W.T)
+        return (W, None) if np.count_nonzero(skew) == 0 else (W - skew, skew)
+    # CSR already (W.T is CSC, a difference takes W's format): tocsr() is a no-op for the stubs
+    sparse_skew = (0.5 * (W - W.T)).tocsr()
+    if sparse_skew.count_nonzero() == 0:
+        return W, None
+    return (W - sparse_skew).tocsr(), sparse_skew
+
+
 class FixedPointData:
     """What the fixed-point routes need from a problem, computed once.
 
@@ -107,11 +123,7 @@ class FixedPointData:
 
     def __init__(self, problem: LocalProblem):
         W = as_operator(problem.W).matrix  # the cone programs are built on the stored entries
-        skew = 0.5 * (W - W.T)
-        if (skew.count_nonzero() if sp.issparse(skew) else np.count_nonzero(skew)) == 0:
-            self.W_sym, self.skew = W, None
-        else:
-            self.W_sym, self.skew = W - skew, skew
+        self.W_sym, self.skew = _split_skew(W)
         self.shift = problem.apex_shift
         self.q = problem.q - np.asarray(W @ self.shift).ravel()
         diagonal = np.abs(self.W_sym.diagonal())
@@ -398,7 +410,8 @@ def solve_tresca_fixed_point(
         2-D or 3-D; ``W`` symmetric positive semidefinite, or nearly so (its skew part is
         treated by the outer iteration, see the module notes).
     tol : float
-        Target natural-map error (:func:`~contactqp.core.local_problem.natural_map_error`), in (0, 1).
+        Target natural-map error
+        (:func:`~contactqp.core.local_problem.natural_map_error`), in (0, 1).
     max_iter : int
         Largest number of cone programs solved.
     r0 : array_like, shape (m,), optional
