@@ -42,7 +42,8 @@ demo: $(STAMP_DEMO)
 
 # every test runs: the main run (numpy of `demo`) deselects exactly the `nastran` marker, which
 # the second run selects (pytest's "deselected" and "passed" counts show both)
-test: $(STAMP_TEST) $(STAMP_NASTRAN)
+# lint first: a ruff or mypy finding fails `make test`
+test: lint $(STAMP_NASTRAN)
 	@$(BIN)/python -c "import numpy; print('main tests on numpy', numpy.__version__)"
 	$(BIN)/python -m pytest -q -m "not nastran"
 	@$(BIN_NASTRAN)/python -c "import numpy; print('NASTRAN tests on numpy', numpy.__version__)"
