@@ -44,6 +44,7 @@ __all__ = [
     "accuracy_limits",
     "check_diagonal",
     "check_positive_semidefinite",
+    "column_products",
     "condense_global",
     "contact_status",
     "natural_map_error",
@@ -357,20 +358,20 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
     return out
 
 
-def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLimits:
-    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) on a local problem.
+def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyLimits:
+    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) of a local
+    problem.
 
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
     ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
-    array's digits. ``columns = (index, W[:, index])`` (dense), when ``r`` is zero outside
-    ``index``, gives ``|W| |r|`` from those columns alone.
+    array's digits. ``magnitude`` is ``|W| |r|`` when the caller has it already
+    (:func:`column_products`).
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
-    magnitude = (
-        _abs_product(problem.W, rv) if columns is None else _abs_product(columns[1], rv[columns[0]])
-    )
+    if magnitude is None:
+        magnitude = _abs_product(problem.W, rv)
     product = float(np.linalg.norm(magnitude))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
@@ -380,6 +381,40 @@ def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLim
     return AccuracyLimits(
         rounding=_EPS * (product + size_q) / scale, data=data / scale, digits=dict(digits)
     )
+
+
+#: Entries of the buffer (256 kB, in a core's cache) through which :func:`column_products`
+#: reads a dense matrix.
+_BUFFER_ENTRIES = 1 << 15
+
+
+def column_products(block, x) -> tuple[np.ndarray, np.ndarray]:
+    """``(A x, |A| |x|)`` of a dense or sparse ``A = block`` (shape (m, k)), reading ``A`` once.
+
+    A dense ``A`` may be a strided view (the normal columns ``W[:, ::dim]`` of a dense ``W``): it
+    is read by blocks of rows copied into one cache-sized buffer, so that neither product makes
+    a temporary of ``A``'s size.
+    """
+    xv = np.asarray(x, dtype=float).ravel()
+    if sp.issparse(block):
+        return np.asarray(block @ xv).ravel(), _abs_product(block, xv)
+    A = np.asarray(block)
+    m, k = A.shape
+    product, magnitude = np.empty(m), np.empty(m)
+    if m == 0 or k == 0:
+        product[:], magnitude[:] = 0.0, 0.0
+        return product, magnitude
+    ax = np.abs(xv)
+    rows = max(1, _BUFFER_ENTRIES // k)
+    buffer = np.empty((min(rows, m), k))
+    for start in range(0, m, rows):
+        stop = min(start + rows, m)
+        part = buffer[: stop - start]
+        np.copyto(part, A[start:stop])
+        np.dot(part, xv, out=product[start:stop])
+        np.abs(part, out=part)
+        np.dot(part, ax, out=magnitude[start:stop])
+    return product, magnitude
 
 
 @dataclass(frozen=True)
