@@ -23,7 +23,7 @@ import functools
 import math
 import operator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -383,37 +383,55 @@ def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyL
     )
 
 
-#: Entries of the buffer (256 kB, in a core's cache) through which :func:`column_products`
-#: reads a dense matrix.
-_BUFFER_ENTRIES = 1 << 15
+#: Entries of a block of rows (512 kB, in cache) by which :func:`column_products` reads a dense
+#: matrix.
+_BLOCK_ENTRIES = 1 << 16
 
 
-def column_products(block, x) -> tuple[np.ndarray, np.ndarray]:
-    """``(A x, |A| |x|)`` of a dense or sparse ``A = block`` (shape (m, k)), reading ``A`` once.
+def _as_slice(index):
+    """Evenly spaced increasing indices as a slice (a view, not a gather), else as given."""
+    if isinstance(index, slice):
+        return index
+    index = np.asarray(index)
+    if index.dtype.kind in "iu" and index.size >= 2:
+        step = int(index[1] - index[0])
+        if step > 0 and np.array_equal(index, index[0] + step * np.arange(index.size)):
+            return slice(int(index[0]), int(index[-1]) + 1, step)
+    return index
 
-    A dense ``A`` may be a strided view (the normal columns ``W[:, ::dim]`` of a dense ``W``): it
-    is read by blocks of rows copied into one cache-sized buffer, so that neither product makes
-    a temporary of ``A``'s size.
+
+def column_products(A, x, columns=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(B x, |B| |x|)`` of ``B = A[:, columns]`` (all of ``A`` when ``columns`` is None),
+    reading ``A`` once.
+
+    A dense ``A`` is read in place by blocks of whole rows that stay in cache: ``B x`` is
+    ``A x'`` with ``x'`` zero off ``columns``, and ``|B|`` of a block goes into one reused
+    buffer, so that neither product makes a temporary of ``B``'s size. A sparse ``A`` gives its
+    columns in compressed rows.
     """
     xv = np.asarray(x, dtype=float).ravel()
-    if sp.issparse(block):
-        return np.asarray(block @ xv).ravel(), _abs_product(block, xv)
-    A = np.asarray(block)
-    m, k = A.shape
-    product, magnitude = np.empty(m), np.empty(m)
-    if m == 0 or k == 0:
-        product[:], magnitude[:] = 0.0, 0.0
-        return product, magnitude
+    if sp.issparse(A):
+        sparse: Any = A
+        B = sparse if columns is None else sparse.tocsr()[:, columns]
+        return np.asarray(B @ xv).ravel(), _abs_product(B, xv)
+    A = np.asarray(A)
+    m, n = A.shape
+    if columns is None:
+        columns, spread = slice(None), xv
+    else:
+        columns = _as_slice(columns)
+        spread = np.zeros(n)
+        spread[columns] = xv
     ax = np.abs(xv)
-    rows = max(1, _BUFFER_ENTRIES // k)
-    buffer = np.empty((min(rows, m), k))
+    product, magnitude = np.empty(m), np.empty(m)
+    rows = max(1, _BLOCK_ENTRIES // max(1, n))
+    buffer = np.empty((min(rows, m), xv.size))
     for start in range(0, m, rows):
         stop = min(start + rows, m)
-        part = buffer[: stop - start]
-        np.copyto(part, A[start:stop])
-        np.dot(part, xv, out=product[start:stop])
-        np.abs(part, out=part)
-        np.dot(part, ax, out=magnitude[start:stop])
+        part = A[start:stop]
+        np.dot(part, spread, out=product[start:stop])
+        absolute = np.abs(part[:, columns], out=buffer[: stop - start])
+        np.dot(absolute, ax, out=magnitude[start:stop])
     return product, magnitude
 
 

@@ -124,8 +124,9 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
 
 
 def _normal_columns(W, dim: int) -> tuple[Any, np.ndarray]:
-    """``(W[:, N], W_NN)``, ``N`` the normal components, ``W`` read once: a strided view of a
-    dense ``W``'s columns (no copy), the CSR columns of a sparse one; ``W_NN`` a dense copy.
+    """``(C, W_NN)``, ``N`` the normal components: ``C`` what :func:`finish` reads ``W r`` and
+    ``|W| |r|`` from (a dense ``W`` itself, read in place; the CSR columns ``W[:, N]`` of a sparse
+    one) and ``W_NN`` a dense copy.
 
     The frictionless route's reactions are zero off the normal components, so these columns
     give all it needs of ``W``: the normal block, ``W r`` and ``|W| |r|``.
@@ -135,8 +136,16 @@ def _normal_columns(W, dim: int) -> tuple[Any, np.ndarray]:
         matrix: Any = operator.matrix
         columns = matrix[:, np.arange(operator.shape[1] // dim) * dim]
         return columns, columns[::dim].toarray()
-    columns = operator.block(None, slice(0, None, dim))
-    return columns, np.ascontiguousarray(columns[::dim])  # a third of a dense W's memory read
+    dense = operator.matrix
+    return dense, np.ascontiguousarray(dense[::dim, ::dim])  # a third of W's memory read
+
+
+def _is_symmetric(A: np.ndarray, block: int = 128) -> bool:
+    """``A == A^T`` exactly, compared by strips (no full-size temporary; stops at a difference)."""
+    n = A.shape[0]
+    return all(
+        np.array_equal(A[i : i + block, i:], A[i:, i : i + block].T) for i in range(0, n, block)
+    )
 
 
 def solve_frictionless(
@@ -190,7 +199,7 @@ def solve_frictionless(
     normal = np.arange(problem.n_contacts) * problem.dim
     normal_columns, W_nn = _normal_columns(problem.W, problem.dim)
     columns = (normal, normal_columns)  # W r and |W| |r| for finish
-    symmetric = np.array_equal(W_nn, W_nn.T)
+    symmetric = _is_symmetric(W_nn)
     W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
     if check_psd:
         check_diagonal(W_sym, "W's normal block")
@@ -253,16 +262,19 @@ def finish(
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
     ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
-    ``columns = (index, W[:, index])``, the problem's columns outside which ``r`` is zero (a
-    strided view of a dense ``W`` will do), lets ``W r`` and ``|W| |r|`` read only those, in
-    one pass (the same sums: the other terms are zero).
+    ``columns = (index, A)``, ``index`` the components outside which ``r`` is zero and ``A``
+    either ``W[:, index]`` or ``W`` itself, lets ``W r`` and ``|W| |r|`` read only those
+    columns, in one pass (:func:`~contactqp.core.local_problem.column_products`; the same sums:
+    the other terms are zero).
     """
     if columns is None:
         u = np.asarray(problem.W @ r).reshape(-1) + problem.q
         limits = None
     else:
         index, block = columns
-        product, magnitude = column_products(block, r[index])
+        product, magnitude = column_products(
+            block, r[index], None if block.shape[1] == index.size else index
+        )
         u = product + problem.q
         limits = accuracy_limits(problem, r, u, magnitude=magnitude)
     error = natural_map_error(problem, r, u, per_contact=per_contact)
