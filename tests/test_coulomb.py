@@ -331,6 +331,31 @@ def test_frictionless_problems_stay_on_the_box_qp():
     assert frictional.success and "newton" in frictional.message
 
 
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_frictionless_route_reads_a_dense_w_as_a_sparse_one(symmetric):
+    # a dense W is read through strided views of its normal columns, a sparse one through its
+    # CSR columns: the same answer and the same certificate, judged on the whole W
+    dense_problem = random_problem(40, 3, seed=11, mu=0.0)
+    W = dense_problem.W
+    if not symmetric:  # as a file written with few digits: unsymmetric at 1e-6
+        W = W * (1 + 1e-6 * np.random.default_rng(5).standard_normal(W.shape))
+        dense_problem = LocalProblem(W, dense_problem.q, dense_problem.mu, 3)
+    sparse_problem = LocalProblem(sp.csr_matrix(W), dense_problem.q, dense_problem.mu, 3)
+    a, b = solve(dense_problem, tol=1e-10), solve(sparse_problem, tol=1e-10)
+    assert a.success and b.success, (a.message, b.message)
+    assert a.method == b.method == "normal-qp"
+    np.testing.assert_allclose(a.forces, b.forces, rtol=0, atol=1e-12 * np.abs(b.forces).max())
+    for solution in (a, b):
+        u = W @ solution.forces + dense_problem.q
+        np.testing.assert_allclose(solution.displacements, u, rtol=0, atol=1e-13)
+        error = natural_map_error(dense_problem, solution.forces)
+        assert error <= 1e-10
+        assert solution.certificate.natural_map == pytest.approx(error, rel=1e-3, abs=1e-16)
+    np.testing.assert_array_equal(a.contact_status, b.contact_status)
+    limits_a, limits_b = a.certificate.limits, b.certificate.limits
+    assert limits_a.rounding == pytest.approx(limits_b.rounding, rel=1e-12)
+
+
 # --- bad input ------------------------------------------------------------------------------
 
 

@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from contactqp.core.local_problem import (
     GlobalProblem,
     LocalProblem,
+    column_products,
     condense_global,
     natural_map_error,
     projection_on_cones,
@@ -244,6 +245,46 @@ def test_round_trip_of_a_data_file(tmp_path):
     a = read_problem(DATA / "Capsules-i97-269.hdf5")
     write_problem(tmp_path / "c.hdf5", a)
     _assert_same(a, read_problem(tmp_path / "c.hdf5"))
+
+
+def test_a_large_nearly_full_w_is_read_dense(tmp_path):
+    # more than DENSE_SIZE rows and at least two-thirds full: an array, with the same values
+    rng = np.random.default_rng(4)
+    m = 3 * 70
+    W = _spd(m, 4)
+    W[rng.random((m, m)) < 0.2] = 0.0  # 80 % full, unsymmetric pattern
+    p = LocalProblem(W, rng.standard_normal(m), np.zeros(70), 3)
+    write_problem(tmp_path / "full.hdf5", p)
+    full = read_problem(tmp_path / "full.hdf5")
+    assert isinstance(full.W, np.ndarray)
+    np.testing.assert_array_equal(full.W, W)
+    # half full, or as full but of DENSE_SIZE rows or fewer: compressed rows, as stored
+    W[rng.random((m, m)) < 0.5] = 0.0
+    write_problem(tmp_path / "half.hdf5", LocalProblem(W, p.q, p.mu, 3))
+    half = read_problem(tmp_path / "half.hdf5")
+    assert sp.issparse(half.W)
+    np.testing.assert_array_equal(half.W.toarray(), W)
+    small = LocalProblem(_spd(198, 1), np.zeros(198), np.zeros(66), 3)
+    write_problem(tmp_path / "small.hdf5", small)
+    _assert_same(small, read_problem(tmp_path / "small.hdf5"))
+
+
+@pytest.mark.parametrize("shape", [(0, 3), (5, 0), (7, 4), (700, 90)])
+def test_column_products_read_columns_in_place(shape):
+    rng = np.random.default_rng(8)
+    W = rng.standard_normal((shape[0], 3 * shape[1]))
+    x, normal = rng.standard_normal(shape[1]), np.arange(shape[1]) * 3
+    copy = W[:, normal]
+    for A, columns in [
+        (W, slice(0, None, 3)),
+        (W, normal),
+        (copy, None),
+        (sp.csr_matrix(W), normal),
+        (sp.csr_matrix(copy), None),
+    ]:
+        product, magnitude = column_products(A, x, columns)
+        np.testing.assert_allclose(product, copy @ x, rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(magnitude, np.abs(copy) @ np.abs(x), rtol=1e-13, atol=0)
 
 
 def test_write_solution(tmp_path):

@@ -23,7 +23,7 @@ import functools
 import math
 import operator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -44,6 +44,7 @@ __all__ = [
     "accuracy_limits",
     "check_diagonal",
     "check_positive_semidefinite",
+    "column_products",
     "condense_global",
     "contact_status",
     "natural_map_error",
@@ -358,22 +359,20 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
     return out
 
 
-def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLimits:
-    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` on a local problem.
-
-    ``r`` and ``u`` have shape (m,).
+def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyLimits:
+    """:class:`AccuracyLimits` of reactions ``r`` and velocities ``u`` (shape (m,)) of a local
+    problem.
 
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
     ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
-    array's digits. ``columns = (index, W[:, index])`` (dense), when ``r`` is zero outside
-    ``index``, gives ``|W| |r|`` from those columns alone.
+    array's digits. ``magnitude`` is ``|W| |r|`` when the caller has it already
+    (:func:`column_products`).
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
-    magnitude = (
-        _abs_product(problem.W, rv) if columns is None else _abs_product(columns[1], rv[columns[0]])
-    )
+    if magnitude is None:
+        magnitude = _abs_product(problem.W, rv)
     product = float(np.linalg.norm(magnitude))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
@@ -383,6 +382,58 @@ def accuracy_limits(problem: LocalProblem, r, u, *, columns=None) -> AccuracyLim
     return AccuracyLimits(
         rounding=_EPS * (product + size_q) / scale, data=data / scale, digits=dict(digits)
     )
+
+
+#: Entries of a block of rows (512 kB, in cache) by which :func:`column_products` reads a dense
+#: matrix.
+_BLOCK_ENTRIES = 1 << 16
+
+
+def _as_slice(index):
+    """Evenly spaced increasing indices as a slice (a view, not a gather), else as given."""
+    if isinstance(index, slice):
+        return index
+    index = np.asarray(index)
+    if index.dtype.kind in "iu" and index.size >= 2:
+        step = int(index[1] - index[0])
+        if step > 0 and np.array_equal(index, index[0] + step * np.arange(index.size)):
+            return slice(int(index[0]), int(index[-1]) + 1, step)
+    return index
+
+
+def column_products(A, x, columns=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(B x, |B| |x|)`` of ``B = A[:, columns]`` (all of ``A`` when ``columns`` is None),
+    reading ``A`` once.
+
+    A dense ``A`` is read in place by blocks of whole rows that stay in cache: ``B x`` is
+    ``A x'`` with ``x'`` zero off ``columns``, and ``|B|`` of a block goes into one reused
+    buffer, so that neither product makes a temporary of ``B``'s size. A sparse ``A`` gives its
+    columns in compressed rows.
+    """
+    xv = np.asarray(x, dtype=float).ravel()
+    if sp.issparse(A):
+        sparse: Any = A
+        B = sparse if columns is None else sparse.tocsr()[:, columns]
+        return np.asarray(B @ xv).ravel(), _abs_product(B, xv)
+    A = np.asarray(A)
+    m, n = A.shape
+    if columns is None:
+        columns, spread = slice(None), xv
+    else:
+        columns = _as_slice(columns)
+        spread = np.zeros(n)
+        spread[columns] = xv
+    ax = np.abs(xv)
+    product, magnitude = np.empty(m), np.empty(m)
+    rows = max(1, _BLOCK_ENTRIES // max(1, n))
+    buffer = np.empty((min(rows, m), xv.size))
+    for start in range(0, m, rows):
+        stop = min(start + rows, m)
+        part = A[start:stop]
+        np.dot(part, spread, out=product[start:stop])
+        absolute = np.abs(part[:, columns], out=buffer[: stop - start])
+        np.dot(absolute, ax, out=magnitude[start:stop])
+    return product, magnitude
 
 
 @dataclass(frozen=True)

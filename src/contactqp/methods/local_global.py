@@ -10,13 +10,14 @@ part is the bound-constrained QP
 A global problem is solved through its condensed form and the answer certified on the global
 equations as written (:func:`certify_global`,
 :meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
-Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far rounding
-(the conditioning of ``M``) and the data's written digits limit its error.
+Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far
+rounding (the conditioning of ``M``) and the data's written digits limit its error.
 """
 
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -28,6 +29,7 @@ from ..core.local_problem import (
     LocalProblem,
     accuracy_limits,
     check_diagonal,
+    column_products,
     contact_status,
     natural_map_error,
 )
@@ -121,16 +123,29 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     return best
 
 
-def _columns(W, index):
-    """``W[:, index]``, read once: dense from a dense ``W``, CSR (as stored) from a sparse one.
+def _normal_columns(W, dim: int) -> tuple[Any, np.ndarray]:
+    """``(C, W_NN)``, ``N`` the normal components: ``C`` what :func:`finish` reads ``W r`` and
+    ``|W| |r|`` from (a dense ``W`` itself, read in place; the CSR columns ``W[:, N]`` of a sparse
+    one) and ``W_NN`` a dense copy.
 
     The frictionless route's reactions are zero off the normal components, so these columns
     give all it needs of ``W``: the normal block, ``W r`` and ``|W| |r|``.
     """
     operator = as_operator(W)
     if sp.issparse(W):
-        return operator.matrix[:, index]
-    return operator.block(None, index)
+        matrix: Any = operator.matrix
+        columns = matrix[:, np.arange(operator.shape[1] // dim) * dim]
+        return columns, columns[::dim].toarray()
+    dense = operator.matrix
+    return dense, np.ascontiguousarray(dense[::dim, ::dim])  # a third of W's memory read
+
+
+def _is_symmetric(A: np.ndarray, block: int = 128) -> bool:
+    """``A == A^T`` exactly, compared by strips (no full-size temporary; stops at a difference)."""
+    n = A.shape[0]
+    return all(
+        np.array_equal(A[i : i + block, i:], A[i:, i : i + block].T) for i in range(0, n, block)
+    )
 
 
 def solve_frictionless(
@@ -172,19 +187,19 @@ def solve_frictionless(
         Some ``mu`` positive, or ``r0`` of the wrong shape.
     NotPositiveDefiniteError
         Only the normal block ``W_NN`` is solved on, and it is validated at no extra cost: its
-        diagonal (:func:`~contactqp.core.local_problem.check_diagonal`), and each free block the
-        box-QP solver factors (:meth:`~contactqp.core.operators.Operator.cholesky`). An indefinite
-        part of ``W_NN`` that no free block reaches (contacts that stay open) is not looked for: the
-        answer is then judged, like every answer, by the natural-map error on the whole ``W``.
+        diagonal (:func:`~contactqp.core.local_problem.check_diagonal`), and each free block
+        the box-QP solver factors (:meth:`~contactqp.core.operators.Operator.cholesky`). An
+        indefinite part of ``W_NN`` that no free block reaches (contacts that stay open) is not
+        looked for: the answer is then judged, like every answer, by the natural-map error on
+        the whole ``W``.
     """
     if np.any(problem.mu > 0):
         raise InvalidInputError("the frictionless route needs mu = 0 on every contact")
     start = time.perf_counter()
     normal = np.arange(problem.n_contacts) * problem.dim
-    columns = (normal, _columns(problem.W, normal))  # W_NN, and W r, |W| |r| for finish
-    W_nn = columns[1][normal]
-    W_nn = W_nn if isinstance(W_nn, np.ndarray) else W_nn.toarray()
-    symmetric = np.array_equal(W_nn, W_nn.T)
+    normal_columns, W_nn = _normal_columns(problem.W, problem.dim)
+    columns = (normal, normal_columns)  # W r and |W| |r| for finish
+    symmetric = _is_symmetric(W_nn)
     W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
     if check_psd:
         check_diagonal(W_sym, "W's normal block")
@@ -247,16 +262,21 @@ def finish(
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
     ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
-    ``columns = (index, W[:, index])``, the problem's columns outside which ``r`` is zero, lets
-    ``W r`` and ``|W| |r|`` read only those (the same sums: the other terms are zero).
+    ``columns = (index, A)``, ``index`` the components outside which ``r`` is zero and ``A``
+    either ``W[:, index]`` or ``W`` itself, lets ``W r`` and ``|W| |r|`` read only those
+    columns, in one pass (:func:`~contactqp.core.local_problem.column_products`; the same sums:
+    the other terms are zero).
     """
     if columns is None:
         u = np.asarray(problem.W @ r).reshape(-1) + problem.q
         limits = None
     else:
         index, block = columns
-        u = block @ r[index] + problem.q
-        limits = accuracy_limits(problem, r, u, columns=columns)
+        product, magnitude = column_products(
+            block, r[index], None if block.shape[1] == index.size else index
+        )
+        u = product + problem.q
+        limits = accuracy_limits(problem, r, u, magnitude=magnitude)
     error = natural_map_error(problem, r, u, per_contact=per_contact)
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
