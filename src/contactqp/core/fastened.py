@@ -28,6 +28,7 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InvalidInputError
+from .model import real_array, warm_start
 from .problem import ContactProblem
 from .result import FastenedResult
 
@@ -114,11 +115,7 @@ class FastenedProblem:
         """The contact part of a warm start ``r0`` (multipliers, shape (m,)), clipped at 0."""
         if r0 is None:
             return None
-        start = np.asarray(r0, dtype=float).reshape(-1)
-        if start.shape != (self.n_constraints,):
-            raise InvalidInputError(
-                f"r0 must have shape ({self.n_constraints},), got {np.shape(r0)}"
-            )
+        start = warm_start(real_array(r0, "r0").reshape(-1), self.n_constraints)
         return np.maximum(start[self.contacts], 0.0)
 
     def make_result(

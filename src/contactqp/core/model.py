@@ -26,6 +26,7 @@ __all__ = [
     "check_spd_matrix",
     "checked_cholesky",
     "finite_array",
+    "warm_start",
     "real_array",
     "positive_tolerance",
     "iteration_cap",
@@ -72,6 +73,15 @@ def finite_array(
             f"its products with forces and displacements would overflow; rescale the units"
         )
     return array
+
+
+def warm_start(r0: ArrayLike, size: int, name: str = "r0") -> np.ndarray:
+    """A method's warm start as a real, finite, 1-D float array of shape ``(size,)``; errors name
+    ``name``."""
+    start = finite_array(r0, name, 1)
+    if start.shape != (size,):
+        raise InvalidInputError(f"{name} must have shape ({size},), got {start.shape}")
+    return start
 
 
 def _is_complex(value: ArrayLike) -> bool:

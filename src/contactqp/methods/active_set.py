@@ -7,9 +7,8 @@ import time
 import numpy as np
 
 from ..core.fastened import FastenedProblem
-from ..core.model import iteration_cap, positive_tolerance
+from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import as_operator
-from ..errors import InvalidInputError
 from .box_qp import solve_box_qp
 from .fastened import solve_fastened_box_qp
 
@@ -63,10 +62,8 @@ def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 50
     iteration_cap(max_iter)
     if isinstance(problem, FastenedProblem):
         return solve_fastened_box_qp(problem, r0=r0, tol=tol, max_iter=max_iter)
-    if r0 is not None and np.shape(r0) != (problem.n_constraints,):
-        raise InvalidInputError(
-            f"r0 must have shape ({problem.n_constraints},), got {np.shape(r0)}"
-        )
+    if r0 is not None:
+        r0 = warm_start(r0, problem.n_constraints)
     start = time.perf_counter()
     dual = problem.dual()
     W = as_operator(dual.W)

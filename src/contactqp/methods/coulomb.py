@@ -63,7 +63,7 @@ from ..core.local_problem import (
     check_positive_semidefinite,
     natural_map_residual,
 )
-from ..core.model import finite_array, iteration_cap, positive_tolerance
+from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import as_operator
 from ..errors import InvalidInputError
 from .local_global import finish
@@ -330,10 +330,7 @@ def _check_options(problem, r0, tol, max_iter):
     m = problem.q.shape[0]
     if r0 is None:
         return np.zeros(m)
-    r = finite_array(r0, "r0", 1)
-    if r.shape != (m,):
-        raise InvalidInputError(f"r0 must have shape ({m},), got {r.shape}")
-    return r
+    return warm_start(r0, m)
 
 
 def solve_coulomb(

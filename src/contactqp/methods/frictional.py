@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ..core.model import real_array
+from ..core.model import finite_array, real_array
 from ..core.problem import FrictionalProblem
 from ..core.result import FrictionalResult
 from ..errors import InvalidInputError
@@ -24,9 +24,7 @@ def _start(problem: FrictionalProblem, r0) -> np.ndarray | None:
     """The warm start in newtons, shape (d k,): ``r0``, else the previous state's forces."""
     if r0 is None:
         return None if problem.previous is None else problem.previous.forces.reshape(-1)
-    start = real_array(r0, "r0").reshape(-1)
-    if not np.all(np.isfinite(start)):
-        raise InvalidInputError("r0 contains NaN or inf")
+    start = finite_array(real_array(r0, "r0").reshape(-1), "r0", 1)
     if start.shape != (problem.n_contacts * problem.dim,):
         raise InvalidInputError(
             f"r0 must hold {problem.dim} local forces per contact "

@@ -33,7 +33,7 @@ from ..core.local_problem import (
     contact_status,
     natural_map_error,
 )
-from ..core.model import finite_array
+from ..core.model import warm_start
 from ..core.operators import as_operator
 from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
 from ..errors import InvalidInputError, NotPositiveDefiniteError
@@ -208,12 +208,7 @@ def solve_frictionless(
         with np.errstate(divide="ignore", invalid="ignore"):  # a zero row of W_NN: start at 0
             first = np.nan_to_num(cold_start(W_sym, -q_n), nan=0.0, posinf=0.0)
     else:
-        first = finite_array(r0, "r0", 1)
-        if first.shape != (problem.W.shape[0],):
-            raise InvalidInputError(
-                f"r0 must have shape ({problem.W.shape[0]},), got {first.shape}"
-            )
-        first = np.maximum(first[normal], 0.0)
+        first = np.maximum(warm_start(r0, problem.W.shape[0])[normal], 0.0)
     try:  # the box-QP's own factorisations of free blocks validate them
         solution = solve_box_qp(
             W_sym,
@@ -269,7 +264,7 @@ def finish(
     """
     if columns is None:
         u = np.asarray(problem.W @ r).reshape(-1) + problem.q
-        limits = None
+        limits = accuracy_limits(problem, r, u)
     else:
         index, block = columns
         product, magnitude = column_products(
@@ -280,7 +275,6 @@ def finish(
     error = natural_map_error(problem, r, u, per_contact=per_contact)
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
-    limits = limits or accuracy_limits(problem, r, u)
     return local_result(
         problem,
         r,

@@ -43,7 +43,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
 from ..core.local_problem import LocalProblem, natural_map_error
-from ..core.model import iteration_cap, positive_tolerance
+from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import as_operator
 from ..core.result import LocalResult
 from ..errors import InvalidInputError, SolverError
@@ -68,13 +68,7 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     iteration_cap(max_iter)
     if r0 is None:
         return None
-    m = problem.dim * problem.n_contacts
-    start = np.asarray(r0, dtype=float)
-    if start.shape != (m,) or not np.all(np.isfinite(start)):
-        raise InvalidInputError(
-            f"r0 must be a finite array of shape ({m},), got shape {start.shape}"
-        )
-    return start
+    return warm_start(r0, problem.dim * problem.n_contacts)
 
 
 _Matrix = np.ndarray | sp.csr_matrix | sp.csr_array
