@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+from bench_frictionless import best_time  # this folder is on the path of a script run from it
 
 from contactqp import solve
 from contactqp.compliance import grid, influence_matrix
@@ -56,7 +57,6 @@ YOUNG, POISSON = 210e9, 0.3  # steel half-space (Pa, -)
 CELL = 10e-6  # cell size (m)
 SPHERE_RADIUS = 5e-3  # rigid sphere (paraboloid) radius (m)
 CLOSED_FRACTION = 0.5  # target fraction of closed contacts (Hertz estimate)
-SHORT_RUN = 0.5  # s: runs shorter than this are repeated and the best time kept
 
 
 def build_problem(n_contacts: int) -> LocalProblem:
@@ -81,20 +81,6 @@ def build_problem(n_contacts: int) -> LocalProblem:
         3,
         title=f"half-space, {side * side} cells, mu = 0",
     )
-
-
-def best_time(run, budget: float = 2.0, max_repeat: int = 7):
-    """``(first seconds, best seconds, first value)`` of ``run()``, repeated while short."""
-    start = time.perf_counter()
-    value = run()
-    first = time.perf_counter() - start
-    best, spent, count = first, first, 1
-    while best < SHORT_RUN and spent < budget and count < max_repeat:
-        start = time.perf_counter()
-        run()
-        elapsed = time.perf_counter() - start
-        best, spent, count = min(best, elapsed), spent + elapsed, count + 1
-    return first, best, value
 
 
 def _cli_in_process(path: Path) -> dict:
@@ -151,10 +137,10 @@ def main(argv=None) -> int:
         W_nn = (
             W[normal][:, normal].toarray() if hasattr(W, "toarray") else W[np.ix_(normal, normal)]
         )
-        solve_first, solve_best, solution = best_time(lambda: solve(problem))
-        cli_first, cli_best, record = best_time(lambda: _cli_in_process(path))
+        solve_best, solution, solve_first = best_time(lambda: solve(problem))
+        cli_best, record, cli_first = best_time(lambda: _cli_in_process(path))
         sub_seconds, sub_record = _cli_subprocess(path)
-        chol_first, chol_best, _ = best_time(lambda: scipy.linalg.cholesky(W_nn))
+        chol_best, _, chol_first = best_time(lambda: scipy.linalg.cholesky(W_nn))
     closed = int(np.count_nonzero(solution.forces[normal] > 0))
     print(
         f"{problem.n_contacts} contacts (W {W.shape[0]}x{W.shape[1]}, "

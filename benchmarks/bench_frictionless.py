@@ -52,7 +52,7 @@ from contactqp.methods import solve_box_qp
 from contactqp.methods.active_set import cold_start
 from contactqp.methods.qp import available_backends, backend_options
 
-__all__ = ["build_problem", "main"]
+__all__ = ["best_time", "build_problem", "main"]
 
 YOUNG, POISSON = 210e9, 0.3  # steel half-space (Pa, -)
 CELL = 10e-6  # cell size (m)
