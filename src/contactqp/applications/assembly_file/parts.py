@@ -92,12 +92,12 @@ def _in_si(model: ReducedModel, units: Units, coordinates: np.ndarray) -> Reduce
     if model.given == "flexibility":
         scale = units.length / units.force
         return ReducedModel(
-            flexibility=model.as_given * scale,
+            flexibility=model.flexibility * scale,
             dofs_per_node=model.dofs_per_node,
             coordinates=coordinates,
         )
     return ReducedModel(
-        stiffness=model.as_given * units.stiffness,
+        stiffness=model.stiffness * units.stiffness,
         dofs_per_node=model.dofs_per_node,
         coordinates=coordinates,
     )
