@@ -14,8 +14,6 @@ import re
 import numpy as np
 import pytest
 import scipy.io
-from fe_files import write_ansys_full
-from test_problem_file_docs import toml_text
 
 from contactqp.applications.assembly_file import read_assembly_file
 from contactqp.applications.assembly_file.schema import LENGTH_UNITS
@@ -23,6 +21,8 @@ from contactqp.applications.riveting import Assembly as RivetingAssembly
 from contactqp.applications.riveting import Part
 from contactqp.compliance.fem import Box, ElasticModel, block
 from contactqp.errors import ContactError, FileFormatError, InvalidInputError
+from fe_files import write_ansys_full
+from test_problem_file_docs import toml_text
 
 E, NU = 70e9, 0.33
 SIZE = (0.04, 0.02, 0.01)  # m

@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
-from test_problem_file_docs import toml_text
 
 from contactqp.applications.assembly_file import read_assembly_file
 from contactqp.applications.assembly_file.schema import fixed_keys
 from contactqp.errors import InvalidInputError
 from contactqp.io.problem_file.options import solver_options
+from test_problem_file_docs import toml_text
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "assembly-files.md"

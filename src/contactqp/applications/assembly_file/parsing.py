@@ -386,8 +386,9 @@ def _fasteners(where: Where, doc: dict, points, freedoms, units: Units):
         )
     from scipy.spatial import cKDTree
 
-    trees = {}
-    fasteners, used = [], {}
+    trees: dict[int, cKDTree] = {}
+    fasteners: list[FastenerInput] = []
+    used: dict[int, int] = {}
     for index, table in enumerate(tables):
         key = f"fasteners[{index}]"
         check_keys(where, table, FASTENER_KEYS, key)
@@ -409,8 +410,8 @@ def _fasteners(where: Where, doc: dict, points, freedoms, units: Units):
             dim = position.size
             if dim not in trees:
                 trees[dim] = cKDTree(points[:, :dim])
-            distance, pair = trees[dim].query(position)
-            pair = int(pair)
+            distance, nearest = trees[dim].query(position)
+            pair = int(nearest)
             if distance > tolerance:
                 raise where.error(
                     f"{key}.position",

@@ -122,7 +122,12 @@ class AssemblyInput:
             When this version of :mod:`contactqp.applications.fastening` has no ``Assembly``.
         """
         try:
-            from ..fastening import Assembly, AssemblyPart, Fastener, InterfacePairs
+            from ..fastening import (  # type: ignore[attr-defined]  # h2 adds them
+                Assembly,
+                AssemblyPart,
+                Fastener,
+                InterfacePairs,
+            )
         except ImportError:
             raise InvalidInputError(
                 "contactqp.applications.fastening has no Assembly yet: use the parts, "
