@@ -121,18 +121,17 @@ class AssemblyInput:
         InvalidInputError
             When this version of :mod:`contactqp.applications.fastening` has no ``Assembly``.
         """
-        try:
-            from ..fastening import (  # type: ignore[attr-defined]  # h2 adds them
-                Assembly,
-                AssemblyPart,
-                Fastener,
-                InterfacePairs,
-            )
-        except ImportError:
+        from .. import fastening  # h2's module; read by name so that this builds before it
+
+        names = ("Assembly", "AssemblyPart", "Fastener", "InterfacePairs")
+        if not all(hasattr(fastening, name) for name in names):
             raise InvalidInputError(
                 "contactqp.applications.fastening has no Assembly yet: use the parts, "
                 "interfaces and fasteners of this input directly"
-            ) from None
+            )
+        Assembly, AssemblyPart, Fastener, InterfacePairs = (
+            getattr(fastening, name) for name in names
+        )
         parts = [AssemblyPart(p.name, p.model, p.coordinates) for p in self.parts]
         interfaces = [
             InterfacePairs(i.first, i.second, i.nodes, i.normals) for i in self.interfaces
