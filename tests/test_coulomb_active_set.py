@@ -90,3 +90,37 @@ def test_column_products_gathered_equal_the_full_product():
     product, magnitude = column_products(A, x, columns)
     np.testing.assert_allclose(product, A[:, columns] @ x, rtol=1e-14)
     np.testing.assert_allclose(magnitude, np.abs(A[:, columns]) @ np.abs(x), rtol=1e-14)
+
+
+def _stacked_pairs(n_pairs=70, seed=5):
+    """Two 3-freedom node rows coupled by a smooth SPD flexibility, one pair per node column."""
+    import contactqp as cq
+
+    rng = np.random.default_rng(seed)
+    x = np.linspace(0.0, 1.0, n_pairs)
+    kernel = np.exp(-np.abs(x[:, None] - x[None, :]) / 0.3)
+    flexibility = np.kron(np.eye(2), np.kron(kernel, np.diag([1.0, 1.0, 2.0]))) * 1e-6
+    model = cq.ReducedModel(flexibility=flexibility, dofs_per_node=3)
+    pairs = np.column_stack([np.arange(n_pairs), n_pairs + np.arange(n_pairs)])
+    gaps = 2e-6 + 1e-6 * rng.random(n_pairs)
+    loads = np.zeros(6 * n_pairs)
+    loads[3 * np.array([10, 40]) + 2] = 2.0  # pull the lower nodes up, the upper ones down
+    loads[3 * (n_pairs + np.array([10, 40])) + 2] = -2.0
+    loads[3 * (n_pairs + np.arange(n_pairs))] = 0.01  # and shear the upper row
+    return model, pairs, gaps, loads
+
+
+def test_with_gaps_solves_as_a_problem_built_with_those_gaps():
+    import contactqp as cq
+
+    model, pairs, gaps, loads = _stacked_pairs()
+    other = gaps + 5e-7 * np.random.default_rng(6).standard_normal(gaps.size)
+    base = cq.FrictionalProblem(model, loads, [cq.NodePairs(pairs, gaps, [0, 0, 1.0])], 0.3)
+    fresh = cq.FrictionalProblem(model, loads, [cq.NodePairs(pairs, other, [0, 0, 1.0])], 0.3)
+    varied, built = solve(base.with_gaps(other)), solve(fresh)
+    assert varied.success and built.success
+    assert 0 < np.count_nonzero(built.forces[:, 0]) < len(pairs)
+    np.testing.assert_allclose(varied.forces, built.forces, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(varied.gaps, built.gaps, rtol=0, atol=1e-15)
+    with pytest.raises(InvalidInputError, match="gaps must have shape"):
+        base.with_gaps(gaps[:-1])

@@ -442,13 +442,7 @@ class FrictionalProblem:
                 "no tangent"
             )
         self.law = FrictionLaw(mu, cohesion, facets, n_contacts=self.n_contacts)
-        gapped = np.flatnonzero((self.law.cohesion > 0) & (self.constraints.gaps > 0))
-        if gapped.size:
-            raise InvalidInputError(
-                f"cohesion models a bonded interface, which starts closed: contact {gapped[0]} "
-                f"has cohesion {self.law.cohesion[gapped[0]]:g} N and initial gap "
-                f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)"
-            )
+        _refuse_open_cohesion(self.law, self.constraints.gaps)
         self.certificate_tol = float(certificate_tol)
         self._local: LocalForm | None = None
         self._free_displacements: np.ndarray | None = None
@@ -492,6 +486,25 @@ class FrictionalProblem:
         twin._free_displacements = None
         twin.previous = previous
         twin._previous_tangential()
+        return twin
+
+    def with_gaps(self, gaps) -> FrictionalProblem:
+        """The same model, contacts, law, loads and state with other initial gaps (m, shape
+        (k,)): ``W`` and ``R H^T`` are shared, only the gaps' offset is new (a variation study's
+        samples)."""
+        values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
+        if values.shape != (self.n_contacts,):
+            raise InvalidInputError(
+                f"gaps must have shape ({self.n_contacts},), got {values.shape}"
+            )
+        _refuse_open_cohesion(self.law, values)
+        twin = copy.copy(self)
+        twin.constraints = dataclasses.replace(self.constraints, gaps=values)
+        twin._free_displacements = None
+        form = copy.copy(self.local())
+        form.offset = np.zeros_like(form.offset)
+        form.offset[:: self.dim] = values
+        twin._local = form
         return twin
 
     def _previous_tangential(self) -> np.ndarray:
@@ -634,6 +647,17 @@ class FrictionalProblem:
         return (
             f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
             f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})"
+        )
+
+
+def _refuse_open_cohesion(law: FrictionLaw, gaps: np.ndarray) -> None:
+    """Raise when a cohesive contact starts open (gap > 0)."""
+    gapped = np.flatnonzero((law.cohesion > 0) & (gaps > 0))
+    if gapped.size:
+        raise InvalidInputError(
+            f"cohesion models a bonded interface, which starts closed: contact {gapped[0]} "
+            f"has cohesion {law.cohesion[gapped[0]]:g} N and initial gap "
+            f"{gaps[gapped[0]]:g} m (it would pull itself shut)"
         )
 
 
