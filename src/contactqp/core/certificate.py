@@ -213,6 +213,19 @@ def _floored(scale):
     return np.maximum(scale, max(CONTACT_FLOOR * float(np.max(scale, initial=0.0)), tiny))
 
 
+def _product_on_support(model, forces: np.ndarray) -> np.ndarray:
+    """``R f`` with ``R`` the flexibility as given, read only where ``f`` is nonzero when that is
+    a small part of it: rows of ``R`` (contiguous) when it is the symmetric matrix stored,
+    else its columns."""
+    given = model.as_given
+    support = np.flatnonzero(forces)
+    if 4 * support.size >= forces.size:
+        return given @ forces
+    if given is model.flexibility:  # the validated, exactly symmetric matrix: R[:, s] = R[s].T
+        return forces[support] @ given[support]
+    return given[:, support] @ forces[support]
+
+
 def _equilibrium(model, displacements, net_load, force: float, length: float) -> float:
     """``max|U - R f| / length`` (or ``max|K U - f| / force`` for a stiffness model).
 
@@ -220,7 +233,7 @@ def _equilibrium(model, displacements, net_load, force: float, length: float) ->
     not its symmetric part, which the solvers use.
     """
     if model.given == "flexibility":
-        residual = displacements - model.as_given @ net_load
+        residual = displacements - _product_on_support(model, net_load)
         return _worst(np.abs(residual) / length)
     return _worst(np.abs(model.as_given @ displacements - net_load) / force)
 

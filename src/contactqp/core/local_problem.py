@@ -19,6 +19,7 @@ rounding of the data limits what it means for the problem the file was written f
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 import operator
@@ -146,6 +147,8 @@ class LocalProblem:
     cohesion: np.ndarray | None = field(default=None)
     digits: dict[str, int] = field(default_factory=dict, repr=False, compare=False)
     law: FrictionLaw = field(init=False, repr=False, compare=False)
+    #: What was checked on ``W``, shared by reference with the :meth:`with_q` twins.
+    _checks: dict[str, bool] = field(init=False, repr=False, compare=False, default_factory=dict)
 
     def __post_init__(self):
         dim = _check_dim(self.dim)
@@ -187,6 +190,29 @@ class LocalProblem:
     def n_contacts(self) -> int:
         """Number of contacts, ``len(mu)``."""
         return int(self.mu.shape[0])
+
+    def with_q(self, q) -> LocalProblem:
+        """The same ``W``, law, title and digits with another ``q`` (same shape).
+
+        ``W`` is not validated again, and what was checked or computed once on this problem
+        (its semidefiniteness, :meth:`check_semidefinite`; the apex shift) carries over: the
+        cheap way to solve many problems that differ only in ``q``.
+        """
+        values = finite_array(q, "q", 1)
+        if values.shape != self.q.shape:
+            raise InvalidInputError(
+                f"q must have length dim*n_contacts = {self.q.shape[0]}, got shape {values.shape}"
+            )
+        twin = copy.copy(self)  # shares W, the law and the cached checks
+        object.__setattr__(twin, "q", values)
+        return twin
+
+    def check_semidefinite(self) -> None:
+        """:func:`check_positive_semidefinite` of ``W``, factored once per problem (and its
+        :meth:`with_q` twins); raises on every call when ``W`` fails."""
+        if not self._checks.get("semidefinite", False):
+            check_positive_semidefinite(self.W)
+            self._checks["semidefinite"] = True
 
     @functools.cached_property
     def apex_shift(self) -> np.ndarray:
@@ -387,6 +413,8 @@ def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyL
 #: Entries of a block of rows (512 kB, in cache) by which :func:`column_products` reads a dense
 #: matrix.
 _BLOCK_ENTRIES = 1 << 16
+#: column_products gathers the columns asked for when they are fewer than 1/FEW_COLUMNS of A's
+FEW_COLUMNS = 8
 
 
 def _as_slice(index):
@@ -417,6 +445,9 @@ def column_products(A, x, columns=None) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(B @ xv).ravel(), _abs_product(B, xv)
     A = np.asarray(A)
     m, n = A.shape
+    if columns is not None and FEW_COLUMNS * np.size(columns) < n:  # gather those columns only
+        block = A[:, columns]
+        return block @ xv, np.abs(block) @ np.abs(xv)
     if columns is None:
         columns, spread = slice(None), xv
     else:

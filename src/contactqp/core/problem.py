@@ -57,11 +57,23 @@ def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
     if model.given == "flexibility":
         # only the freedoms the constraints touch enter R M^T
         used = np.unique(matrix.indices)
-        influence = model.flexibility[:, used] @ matrix[:, used].T.toarray()
+        # R is exactly symmetric (ReducedModel symmetrises it): R M^T = (M R)^T, one sparse
+        # product (a few entries per row of M) instead of a dense one
+        influence = np.ascontiguousarray((matrix[:, used] @ model.flexibility[used, :]).T)
     else:
         influence = model.displacements(matrix.T.toarray())
     W = np.asarray(matrix @ influence)
     return influence, 0.5 * (W + W.T)
+
+
+def _sparse_product(model: ReducedModel, loads: np.ndarray) -> np.ndarray:
+    """``R P``: of a flexibility model with few loaded freedoms, on those columns of ``R``."""
+    if model.given != "flexibility":
+        return model.displacements(loads)
+    loaded = np.flatnonzero(loads)
+    if 4 * loaded.size >= loads.size:
+        return model.flexibility @ loads
+    return model.flexibility[:, loaded] @ loads[loaded]
 
 
 def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.ndarray:
@@ -273,19 +285,40 @@ class LocalForm:
         self.influence, self.W = _delassus(model, H)
         self.offset = np.zeros(H.shape[0])
         self.offset[:: frames.dim] = constraints.gaps
+        self.dim = frames.dim
         self._model = model
+        self._templates: dict[int, tuple[FrictionLaw, LocalProblem]] = {}
 
     def free_displacements(self, loads: np.ndarray) -> np.ndarray:
-        """``R P`` (m)."""
-        return self._model.displacements(loads)
+        """``R P`` (m); of a flexibility model, read on the columns of the loaded freedoms
+        when they are few."""
+        return _sparse_product(self._model, loads)
 
     def q(self, loads: np.ndarray) -> np.ndarray:
         """``H R P + w`` (m): the local displacements the loads cause without contact forces."""
         return self.operator @ self.free_displacements(loads) + self.offset
 
-    def displacements(self, loads: np.ndarray, forces: np.ndarray) -> np.ndarray:
-        """``U = R (P + H^T r)`` (m) for local forces ``r`` (N, shape (d k,))."""
-        return self.free_displacements(loads) + self.influence @ forces
+    def displacements(
+        self, loads: np.ndarray, forces: np.ndarray, free: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``U = R (P + H^T r)`` (m) for local forces ``r`` (N, shape (d k,)); ``free`` is
+        ``R P`` when known. Only the columns of ``R H^T`` under nonzero forces are read."""
+        if free is None:
+            free = self.free_displacements(loads)
+        used = np.flatnonzero(forces)
+        if used.size == forces.size:
+            return free + self.influence @ forces
+        return free + self.influence[:, used] @ forces[used]
+
+    def fclib_template(self, law: FrictionLaw) -> LocalProblem:
+        """``W / max diag(W)`` as a :class:`LocalProblem` with ``law``'s ``mu`` (q zero),
+        scaled and validated once per law: each step's FCLIB problem is its ``with_q``."""
+        cached = self._templates.get(id(law))
+        if cached is None or cached[0] is not law:
+            w = float(np.max(self.W.diagonal()))
+            problem = LocalProblem(self.W / w, np.zeros(self.W.shape[0]), law.mu, self.dim)
+            cached = self._templates[id(law)] = (law, problem)
+        return cached[1]
 
 
 class FrictionStep:
@@ -311,16 +344,20 @@ class FrictionStep:
         ``L / w`` (N): ``r = force_unit r_fclib - apex_shift``.
     """
 
-    def __init__(self, tangential: np.ndarray, local: LocalProblem):
+    def __init__(
+        self, tangential: np.ndarray, local: LocalProblem, fclib: LocalProblem | None = None
+    ):
         self.tangential, self.local = tangential, local
         self.apex_shift = local.apex_shift
         W = local.W
-        self.q_apex = local.q - W @ self.apex_shift
+        self.q_apex = local.q - W @ self.apex_shift if np.any(self.apex_shift) else local.q
         w = float(np.max(W.diagonal()))
         length = float(np.max(np.abs(self.q_apex))) or 1.0
-        # scipy-stubs type csr_matrix / float as any spmatrix format; it is CSR at runtime
-        scaled: scipy.sparse.csr_matrix | np.ndarray = W / w  # type: ignore[assignment]
-        self.fclib = LocalProblem(scaled, self.q_apex / length, local.mu, local.dim)
+        if fclib is None:  # else a problem with W / w, mu and dim of this step (its q replaced)
+            # scipy-stubs type csr_matrix / float as any spmatrix format; it is CSR at runtime
+            scaled: scipy.sparse.csr_matrix | np.ndarray = W / w  # type: ignore[assignment]
+            fclib = LocalProblem(scaled, self.q_apex, local.mu, local.dim)
+        self.fclib = fclib.with_q(self.q_apex / length)
         self.force_unit = length / w
 
 
@@ -405,15 +442,12 @@ class FrictionalProblem:
                 "no tangent"
             )
         self.law = FrictionLaw(mu, cohesion, facets, n_contacts=self.n_contacts)
-        gapped = np.flatnonzero((self.law.cohesion > 0) & (self.constraints.gaps > 0))
-        if gapped.size:
-            raise InvalidInputError(
-                f"cohesion models a bonded interface, which starts closed: contact {gapped[0]} "
-                f"has cohesion {self.law.cohesion[gapped[0]]:g} N and initial gap "
-                f"{self.constraints.gaps[gapped[0]]:g} m (it would pull itself shut)"
-            )
+        _refuse_open_cohesion(self.law, self.constraints.gaps)
         self.certificate_tol = float(certificate_tol)
         self._local: LocalForm | None = None
+        self._free_displacements: np.ndarray | None = None
+        # validated once, shared with the with_loads twins (same W and law; q replaced)
+        self._templates: dict[str, LocalProblem] = {}
         self.previous = previous
         self._previous_tangential()  # checked now, not at the solve
 
@@ -449,8 +483,28 @@ class FrictionalProblem:
         twin = copy.copy(self)
         twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
         twin._local = self.local()
+        twin._free_displacements = None
         twin.previous = previous
         twin._previous_tangential()
+        return twin
+
+    def with_gaps(self, gaps) -> FrictionalProblem:
+        """The same model, contacts, law, loads and state with other initial gaps (m, shape
+        (k,)): ``W`` and ``R H^T`` are shared, only the gaps' offset is new (a variation study's
+        samples)."""
+        values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
+        if values.shape != (self.n_contacts,):
+            raise InvalidInputError(
+                f"gaps must have shape ({self.n_contacts},), got {values.shape}"
+            )
+        _refuse_open_cohesion(self.law, values)
+        twin = copy.copy(self)
+        twin.constraints = dataclasses.replace(self.constraints, gaps=values)
+        twin._free_displacements = None
+        form = copy.copy(self.local())
+        form.offset = np.zeros_like(form.offset)
+        form.offset[:: self.dim] = values
+        twin._local = form
         return twin
 
     def _previous_tangential(self) -> np.ndarray:
@@ -484,12 +538,23 @@ class FrictionalProblem:
     def step(self) -> FrictionStep:
         """The increment from :attr:`previous`, assembled once for method and certificate."""
         tangential = self._previous_tangential()
-        q = self.local().q(self.loads).reshape(self.n_contacts, self.dim)
+        form = self.local()
+        q = (form.operator @ self._free() + form.offset).reshape(self.n_contacts, self.dim)
         q[:, 1:] -= tangential
-        local = LocalProblem(
-            self.local().W, q.reshape(-1), self.law.mu, self.dim, cohesion=self.law.cohesion
+        template = self._templates.get("local")
+        if template is None:
+            template = self._templates["local"] = LocalProblem(
+                form.W, q.reshape(-1), self.law.mu, self.dim, cohesion=self.law.cohesion
+            )
+        return FrictionStep(
+            tangential, template.with_q(q.reshape(-1)), form.fclib_template(self.law)
         )
-        return FrictionStep(tangential, local)
+
+    def _free(self) -> np.ndarray:
+        """``R P`` (m) of this problem's loads, computed once."""
+        if self._free_displacements is None:
+            self._free_displacements = self.local().free_displacements(self.loads)
+        return self._free_displacements
 
     def make_result(
         self,
@@ -531,7 +596,7 @@ class FrictionalProblem:
                 f"({self.n_contacts * self.dim} values), got shape {np.shape(forces)}"
             )
         local = self.local()
-        U = local.displacements(self.loads, r)
+        U = local.displacements(self.loads, r, self._free())
         if step is None:
             step = self.step()
         tangential = step.tangential
@@ -582,6 +647,17 @@ class FrictionalProblem:
         return (
             f"FrictionalProblem({self.model!r}, {self.n_contacts} contacts in {self.dim}-D, "
             f"{'exact cone' if self.law.facets is None else f'{self.law.facets} facets'})"
+        )
+
+
+def _refuse_open_cohesion(law: FrictionLaw, gaps: np.ndarray) -> None:
+    """Raise when a cohesive contact starts open (gap > 0)."""
+    gapped = np.flatnonzero((law.cohesion > 0) & (gaps > 0))
+    if gapped.size:
+        raise InvalidInputError(
+            f"cohesion models a bonded interface, which starts closed: contact {gapped[0]} "
+            f"has cohesion {law.cohesion[gapped[0]]:g} N and initial gap "
+            f"{gaps[gapped[0]]:g} m (it would pull itself shut)"
         )
 
 

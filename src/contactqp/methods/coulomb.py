@@ -60,7 +60,6 @@ from .. import kernels
 from ..core.local_problem import (
     LocalProblem,
     better_dense,
-    check_positive_semidefinite,
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
@@ -84,6 +83,8 @@ RUN_ITERATIONS = 100  # largest number of iterations of one Newton (or LM) run
 MAX_ITER = 2 * ROUNDS * RUN_ITERATIONS + (ROUNDS - 1) * PGS_SWEEPS
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this share of its column's max
 _NO_JACOBIAN = np.empty((0, 3, 3))  # tells kernels.alart_curnier_rows to skip the Jacobian
+ACTIVE_SET_MIN = 64  # contacts from which a dense problem is solved on its candidate set
+ACTIVE_SET_GROWTH = 8  # fewest violators added to the candidate set at once
 
 
 def alart_curnier(R, U, mu, rho, jacobian: bool = False):
@@ -322,6 +323,93 @@ class _Newton:
         return best[0], best[1], max_iter, "iteration limit"
 
 
+def _rounds(W, q, mu, d, r, tol, max_iter, measure):
+    """Newton, Levenberg-Marquardt, then (Gauss-Seidel, both Newton runs) up to 3 rounds on
+    the FCLIB problem ``(W, q, mu)`` from ``r``; ``(r, iterations, stages)``.
+
+    ``measure(r, u)`` is ``(residual, error)``, the convergence test (error <= ``tol``).
+    """
+    newton = _Newton(W, q, mu, d, measure)
+    gauss_seidel = None
+    error, iterations, stages = math.inf, 0, []
+    for round_ in range(ROUNDS):
+        if round_:
+            gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
+            sweeps = min(PGS_SWEEPS, max_iter - iterations)
+            for sweep in range(1, sweeps + 1):
+                r = gauss_seidel.sweep(r)
+                if sweep % 10 == 0 and measure(r, W @ r + q)[1] <= tol:
+                    break
+            iterations += sweep
+            stages.append(f"gauss-seidel {sweep} sweeps")
+        for adaptive in (False, True):
+            if iterations >= max_iter:
+                break
+            budget = min(RUN_ITERATIONS, max_iter - iterations)
+            r, error, k, reason = newton.run(r, tol, budget, adaptive)
+            iterations += k
+            stages.append(f"{'levenberg-marquardt' if adaptive else 'newton'} {k} it. ({reason})")
+            if error <= tol:
+                break
+        if error <= tol:
+            break
+        if iterations >= max_iter:
+            stages.append(f"max_iter = {max_iter} reached")
+            break
+    return r, iterations, stages
+
+
+def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
+    """Solve on the contacts that can close; ``(r, iterations, stages, index)``.
+
+    The FCLIB problem ``(W, q, mu)`` (dense ``W``) is solved on a candidate set ``C`` of
+    contacts (those of the warm start ``r`` that carry force), the others held open at
+    ``r = 0``. An open contact satisfies the law exactly when its normal gap
+    ``u_N = W_NC r_C + q_N`` is not negative, which one product with the columns of ``C``
+    checks; the violators are added (the most violated first, at most as many as ``C``
+    holds, and at least :data:`ACTIVE_SET_GROWTH`) and ``C`` is solved again from its last
+    solution. The subproblem's error (relative to its own, smaller scale) bounds the whole
+    problem's, so a converged ``C`` without violators solves the whole problem.
+    ``index`` is the components of ``C`` (``r`` is zero elsewhere), or None when a
+    subproblem did not converge or ``C`` grew past half of the contacts: the caller then
+    solves the whole problem from ``r``.
+    """
+    nc = mu.shape[0]
+    normal = np.arange(nc) * d
+    R = r.reshape(nc, d)
+    candidate = np.flatnonzero(np.any(R != 0.0, axis=1))
+    iterations, stages = 0, []
+    while True:
+        rows = (candidate[:, None] * d + np.arange(d)).reshape(-1)
+        if candidate.size:
+            sub_W, sub_q, sub_mu = W[np.ix_(rows, rows)], q[rows], mu[candidate]
+            sub = LocalProblem(sub_W, sub_q, sub_mu, d)
+
+            def measure(r_sub, u_sub, sub=sub):
+                return natural_map_residual(sub, r_sub, u_sub, per_contact=per_contact)
+
+            r_sub, k, more = _rounds(
+                sub_W, sub_q, sub_mu, d, r[rows], tol, max_iter - iterations, measure
+            )
+            iterations += k
+            stages.append(f"{candidate.size} contacts: " + ", ".join(more))
+            r[rows] = r_sub
+            if measure(r_sub, sub_W @ r_sub + sub_q)[1] > tol:
+                return r, iterations, stages, None
+        outside = np.setdiff1d(np.arange(nc), candidate, assume_unique=True)
+        gaps = W[np.ix_(normal[outside], rows)] @ r[rows] + q[normal[outside]]
+        violated = np.flatnonzero(gaps < 0.0)
+        if violated.size == 0:
+            return r, iterations, stages, rows
+        if violated.size > max(ACTIVE_SET_GROWTH, candidate.size):
+            closing = -gaps[violated] / W[normal[outside[violated]], normal[outside[violated]]]
+            keep = max(ACTIVE_SET_GROWTH, candidate.size)
+            violated = violated[np.argpartition(-closing, keep)[:keep]]
+        candidate = np.union1d(candidate, outside[violated])
+        if 2 * candidate.size > nc or iterations >= max_iter:
+            return r, iterations, stages, None
+
+
 def _check_options(problem, r0, tol, max_iter):
     if not isinstance(problem, LocalProblem):
         raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
@@ -393,7 +481,7 @@ def solve_coulomb(
     if sp.issparse(W) and better_dense(W):
         W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
     if check_psd:
-        check_positive_semidefinite(W)
+        problem.check_semidefinite()  # once per problem and its with_q twins
     shift = problem.apex_shift
     q = problem.q - W @ shift if np.any(shift) else problem.q
 
@@ -402,33 +490,18 @@ def solve_coulomb(
         return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
 
     r = r + shift
-    newton = _Newton(W, q, mu, d, measure)
-    gauss_seidel = None
-    error, iterations, stages = math.inf, 0, []
-    for round_ in range(ROUNDS):
-        if round_:
-            gauss_seidel = gauss_seidel or GaussSeidel(W, q, mu, d)
-            sweeps = min(PGS_SWEEPS, max_iter - iterations)
-            for sweep in range(1, sweeps + 1):
-                r = gauss_seidel.sweep(r)
-                if sweep % 10 == 0 and measure(r, W @ r + q)[1] <= tol:
-                    break
-            iterations += sweep
-            stages.append(f"gauss-seidel {sweep} sweeps")
-        for adaptive in (False, True):
-            if iterations >= max_iter:
-                break
-            budget = min(RUN_ITERATIONS, max_iter - iterations)
-            r, error, k, reason = newton.run(r, tol, budget, adaptive)
+    columns = None
+    if isinstance(W, np.ndarray) and problem.n_contacts >= ACTIVE_SET_MIN:
+        r, iterations, stages, index = _active_set(W, q, mu, d, r, tol, max_iter, per_contact)
+        if index is not None:  # r is zero outside index, the apex shifts' normals aside
+            shifted = np.flatnonzero(shift)
+            columns = (np.union1d(index, shifted) if shifted.size else index, W)
+        else:  # the reduction gave up: the whole problem from where it stopped
+            r, k, more = _rounds(W, q, mu, d, r, tol, max_iter - iterations, measure)
             iterations += k
-            stages.append(f"{'levenberg-marquardt' if adaptive else 'newton'} {k} it. ({reason})")
-            if error <= tol:
-                break
-        if error <= tol:
-            break
-        if iterations >= max_iter:
-            stages.append(f"max_iter = {max_iter} reached")
-            break
+            stages += ["whole problem:"] + more
+    else:
+        r, iterations, stages = _rounds(W, q, mu, d, r, tol, max_iter, measure)
     return finish(
         problem,
         r - shift,
@@ -438,4 +511,5 @@ def solve_coulomb(
         ", ".join(stages),
         method="coulomb",
         per_contact=per_contact,
+        columns=columns,
     )
