@@ -394,3 +394,31 @@ def test_summary_is_json_ready_and_the_table_renders(stages):
     text = console.export_text()
     assert "shear 50 N" in text and "210.2" in text and "closed" not in text
     assert "stick" in text and "slip" in text
+
+
+def test_point_maps_mix_scales_and_categories_each_legend_its_own(geometry):
+    """As riveting.plot_status draws them: gaps on a colour scale, then the status as labels;
+    the marked points are named on the first panel only."""
+    from contactqp.io.plot import point_maps_figure
+
+    points, _ = geometry
+    xy = points[:, :2]
+    labels = np.where(np.arange(K) % 3 == 0, "closed", "open").astype(object)
+    labels[[2, 7]] = "fastened"
+    figure = point_maps_figure(
+        xy,
+        [(np.arange(K) * 1e-5, "gap", "viridis"), (labels, "status", STATUS_COLOURS)],
+        marked=xy[[2, 7]],
+        marked_label="fasteners",
+    )
+    panels = {ax.get_title(): ax for ax in figure.axes}
+    gap_axes, status_axes = panels["gap"], panels["status"]
+    assert len(figure.axes) == 3  # one colour bar: the gap panel's
+    assert [t.get_text() for t in gap_axes.get_legend().get_texts()] == ["fasteners"]
+    assert [t.get_text() for t in status_axes.get_legend().get_texts()] == [
+        "open",
+        "closed",
+        "fastened",
+    ]
+    with pytest.raises(InvalidInputError, match="values for 20 points"):
+        point_maps_figure(xy, [(np.zeros(3), "bad", "viridis")])

@@ -152,7 +152,8 @@ def point_maps_figure(
             raise InvalidInputError(
                 f"map panel {panel.title!r}: {values.shape} values for {len(xy)} points"
             )
-        if values.dtype.kind in "USO":
+        categorical = values.dtype.kind in "USO"
+        if categorical:
             _draw_categories(ax, xy, values.astype(str), panel.colours)
         else:
             low, high = panel.limits if panel.limits is not None else (None, None)
@@ -168,8 +169,10 @@ def point_maps_figure(
                 ms=10,
                 label=marked_label if n == 0 else "_nolegend_",
             )
-        if (marked is not None and n == 0) or ax.get_legend() is not None:
-            ax.legend(loc="upper right", fontsize="small")
+        if categorical:  # beside the map, where a colour bar would be
+            ax.legend(loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize="small")
+        elif marked is not None and n == 0:
+            ax.legend(loc="best", fontsize="small")
         ax.set_title(panel.title)
         ax.set_ylabel(axis_labels[1])
         ax.set_aspect("equal")
@@ -179,7 +182,7 @@ def point_maps_figure(
 
 
 def _draw_categories(ax: Any, xy: np.ndarray, labels: np.ndarray, colours: Any) -> None:
-    """Scatter ``xy`` one label at a time, each label its colour, and a legend of them."""
+    """Scatter ``xy`` one label at a time, each label its colour (named for the legend)."""
     given = dict(colours) if isinstance(colours, Mapping) else {}
     present = [label for label in given if label in set(labels)]
     present += sorted(set(labels) - set(present))
@@ -188,7 +191,6 @@ def _draw_categories(ax: Any, xy: np.ndarray, labels: np.ndarray, colours: Any) 
         where = labels == label
         colour = given[label] if label in given else next(spare)
         ax.scatter(xy[where, 0], xy[where, 1], color=colour, s=18, label=label)
-    ax.legend(loc="upper right", fontsize="small")
 
 
 def plot_point_maps(
