@@ -422,3 +422,18 @@ def test_point_maps_mix_scales_and_categories_each_legend_its_own(geometry):
     ]
     with pytest.raises(InvalidInputError, match="values for 20 points"):
         point_maps_figure(xy, [(np.zeros(3), "bad", "viridis")])
+
+
+def test_initial_gaps_are_written_beside_the_residual_ones(stages, geometry, tmp_path):
+    points, normals = geometry
+    initial = np.linspace(-1e-5, 4e-4, K)
+    files = write_sequence(tmp_path, stages, points, normals, initial_gaps=initial)
+    table = np.genfromtxt(files["stages.csv"], delimiter=",", names=True, dtype=None)
+    header, _ = _read_csv(files["stages.csv"])
+    assert header.index("initial_gap (m)") == header.index("gap (m)") - 1
+    np.testing.assert_array_equal(table["initial_gap_m"], np.tile(initial, len(stages)))
+    np.testing.assert_array_equal(table["gap_m"], np.concatenate([s.gaps for s in stages]))
+    mesh = meshio.read(files["stage_002.vtu"])
+    np.testing.assert_array_equal(mesh.point_data["initial_gap"], initial)
+    with pytest.raises(InvalidInputError, match="initial_gaps"):
+        write_sequence(tmp_path, stages, points, normals, initial_gaps=initial[:-1])

@@ -10,7 +10,8 @@ numbered from 1 in installation order (each fastener, then each load step).
 :func:`write_sequence` writes, in one directory:
 
 - ``stages.csv``: every stage's pairs, one row per (stage, pair), long form: ``stage``,
-  ``label``, ``pair``, ``x (m)``, ``y (m)``, ``z (m)``, ``gap (m)``, ``normal_force (N)``,
+  ``label``, ``pair``, ``x (m)``, ``y (m)``, ``z (m)``, (given the initial gaps:
+  ``initial_gap (m)``), ``gap (m)`` (residual), ``normal_force (N)``,
   ``tangential_force_t1 (N)``, ``tangential_force_t2 (N)``, ``status`` (a label of
   :data:`~contactqp.core.status.STATUS_LABELS`), ``slip_t1 (m)``, ``slip_t2 (m)`` (the
   stage's slip increment), ``fastener_force (N)`` (0 away from installed fasteners);
@@ -86,6 +87,8 @@ STAGE_HEADER = (
     "slip_t2 (m)",
     "fastener_force (N)",
 )
+#: Where ``initial_gap (m)`` goes in :data:`STAGE_HEADER` when the initial gaps are given.
+INITIAL_GAP_COLUMN = STAGE_HEADER.index("gap (m)")
 #: Header of ``fasteners.csv``.
 FASTENER_HEADER = ("stage", "label", "fastener", "pair", "x (m)", "y (m)", "z (m)", "force (N)")
 
@@ -101,6 +104,16 @@ def _geometry(points: ArrayLike, normals: ArrayLike | None = None) -> tuple[np.n
     if n.shape != xyz.shape or not np.isfinite(n).all():
         raise InvalidInputError(f"normals must be finite, of shape {xyz.shape}, got {n.shape}")
     return xyz, n
+
+
+def _initial_gaps(initial_gaps: ArrayLike | None, k: int) -> np.ndarray | None:
+    """The initial gaps (k,) as floats, checked; None stays None."""
+    if initial_gaps is None:
+        return None
+    gaps = np.asarray(initial_gaps, dtype=float)
+    if gaps.shape != (k,) or not np.isfinite(gaps).all():
+        raise InvalidInputError(f"initial_gaps must be finite, of shape ({k},), got {gaps.shape}")
+    return gaps
 
 
 def _stages(sequence: Any) -> list:
@@ -152,15 +165,20 @@ def _checked(stage: Any, k: int, number: int) -> SimpleNamespace:
     )
 
 
-def stage_rows(stage: Any, points: ArrayLike, number: int = 1) -> list[list]:
-    """The rows of ``stages.csv`` of one stage (``number``: its place in the sequence)."""
+def stage_rows(
+    stage: Any, points: ArrayLike, number: int = 1, initial_gaps: ArrayLike | None = None
+) -> list[list]:
+    """The rows of ``stages.csv`` of one stage (``number``: its place in the sequence), with
+    an ``initial_gap`` column when ``initial_gaps`` (k,) are given."""
     (xyz,) = _geometry(points)
     s = _checked(stage, len(xyz), number)
+    initial = _initial_gaps(initial_gaps, len(xyz))
     columns = [
         [number] * len(xyz),
         [s.label] * len(xyz),
         range(len(xyz)),
         *xyz.T.tolist(),
+        *([] if initial is None else [initial.tolist()]),
         s.gaps.tolist(),
         s.normal_forces.tolist(),
         *s.tangential_forces.T.tolist(),
@@ -171,7 +189,12 @@ def stage_rows(stage: Any, points: ArrayLike, number: int = 1) -> list[list]:
     return [list(row) for row in zip(*columns, strict=True)]
 
 
-def write_stage_table(path: str | os.PathLike[str], sequence: Any, points: ArrayLike) -> Path:
+def write_stage_table(
+    path: str | os.PathLike[str],
+    sequence: Any,
+    points: ArrayLike,
+    initial_gaps: ArrayLike | None = None,
+) -> Path:
     """Write ``stages.csv``: every pair of every stage, one row each (header
     :data:`STAGE_HEADER`; module docstring).
 
@@ -181,10 +204,19 @@ def write_stage_table(path: str | os.PathLike[str], sequence: Any, points: Array
     sequence : AssemblySequence or sequence of AssemblyStage
     points : array_like, shape (k, 3)
         Pair positions (m).
+    initial_gaps : array_like, shape (k,), optional
+        The gaps before fastening (m): an ``initial_gap (m)`` column before ``gap (m)``.
     """
     stages = _stages(sequence)
-    rows = (row for n, stage in enumerate(stages, 1) for row in stage_rows(stage, points, n))
-    return write_rows(path, STAGE_HEADER, rows)
+    header = list(STAGE_HEADER)
+    if initial_gaps is not None:
+        header.insert(INITIAL_GAP_COLUMN, "initial_gap (m)")
+    rows = (
+        row
+        for n, stage in enumerate(stages, 1)
+        for row in stage_rows(stage, points, n, initial_gaps)
+    )
+    return write_rows(path, header, rows)
 
 
 def write_fastener_table(path: str | os.PathLike[str], sequence: Any, points: ArrayLike) -> Path:
@@ -199,7 +231,13 @@ def write_fastener_table(path: str | os.PathLike[str], sequence: Any, points: Ar
     return write_rows(path, FASTENER_HEADER, rows)
 
 
-def stage_mesh(stage: Any, points: ArrayLike, normals: ArrayLike, number: int = 1) -> PointMesh:
+def stage_mesh(
+    stage: Any,
+    points: ArrayLike,
+    normals: ArrayLike,
+    number: int = 1,
+    initial_gaps: ArrayLike | None = None,
+) -> PointMesh:
     """One stage's pairs as vertices with their fields, for
     :func:`~contactqp.io.export.write_vtu` (``write_vtu(path, *stage_mesh(...))``).
 
@@ -209,10 +247,12 @@ def stage_mesh(stage: Any, points: ArrayLike, normals: ArrayLike, number: int = 
     the first part as a vector in x, y, z: ``-normal_force n + tangential_force . (t1, t2)``),
     ``slip`` (m, the stage's increment along ``t1, t2``), ``status`` (codes of
     :data:`~contactqp.core.status.STATUS_LABELS`), ``fastener_force`` (N, tension, 0 away from
-    installed fasteners), ``normal`` (the pair normal).
+    installed fasteners), ``normal`` (the pair normal); given ``initial_gaps`` (k,), also
+    ``initial_gap`` (m).
     """
     xyz, n = _geometry(points, normals)
     s = _checked(stage, len(xyz), number)
+    initial = _initial_gaps(initial_gaps, len(xyz))
     tangents = tangent_basis(n)  # (k, 2, 3)
     force = -s.normal_forces[:, None] * n + np.einsum("kj,kjd->kd", s.tangential_forces, tangents)
     data = {
@@ -225,6 +265,8 @@ def stage_mesh(stage: Any, points: ArrayLike, normals: ArrayLike, number: int = 
         "fastener_force": s.tension,
         "normal": n,
     }
+    if initial is not None:
+        data["initial_gap"] = initial
     return PointMesh(xyz, [("vertex", np.arange(len(xyz)).reshape(-1, 1))], data)
 
 
@@ -235,16 +277,20 @@ def write_stage_meshes(
     normals: ArrayLike,
     *,
     stem: str = "stage",
+    initial_gaps: ArrayLike | None = None,
 ) -> dict[str, Path]:
-    """Write one VTU per stage (``stage_001.vtu``, ...) and ``stages.pvd``, their ParaView
-    collection (time step = stage number); ``{file name: path}``."""
+    """Write one VTU per stage (``stage_001.vtu``, ...; :func:`stage_mesh`) and
+    ``stages.pvd``, their ParaView collection (time step = stage number);
+    ``{file name: path}``."""
     directory = Path(directory)
     files = {}
     collection = ElementTree.Element("VTKFile", type="Collection", version="0.1")
     datasets = ElementTree.SubElement(collection, "Collection")
     for number, stage in enumerate(_stages(sequence), 1):
         name = f"{stem}_{number:03d}.vtu"
-        files[name] = write_vtu(directory / name, *stage_mesh(stage, points, normals, number))
+        files[name] = write_vtu(
+            directory / name, *stage_mesh(stage, points, normals, number, initial_gaps)
+        )
         ElementTree.SubElement(datasets, "DataSet", timestep=str(number), part="0", file=name)
     pvd = directory / f"{stem}s.pvd"
     ElementTree.indent(collection)
@@ -341,6 +387,7 @@ def write_sequence(
     points: ArrayLike,
     normals: ArrayLike,
     *,
+    initial_gaps: ArrayLike | None = None,
     plot: bool = False,
 ) -> dict[str, Path]:
     """Write every file of a fastening sequence (module docstring) into ``directory``.
@@ -352,6 +399,8 @@ def write_sequence(
     sequence : AssemblySequence or sequence of AssemblyStage
     points, normals : array_like, shape (k, 3)
         Pair positions (m) and unit normals (from the first part towards the second).
+    initial_gaps : array_like, shape (k,), optional
+        The gaps before fastening (m), written beside the residual ones (CSV and VTU).
     plot : bool
         Also write the PNG figures (needs matplotlib, the ``plot`` extra).
 
@@ -363,10 +412,10 @@ def write_sequence(
     directory = Path(directory)
     stages = _stages(sequence)
     files = {
-        "stages.csv": write_stage_table(directory / "stages.csv", stages, points),
+        "stages.csv": write_stage_table(directory / "stages.csv", stages, points, initial_gaps),
         "fasteners.csv": write_fastener_table(directory / "fasteners.csv", stages, points),
     }
-    files.update(write_stage_meshes(directory, stages, points, normals))
+    files.update(write_stage_meshes(directory, stages, points, normals, initial_gaps=initial_gaps))
     if plot:
         files.update(write_plots(directory, stages, points, normals))
     return files
