@@ -437,3 +437,31 @@ def test_initial_gaps_are_written_beside_the_residual_ones(stages, geometry, tmp
     np.testing.assert_array_equal(mesh.point_data["initial_gap"], initial)
     with pytest.raises(InvalidInputError, match="initial_gaps"):
         write_sequence(tmp_path, stages, points, normals, initial_gaps=initial[:-1])
+
+
+def test_shim_table_and_summary_list_the_pairs_above_the_tolerance(stages, geometry, tmp_path):
+    from rich.console import Console
+
+    points, normals = geometry
+    final = stages[-1]
+    final.gaps[[3, 8, 11]] = [1e-4, 1.0001e-4, 2.5e-4]  # exactly at it: no shim
+    tolerance = 1e-4
+    expected = [p for p in range(K) if final.gaps[p] > tolerance]
+    assert 8 in expected and 11 in expected and 3 not in expected
+    files = write_sequence(tmp_path, stages, points, normals, shim_tolerance=tolerance)
+    header, rows = _read_csv(files["shims.csv"])
+    assert header == ["pair", "x (m)", "y (m)", "z (m)", "gap (m)"]
+    assert [int(row[0]) for row in rows] == expected
+    np.testing.assert_array_equal([float(row[4]) for row in rows], final.gaps[expected])
+    np.testing.assert_array_equal(np.array(rows, dtype=float)[:, 1:4], points[expected])
+    summary = sequence_summary(stages, shim_tolerance=tolerance)
+    assert summary["shim_pairs"] == expected and summary["shim_tolerance"] == tolerance
+    assert [row["shims"] for row in summary["stages"]] == [
+        int(np.count_nonzero(s.gaps > tolerance)) for s in stages
+    ]
+    assert "shims" not in sequence_summary(stages)["stages"][0]
+    console = Console(record=True, width=200)
+    console.print(sequence_table(stages, shim_tolerance=tolerance))
+    assert "gap > 0.1 mm" in console.export_text()
+    with pytest.raises(InvalidInputError, match="shim_tolerance"):
+        sequence_summary(stages, shim_tolerance=-1.0)

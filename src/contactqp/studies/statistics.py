@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 
-__all__ = ["GapStatistics", "gap_statistics"]
+__all__ = ["GapStatistics", "gap_statistics", "shim_tolerance_value"]
 
 
 @dataclass(frozen=True)
@@ -68,10 +68,7 @@ def gap_statistics(
     InvalidInputError
         No successful sample, or a shim tolerance that is negative or not finite.
     """
-    if shim_tolerance is not None and not (np.isfinite(shim_tolerance) and shim_tolerance >= 0):
-        raise InvalidInputError(
-            f"shim_tolerance must be a finite gap >= 0 (m), got {shim_tolerance!r}"
-        )
+    tolerance = None if shim_tolerance is None else shim_tolerance_value(shim_tolerance)
     ok = np.asarray(fields["success"], dtype=bool)
     if not ok.any():
         raise InvalidInputError("no successful sample to compute statistics from")
@@ -83,6 +80,25 @@ def gap_statistics(
         probabilities,
         np.quantile(gaps, probabilities, axis=0),
         closed.mean(axis=0),
-        None if shim_tolerance is None else float(shim_tolerance),
-        None if shim_tolerance is None else (gaps > shim_tolerance).mean(axis=0),
+        tolerance,
+        None if tolerance is None else (gaps > tolerance).mean(axis=0),
     )
+
+
+def shim_tolerance_value(shim_tolerance: float) -> float:
+    """``shim_tolerance`` as a float, checked: a gap (m), finite and >= 0.
+
+    Raises
+    ------
+    InvalidInputError
+        Negative, not finite, or not a number.
+    """
+    try:
+        tolerance = float(shim_tolerance)
+    except (TypeError, ValueError):
+        tolerance = float("nan")
+    if not (np.isfinite(tolerance) and tolerance >= 0):
+        raise InvalidInputError(
+            f"shim_tolerance must be a finite gap >= 0 (m), got {shim_tolerance!r}"
+        )
+    return tolerance

@@ -21,6 +21,8 @@ numbered from 1 in installation order (each fastener, then each load step).
 - ``stage_001.vtu``, ``stage_002.vtu``, ...: the pairs as vertices with their fields
   (:func:`stage_mesh`), and ``stages.pvd``, the ParaView collection of them (one time step per
   stage);
+- with a shim tolerance: ``shims.csv``, the pairs of the last stage whose residual gap is
+  above it: ``pair``, ``x (m)``, ``y (m)``, ``z (m)``, ``gap (m)``;
 - with ``plot``: ``gap.png`` (residual gap of the last stage, fasteners marked),
   ``status.png`` (its pair status, categorical) and ``fastener_forces.png`` (each fastener's
   force against the stages).
@@ -48,7 +50,7 @@ from ...core.contact import tangent_basis
 from ...core.status import STATUS_LABELS, status_counts, status_labels
 from ...errors import InvalidInputError
 from ...io.export import PointMesh, write_rows, write_vtu
-from ...studies.statistics import GapStatistics
+from ...studies.statistics import GapStatistics, shim_tolerance_value
 
 __all__ = [
     "stage_rows",
@@ -56,6 +58,8 @@ __all__ = [
     "write_fastener_table",
     "stage_mesh",
     "write_stage_meshes",
+    "shim_pairs",
+    "write_shim_table",
     "fastener_force_history",
     "map_plane",
     "gap_map_figure",
@@ -299,6 +303,26 @@ def write_stage_meshes(
     return files
 
 
+def shim_pairs(stage: Any, shim_tolerance: float) -> np.ndarray:
+    """The pairs (indices, ascending) whose residual gap in ``stage`` is above
+    ``shim_tolerance`` (m, strictly): where a shim is needed."""
+    tolerance = shim_tolerance_value(shim_tolerance)
+    gaps = np.asarray(stage.gaps, dtype=float).reshape(-1)
+    return np.flatnonzero(gaps > tolerance)
+
+
+def write_shim_table(
+    path: str | os.PathLike[str], stage: Any, points: ArrayLike, shim_tolerance: float
+) -> Path:
+    """Write ``shims.csv``: the pairs of :func:`shim_pairs`, one row each: ``pair``, ``x (m)``,
+    ``y (m)``, ``z (m)``, ``gap (m)``."""
+    (xyz,) = _geometry(points)
+    s = _checked(stage, len(xyz), 1)
+    pairs = shim_pairs(stage, shim_tolerance)
+    rows = ([int(p), *xyz[p].tolist(), float(s.gaps[p])] for p in pairs)
+    return write_rows(path, ["pair", "x (m)", "y (m)", "z (m)", "gap (m)"], rows)
+
+
 def fastener_force_history(sequence: Any) -> tuple[np.ndarray, np.ndarray]:
     """``(pairs, forces)``: the pair of each fastener in order of first installation (f,) and
     its force after each stage (s, f), N, NaN before it is installed."""
@@ -388,6 +412,7 @@ def write_sequence(
     normals: ArrayLike,
     *,
     initial_gaps: ArrayLike | None = None,
+    shim_tolerance: float | None = None,
     plot: bool = False,
 ) -> dict[str, Path]:
     """Write every file of a fastening sequence (module docstring) into ``directory``.
@@ -401,6 +426,8 @@ def write_sequence(
         Pair positions (m) and unit normals (from the first part towards the second).
     initial_gaps : array_like, shape (k,), optional
         The gaps before fastening (m), written beside the residual ones (CSV and VTU).
+    shim_tolerance : float, optional
+        Gap (m) above which a pair needs a shim: writes ``shims.csv`` (the last stage).
     plot : bool
         Also write the PNG figures (needs matplotlib, the ``plot`` extra).
 
@@ -416,6 +443,10 @@ def write_sequence(
         "fasteners.csv": write_fastener_table(directory / "fasteners.csv", stages, points),
     }
     files.update(write_stage_meshes(directory, stages, points, normals, initial_gaps=initial_gaps))
+    if shim_tolerance is not None:
+        files["shims.csv"] = write_shim_table(
+            directory / "shims.csv", stages[-1], points, shim_tolerance
+        )
     if plot:
         files.update(write_plots(directory, stages, points, normals))
     return files
@@ -485,13 +516,16 @@ def plot_statistics_maps(
     return save_figure(statistics_map_figure(statistics, points, normals), path)
 
 
-def sequence_summary(sequence: Any) -> dict[str, Any]:
+def sequence_summary(sequence: Any, *, shim_tolerance: float | None = None) -> dict[str, Any]:
     """A JSON-ready summary of a sequence (SI units).
 
     ``{"success": bool, "pairs": k, "stages": [{"stage", "label", "success", "max_gap" (m),
     "contacts" ({status label: count}, every label), "fasteners" (pairs, installation order),
-    "fastener_forces" (N)}, ...]}``.
+    "fastener_forces" (N)}, ...]}``; with ``shim_tolerance`` (m), each stage also has
+    ``"shims"`` (pairs above it) and the summary ``"shim_tolerance"`` and ``"shim_pairs"``
+    (the last stage's pairs above it).
     """
+    tolerance = None if shim_tolerance is None else shim_tolerance_value(shim_tolerance)
     stages = _stages(sequence)
     k = len(np.asarray(stages[0].gaps))
     rows = []
@@ -508,16 +542,29 @@ def sequence_summary(sequence: Any) -> dict[str, Any]:
                 "fastener_forces": s.fastener_forces.tolist(),
             }
         )
-    return {"success": all(row["success"] for row in rows), "pairs": k, "stages": rows}
+        if tolerance is not None:
+            rows[-1]["shims"] = int(np.count_nonzero(s.gaps > tolerance))
+    summary: dict[str, Any] = {
+        "success": all(row["success"] for row in rows),
+        "pairs": k,
+        "stages": rows,
+    }
+    if tolerance is not None:
+        summary["shim_tolerance"] = tolerance
+        summary["shim_pairs"] = shim_pairs(stages[-1], tolerance).tolist()
+    return summary
 
 
-def sequence_table(sequence: Any, *, title: str | None = None) -> Any:
+def sequence_table(
+    sequence: Any, *, title: str | None = None, shim_tolerance: float | None = None
+) -> Any:
     """A :class:`rich.table.Table` of a sequence, one row per stage: label, success, largest
-    gap (mm), the pairs of each status present in any stage, and the newest fastener's force,
-    the smallest and the largest fastener force (N)."""
+    gap (mm), the pairs of each status present in any stage, with ``shim_tolerance`` the pairs
+    above it, and the newest fastener's force, the smallest and the largest fastener force (N)."""
     from rich.table import Table
 
-    summary = sequence_summary(sequence)
+    summary = sequence_summary(sequence, shim_tolerance=shim_tolerance)
+    shims = [] if shim_tolerance is None else [f"gap > {summary['shim_tolerance'] * 1e3:.4g} mm"]
     present = [
         label for label in STATUS_LABELS if any(row["contacts"][label] for row in summary["stages"])
     ]
@@ -525,7 +572,7 @@ def sequence_table(sequence: Any, *, title: str | None = None) -> Any:
     table.add_column("stage", justify="right")
     table.add_column("label")
     table.add_column("ok")
-    for column in ("max gap (mm)", *present, "newest fastener (N)", "min (N)", "max (N)"):
+    for column in ("max gap (mm)", *present, *shims, "newest fastener (N)", "min (N)", "max (N)"):
         table.add_column(column, justify="right")
     for row in summary["stages"]:
         forces = row["fastener_forces"]
@@ -536,6 +583,7 @@ def sequence_table(sequence: Any, *, title: str | None = None) -> Any:
             "yes" if row["success"] else "[red]no[/red]",
             f"{row['max_gap'] * 1e3:.4g}",
             *(str(row["contacts"][label]) for label in present),
+            *([str(row["shims"])] if shims else []),
             *(numbers or ["-"] * 3),
         )
     return table
