@@ -146,7 +146,8 @@ def _checked(stage: Any, k: int, number: int) -> SimpleNamespace:
         arrays[name] = values
     status = arrays["status"].astype(int)
     if status.size and (status.min() < 0 or status.max() >= len(STATUS_LABELS)):
-        raise InvalidInputError(f"{what}: status codes must be ContactStatus codes 0..4")
+        highest = len(STATUS_LABELS) - 1
+        raise InvalidInputError(f"{what}: status codes must be ContactStatus codes 0..{highest}")
     pairs = np.asarray(stage.fasteners, dtype=int).reshape(-1)
     forces = np.asarray(stage.fastener_forces, dtype=float).reshape(-1)
     if forces.shape != pairs.shape or (pairs.size and (pairs.min() < 0 or pairs.max() >= k)):
@@ -352,57 +353,81 @@ def map_plane(points: ArrayLike, normals: ArrayLike) -> tuple[np.ndarray, tuple[
     return xyz[:, [first, second]], (f"{names[first]} (mm)", f"{names[second]} (mm)")
 
 
+def _gap_map(stage: Any, points: ArrayLike, normals: ArrayLike) -> dict[str, Any]:
+    """What :func:`~contactqp.io.plot.point_maps_figure` takes to draw a stage's gap map."""
+    xy, axes = map_plane(points, normals)
+    s = _checked(stage, len(xy), 1)
+    return {
+        "points": xy,
+        "panels": [(s.gaps * 1e3, f"residual gap (mm), {s.label}", "viridis")],
+        "marked": xy[s.fasteners] if s.fasteners.size else None,
+        "marked_label": "fasteners",
+        "axis_labels": axes,
+    }
+
+
+def _status_map(stage: Any, points: ArrayLike, normals: ArrayLike) -> dict[str, Any]:
+    """What :func:`~contactqp.io.plot.point_maps_figure` takes to draw a stage's status map."""
+    from ...io.plot import STATUS_COLOURS
+
+    xy, axes = map_plane(points, normals)
+    s = _checked(stage, len(xy), 1)
+    labels = np.array(status_labels(s.status), dtype=str)
+    return {
+        "points": xy,
+        "panels": [(labels, f"status, {s.label}", STATUS_COLOURS)],
+        "axis_labels": axes,
+    }
+
+
+def _fastener_series(sequence: Any) -> tuple[list[str], np.ndarray, list[str]]:
+    """``(stage labels, forces (s, f), fastener names)`` for the fastener force plot."""
+    stages = _stages(sequence)
+    pairs, forces = fastener_force_history(stages)
+    return [str(stage.label) for stage in stages], forces, [f"pair {pair}" for pair in pairs]
+
+
 def gap_map_figure(stage: Any, points: ArrayLike, normals: ArrayLike) -> Any:
     """Map of a stage's residual gap (mm, colour scale), its installed fasteners marked."""
     from ...io.plot import point_maps_figure
 
-    xy, axes = map_plane(points, normals)
-    s = _checked(stage, len(xy), 1)
-    title = f"residual gap (mm), {s.label}"
-    return point_maps_figure(
-        xy,
-        [(s.gaps * 1e3, title, "viridis")],
-        marked=xy[s.fasteners] if s.fasteners.size else None,
-        marked_label="fasteners",
-        axis_labels=axes,
-    )
+    return point_maps_figure(**_gap_map(stage, points, normals))
 
 
 def status_map_figure(stage: Any, points: ArrayLike, normals: ArrayLike) -> Any:
     """Map of a stage's pair status: one colour per status present
     (:data:`~contactqp.io.plot.STATUS_COLOURS`), named in the legend."""
-    from ...io.plot import STATUS_COLOURS, point_maps_figure
+    from ...io.plot import point_maps_figure
 
-    xy, axes = map_plane(points, normals)
-    s = _checked(stage, len(xy), 1)
-    labels = np.array(status_labels(s.status), dtype=str)
-    return point_maps_figure(xy, [(labels, f"status, {s.label}", STATUS_COLOURS)], axis_labels=axes)
+    return point_maps_figure(**_status_map(stage, points, normals))
 
 
 def fastener_forces_figure(sequence: Any) -> Any:
     """Each fastener's force (N) against the stages, one line per fastener."""
-    from ...io.plot import fastener_forces_figure as forces_figure
+    from ...io import plot
 
-    stages = _stages(sequence)
-    pairs, forces = fastener_force_history(stages)
-    names = [f"pair {pair}" for pair in pairs]
-    return forces_figure([str(stage.label) for stage in stages], forces, names)
+    return plot.fastener_forces_figure(*_fastener_series(sequence))
 
 
 def write_plots(
     directory: str | os.PathLike[str], sequence: Any, points: ArrayLike, normals: ArrayLike
 ) -> dict[str, Path]:
     """Write ``gap.png`` and ``status.png`` (the last stage) and ``fastener_forces.png``."""
-    from ...io.plot import save_figure
+    from ...io.plot import plot_fastener_forces, plot_point_maps
 
     directory = Path(directory)
     stages = _stages(sequence)
-    figures = {
-        "gap.png": gap_map_figure(stages[-1], points, normals),
-        "status.png": status_map_figure(stages[-1], points, normals),
-        "fastener_forces.png": fastener_forces_figure(stages),
+    return {
+        "gap.png": plot_point_maps(
+            path=directory / "gap.png", **_gap_map(stages[-1], points, normals)
+        ),
+        "status.png": plot_point_maps(
+            path=directory / "status.png", **_status_map(stages[-1], points, normals)
+        ),
+        "fastener_forces.png": plot_fastener_forces(
+            *_fastener_series(stages), directory / "fastener_forces.png"
+        ),
     }
-    return {name: save_figure(figure, directory / name) for name, figure in figures.items()}
 
 
 def write_sequence(
@@ -429,7 +454,7 @@ def write_sequence(
     shim_tolerance : float, optional
         Gap (m) above which a pair needs a shim: writes ``shims.csv`` (the last stage).
     plot : bool
-        Also write the PNG figures (needs matplotlib, the ``plot`` extra).
+        Also write the PNG figures (the ``plot`` extra).
 
     Returns
     -------
@@ -485,10 +510,11 @@ def write_statistics(
     return write_rows(path, header, rows)
 
 
-def statistics_map_figure(statistics: GapStatistics, points: ArrayLike, normals: ArrayLike) -> Any:
-    """Maps of the mean residual gap (mm), the probability of contact and, with a shim
-    tolerance, the probability of a gap above it (both on the scale 0 to 1)."""
-    from ...io.plot import MapPanel, point_maps_figure
+def _statistics_maps(
+    statistics: GapStatistics, points: ArrayLike, normals: ArrayLike
+) -> dict[str, Any]:
+    """What :func:`~contactqp.io.plot.point_maps_figure` takes to draw the study's maps."""
+    from ...io.plot import MapPanel
 
     xy, axes = map_plane(points, normals)
     samples = f", {statistics.samples} samples"
@@ -501,7 +527,15 @@ def statistics_map_figure(statistics: GapStatistics, points: ArrayLike, normals:
     if statistics.shim_probability is not None and statistics.shim_tolerance is not None:
         title = f"probability of a gap above {statistics.shim_tolerance * 1e3:.4g} mm{samples}"
         panels.append(MapPanel(statistics.shim_probability, title, "magma", (0, 1)))
-    return point_maps_figure(xy, panels, axis_labels=axes)
+    return {"points": xy, "panels": panels, "axis_labels": axes}
+
+
+def statistics_map_figure(statistics: GapStatistics, points: ArrayLike, normals: ArrayLike) -> Any:
+    """Maps of the mean residual gap (mm), the probability of contact and, with a shim
+    tolerance, the probability of a gap above it (both on the scale 0 to 1)."""
+    from ...io.plot import point_maps_figure
+
+    return point_maps_figure(**_statistics_maps(statistics, points, normals))
 
 
 def plot_statistics_maps(
@@ -510,10 +544,11 @@ def plot_statistics_maps(
     normals: ArrayLike,
     path: str | os.PathLike[str],
 ) -> Path:
-    """Write :func:`statistics_map_figure` to ``path`` (its suffix chooses the format)."""
-    from ...io.plot import save_figure
+    """Write the maps of :func:`statistics_map_figure` to ``path`` (its suffix chooses the
+    format)."""
+    from ...io.plot import plot_point_maps
 
-    return save_figure(statistics_map_figure(statistics, points, normals), path)
+    return plot_point_maps(path=path, **_statistics_maps(statistics, points, normals))
 
 
 def sequence_summary(sequence: Any, *, shim_tolerance: float | None = None) -> dict[str, Any]:
