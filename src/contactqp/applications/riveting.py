@@ -57,7 +57,6 @@ from ..core.fastened import FastenedProblem
 from ..core.model import ReducedModel, finite_array
 from ..core.problem import ContactProblem
 from ..core.result import FastenedResult
-from ..core.status import STATUS_LABELS
 from ..errors import InvalidInputError
 from ..io.export import PointMesh
 from ..methods import solve
@@ -417,19 +416,14 @@ def plot_status(
     initial_gaps: ArrayLike,
     path: str | os.PathLike[str],
 ) -> Path:
-    """Maps of the initial and residual gaps (mm) and of the pair status, the fasteners marked
-    (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
-    from ..io.plot import plot_point_maps
+    """Maps of the initial and residual gaps (mm) and of the pair status (categorical, with a
+    legend), the fasteners marked (drawn by :func:`contactqp.io.plot.plot_point_maps`)."""
+    from ..io.plot import STATUS_COLOURS, plot_point_maps
 
     panels = [
         (np.asarray(initial_gaps) * 1e3, "initial gap (mm)", "viridis"),
         (state.gaps * 1e3, "residual gap (mm)", "viridis"),
-        (
-            state.contact_status,
-            "status: "
-            + " / ".join(f"{code} {STATUS_LABELS[code]}" for code in FastenedResult.STATUSES),
-            "coolwarm",
-        ),
+        (np.array(state.status_labels, dtype=str), "status", STATUS_COLOURS),
     ]
     return plot_point_maps(
         model.points, panels, path, marked=model.points[state.fasteners], marked_label="fasteners"

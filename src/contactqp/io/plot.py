@@ -9,7 +9,7 @@ takes plain arrays in SI units (an application picks them from its own objects, 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -23,7 +23,12 @@ __all__ = [
     "plot_spring_chain",
     "plot_deflections",
     "DeflectionCase",
+    "MapPanel",
+    "STATUS_COLOURS",
+    "point_maps_figure",
     "plot_point_maps",
+    "fastener_forces_figure",
+    "plot_fastener_forces",
     "plot_statistics",
     "plot_sliding_curve",
     "save_figure",
@@ -93,13 +98,109 @@ def plot_spring_chain(
     return save_figure(figure, path)
 
 
+class MapPanel(NamedTuple):
+    """One panel of :func:`point_maps_figure`; a plain ``(values, title, colours)`` tuple will do.
+
+    ``values`` of shape (m,) are numbers, drawn on a colour scale (``colours`` a matplotlib
+    colormap name, ``limits`` its ``(low, high)``, default the values' range), or labels (str),
+    drawn as categories: one colour per label present (``colours`` a ``{label: colour}``
+    mapping, whose order is the legend's; labels it lacks take the next ``tab10`` colour) and
+    a legend instead of a colour bar.
+    """
+
+    values: ArrayLike
+    title: str
+    colours: str | Mapping[str, str] = "viridis"
+    limits: tuple[float, float] | None = None
+
+
+#: Colour of each contact status label (:data:`contactqp.core.status.STATUS_LABELS`) on maps.
+STATUS_COLOURS: dict[str, str] = {
+    "open": "#bdbdbd",
+    "stick": "#1b9e77",
+    "slip": "#d95f02",
+    "closed": "#1f78b4",
+    "fastened": "#000000",
+}
+
+
+def point_maps_figure(
+    points: ArrayLike,
+    panels: Sequence[MapPanel | tuple],
+    *,
+    marked: ArrayLike | None = None,
+    marked_label: str = "",
+    axis_labels: tuple[str, str] = ("x (mm)", "y (mm)"),
+) -> Any:
+    """The figure :func:`plot_point_maps` writes (a :class:`matplotlib.figure.Figure`).
+
+    A categorical panel's legend holds exactly the labels present in its values (and, on the
+    first panel, the marked points); each other panel has a colour bar.
+    """
+    xy = np.asarray(points, dtype=float)
+    if xy.ndim != 2 or xy.shape[1] != 2:
+        raise InvalidInputError(f"map points must have shape (m, 2), got {xy.shape}")
+    xy = xy * 1e3
+    figure, axes = subplots(
+        len(panels), 1, figsize=(7, 0.5 + 3.0 * len(panels)), sharex=True, squeeze=False
+    )
+    axes = axes[:, 0]
+    for n, (ax, panel) in enumerate(zip(axes, panels, strict=True)):
+        panel = MapPanel(*panel)
+        values = np.asarray(panel.values)
+        if values.shape != (len(xy),):
+            raise InvalidInputError(
+                f"map panel {panel.title!r}: {values.shape} values for {len(xy)} points"
+            )
+        categorical = values.dtype.kind in "USO"
+        if categorical:
+            _draw_categories(ax, xy, values.astype(str), panel.colours)
+        else:
+            low, high = panel.limits if panel.limits is not None else (None, None)
+            colours = panel.colours if isinstance(panel.colours, str) else "viridis"
+            shown = ax.scatter(
+                xy[:, 0], xy[:, 1], c=values, cmap=colours, vmin=low, vmax=high, s=18
+            )
+            figure.colorbar(shown, ax=ax)
+        if marked is not None:  # named in the first panel's legend only
+            ax.plot(
+                *(np.asarray(marked, dtype=float).reshape(-1, 2) * 1e3).T,
+                "k+",
+                ms=10,
+                label=marked_label if n == 0 else "_nolegend_",
+            )
+        if categorical:  # beside the map, where a colour bar would be
+            ax.legend(loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize="small")
+        elif marked is not None and n == 0:
+            ax.legend(loc="best", fontsize="small")
+        ax.set_title(panel.title)
+        ax.set_ylabel(axis_labels[1])
+        ax.set_aspect("equal")
+    axes[-1].set_xlabel(axis_labels[0])
+    figure.tight_layout()
+    return figure
+
+
+def _draw_categories(ax: Any, xy: np.ndarray, labels: np.ndarray, colours: Any) -> None:
+    """Scatter ``xy`` one label at a time, each label its colour (named for the legend)."""
+    given = dict(colours) if isinstance(colours, Mapping) else {}
+    present = [label for label in given if label in set(labels)]
+    present += sorted(set(labels) - set(present))
+    spare = iter(f"C{i % 10}" for i in range(len(present)))
+    for label in present:
+        where = labels == label
+        colour = given[label] if label in given else next(spare)
+        ax.scatter(xy[where, 0], xy[where, 1], color=colour, s=18, label=label)
+
+
 def plot_point_maps(
     points: ArrayLike,
-    panels: Sequence[tuple[ArrayLike, str, str]],
+    panels: Sequence[MapPanel | tuple],
     path: str | os.PathLike[str],
     *,
     marked: ArrayLike | None = None,
     marked_label: str = "",
+    axis_labels: tuple[str, str] = ("x (mm)", "y (mm)"),
 ) -> Path:
     """Maps of values at points in a plane, one panel above the other, sharing the x axis.
 
@@ -107,34 +208,71 @@ def plot_point_maps(
     ----------
     points : array_like, shape (m, 2)
         Positions (m); drawn in mm.
-    panels : sequence of (array_like, str, str)
-        ``(values, title, colormap)`` of each panel; ``values`` has shape (m,).
+    panels : sequence of MapPanel or (array_like, str, str)
+        ``(values, title, colours[, limits])`` of each panel (:class:`MapPanel`): numbers on a
+        colour scale, or labels as categories with a legend.
     path : str or Path
         Output file; its suffix chooses the format.
     marked : array_like, shape (j, 2), optional
         Positions (m) marked with a cross on every panel, named ``marked_label`` in a legend.
+    axis_labels : (str, str)
+        Labels of the horizontal and vertical axes (the coordinates are drawn in mm).
     """
-    xy = np.asarray(points, dtype=float) * 1e3
-    figure, axes = subplots(len(panels), 1, figsize=(7, 9.5), sharex=True, squeeze=False)
-    axes = axes[:, 0]
-    for ax, (values, title, cmap) in zip(axes, panels, strict=True):
-        shown = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap=cmap, s=18)
-        figure.colorbar(shown, ax=ax)
-        if marked is not None:
-            ax.plot(
-                *(np.asarray(marked, dtype=float).reshape(-1, 2) * 1e3).T,
-                "k+",
-                ms=10,
-                label=marked_label,
-            )
-        ax.set_title(title)
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal")
-    if marked is not None:
-        axes[0].legend(loc="upper right", fontsize="small")
-    axes[-1].set_xlabel("x (mm)")
-    figure.tight_layout()
+    figure = point_maps_figure(
+        points, panels, marked=marked, marked_label=marked_label, axis_labels=axis_labels
+    )
     return save_figure(figure, path)
+
+
+def fastener_forces_figure(
+    stage_labels: Sequence[str], forces: ArrayLike, names: Sequence[str]
+) -> Any:
+    """The figure :func:`plot_fastener_forces` writes (a :class:`matplotlib.figure.Figure`):
+    one line per fastener, in ``names`` order."""
+    force = np.asarray(forces, dtype=float)
+    if force.ndim != 2 or force.shape != (len(stage_labels), len(names)):
+        raise InvalidInputError(
+            f"fastener forces must have shape ({len(stage_labels)} stages, {len(names)} "
+            f"fasteners), got {force.shape}"
+        )
+    stages = np.arange(1, len(stage_labels) + 1)
+    figure, axes = subplots(figsize=(8, 4.5))
+    for column, name in enumerate(names):
+        axes.plot(stages, force[:, column], marker="o", ms=4, label=name)
+    axes.axhline(0.0, color="0.5", lw=0.8)
+    axes.set_xticks(stages)
+    if len(stages) <= 20:
+        axes.set_xticklabels(stage_labels, rotation=30, ha="right", fontsize="small")
+    axes.set_xlabel("stage of the installation sequence")
+    axes.set_ylabel("fastener force (N), tension > 0")
+    axes.set_title("Fastener forces along the sequence")
+    axes.grid(True, alpha=0.3)
+    axes.legend(fontsize="small", ncol=max(1, len(names) // 10 + 1))
+    figure.tight_layout()
+    return figure
+
+
+def plot_fastener_forces(
+    stage_labels: Sequence[str],
+    forces: ArrayLike,
+    names: Sequence[str],
+    path: str | os.PathLike[str],
+) -> Path:
+    """Each fastener's force against the stages of an installation sequence.
+
+    Parameters
+    ----------
+    stage_labels : sequence of str
+        The stages, in order (drawn at x = 1, 2, ...).
+    forces : array_like, shape (s, f)
+        Force of fastener ``j`` after stage ``i`` (N, tension > 0); NaN before it is installed
+        (no point drawn).
+    names : sequence of str
+        One legend entry per fastener.
+    path : str or Path
+        Output file; its suffix chooses the format.
+    """
+    return save_figure(fastener_forces_figure(stage_labels, forces, names), path)
 
 
 def plot_statistics(statistics: Any, coordinates: ArrayLike, path: str | os.PathLike[str]) -> Path:

@@ -185,9 +185,15 @@ class BatchData:
     indices: np.ndarray
     fields: dict
 
-    def statistics(self, levels: Sequence[float] = (0.05, 0.5, 0.95)) -> GapStatistics:
-        """:class:`GapStatistics` of the ``gap`` and ``closed`` fields (successful samples)."""
-        return gap_statistics(self.fields, levels)
+    def statistics(
+        self,
+        levels: Sequence[float] = (0.05, 0.5, 0.95),
+        *,
+        shim_tolerance: float | None = None,
+    ) -> GapStatistics:
+        """:class:`GapStatistics` of the ``gap`` and ``closed`` fields (successful samples);
+        with ``shim_tolerance`` (m), also the probability of a gap above it."""
+        return gap_statistics(self.fields, levels, shim_tolerance=shim_tolerance)
 
 
 def load_batch(path: str | os.PathLike[str], n_samples: int | None = None) -> BatchData:
