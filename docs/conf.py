@@ -12,6 +12,7 @@ import inspect
 import sys
 from pathlib import Path
 
+import jinja2
 import jinja2.sandbox
 import numpydoc.docscrape
 import numpydoc.docscrape_sphinx
@@ -93,16 +94,16 @@ def skip_member(app, what, name, obj, skip, options):
 def _numpydoc_template_once() -> None:
     """numpydoc compiles its Jinja template anew for every docstring (a third of the build
     here): compile it once per builder and hand it to numpydoc's own docstring reader."""
-    original = numpydoc.docscrape_sphinx.get_doc_object
     templates: dict = {}
     folder = Path(numpydoc.docscrape_sphinx.__file__).parent / "templates"
 
     def get_doc_object(obj, what=None, doc=None, config=None, builder=None):
-        if builder is None:
-            return original(obj, what, doc, config, builder)
-        if id(builder) not in templates:
-            loader = sphinx.jinja2glue.BuiltinTemplateLoader()
-            loader.init(builder, dirs=[str(folder)])
+        if id(builder) not in templates:  # builder None: numpydoc's signature pass
+            if builder is None:
+                loader = jinja2.FileSystemLoader([str(folder)])
+            else:
+                loader = sphinx.jinja2glue.BuiltinTemplateLoader()
+                loader.init(builder, dirs=[str(folder)])
             environment = jinja2.sandbox.SandboxedEnvironment(loader=loader)
             templates[id(builder)] = environment.get_template("numpydoc_docstring.rst")
         config = {} if config is None else config
