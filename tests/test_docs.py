@@ -77,7 +77,8 @@ def test_every_gallery_example_is_run_by_the_build_or_by_a_test():
         assert re.search(rf"\b{name}\b", tests), f"examples/{name}.py is neither run nor tested"
     for name in sorted(scripts):  # the gallery takes its title from the docstring's heading
         lines = ast.get_docstring(ast.parse((EXAMPLES / f"{name}.py").read_text())).splitlines()
-        assert len(lines) > 1 and set(lines[1]) == {"="} and len(lines[1]) >= len(lines[0]), name
+        titled = len(lines) > 1 and set(lines[1]) == {"="} and len(lines[1]) >= len(lines[0])
+        assert titled, f"examples/{name}.py: underline the docstring's first line with '='"
 
 
 def test_the_api_reference_reaches_every_public_module():

@@ -51,6 +51,10 @@ def _figure(value) -> str:
 class ContactResult:
     """The answer to a contact problem; a frictionless answer is one of these.
 
+    ``repr`` gives one line; in a notebook the result shows as a small table of the same
+    (``_repr_html_``: method, verdict, message, iterations, seconds, contacts by status and the
+    certificate's residuals).
+
     Attributes
     ----------
     displacements : ndarray, shape (n,)
