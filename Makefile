@@ -9,7 +9,7 @@ VENV_NASTRAN := .venv-nastran
 BIN_NASTRAN := $(VENV_NASTRAN)/bin
 STAMP_NASTRAN := $(VENV_NASTRAN)/.test-installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint docs bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -43,7 +43,7 @@ demo: $(STAMP_DEMO)
 # every test runs: the main run (numpy of `demo`) deselects exactly the `nastran` marker, which
 # the second run selects (pytest's "deselected" and "passed" counts show both)
 # lint first: a ruff or mypy finding fails `make test`
-test: lint $(STAMP_NASTRAN)
+test: lint docs $(STAMP_NASTRAN)
 	@$(BIN)/python -c "import numpy; print('main tests on numpy', numpy.__version__)"
 	$(BIN)/python -m pytest -q -m "not nastran"
 	@$(BIN_NASTRAN)/python -c "import numpy; print('NASTRAN tests on numpy', numpy.__version__)"
@@ -55,8 +55,15 @@ lint: $(STAMP_TEST)
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
+# the documentation site, offline (no intersphinx, nothing fetched): every warning is an error
+# (-W --keep-going reports them all) and every cross-reference must resolve (-n); the gallery
+# runs the examples. Open docs/_build/html/index.html
+docs: $(STAMP_TEST)
+	$(BIN)/sphinx-build -W --keep-going -n -q -b html docs docs/_build/html
+	@echo "documentation in docs/_build/html/index.html"
+
 bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_frictionless.py
 
 clean:
-	rm -rf $(VENV) $(VENV_NASTRAN) out build src/*.egg-info src/contactqp/kernels/compiled.c src/contactqp/kernels/compiled.*.so
+	rm -rf $(VENV) $(VENV_NASTRAN) out build docs/_build docs/auto_examples docs/api/generated docs/sg_execution_times.rst src/*.egg-info src/contactqp/kernels/compiled.c src/contactqp/kernels/compiled.*.so

@@ -1,4 +1,5 @@
 r"""Cattaneo-Mindlin: a sphere pressed on a half-space, then sheared by ``Q < mu P``.
+=================================================================================
 
 A rigid sphere (radius ``R_s``) is pushed a depth ``d`` into an elastic half-space, then moved
 tangentially by ``delta`` along x with the depth kept. The surface is cut into square cells of side

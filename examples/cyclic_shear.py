@@ -1,11 +1,12 @@
 r"""Cyclic shear of the spring chain with friction: a hysteresis loop against its closed form.
+==========================================================================================
 
 The chain of :mod:`contactqp.applications.springs` (``n`` bodies of mass ``m`` on a floor, springs
 of stiffness ``c`` from the wall to body 1 and between neighbours, a force ``F`` on the last body)
 is built here as a 2-D reduced model: each body is a node with a horizontal and a vertical freedom,
 pressed on the floor (a :class:`~contactqp.PlaneObstacle`) by its weight, with Coulomb friction
 ``mu``. The force goes 0 -> F_max -> -F_max -> F_max ... and each step is solved from the previous
-state (:func:`~contactqp.core.history.solve_history`).
+state (:func:`~contactqp.methods.history.solve_history`).
 
 Closed form (derived for this example; ``L = mu m g``). Loaded from rest (virgin curve),
 
@@ -175,4 +176,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    status = main()
+    if status:  # exit 0 by returning (the docs gallery runs this file in its own process)
+        sys.exit(status)

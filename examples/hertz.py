@@ -1,4 +1,5 @@
 r"""Hertz contact: a rigid sphere pressed into an elastic half-space, against Hertz's theory.
+=========================================================================================
 
 The half-space surface is cut into square cells of side ``h`` carrying uniform pressure; their
 normal flexibility is Love's closed form (:func:`contactqp.compliance.normal_influence`). The

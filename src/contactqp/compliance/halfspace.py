@@ -10,7 +10,7 @@ by the Boussinesq value
 
 along the force. A uniform pressure ``p`` on a rectangle displaces a surface point ``(X, Y)``
 (relative to the rectangle's centre) by the integral of this kernel over the rectangle, which Love
-(1929) gave in closed form:
+(1929) gave in closed form [Love1929]_:
 
 .. math::
 
@@ -29,7 +29,7 @@ half-space, say): a force pulling the surface out lifts it, a force pressing in 
 matrix entries are positive.
 
 A point force ``Q`` tangential to the surface (along x) displaces the surface by Cerruti's
-solution (Johnson 1985, eq. 2.19 at z = 0; G = E / (2 (1 + nu)) the shear modulus):
+solution ([Johnson1985]_, eq. 2.19 at z = 0; G = E / (2 (1 + nu)) the shear modulus):
 
 .. math::
 

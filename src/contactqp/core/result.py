@@ -16,6 +16,7 @@ The certificates are in :mod:`contactqp.core.certificate`.
 from __future__ import annotations
 
 import dataclasses
+import html
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -39,9 +40,20 @@ __all__ = [
 SUCCESS, NOT_CONVERGED, CERTIFICATE_FAILED = 0, 1, 2
 
 
+def _figure(value) -> str:
+    """A certificate's entry as shown in :meth:`ContactResult._repr_html_`."""
+    if isinstance(value, float):
+        return f"{value:.2e}"
+    return str(value)
+
+
 @dataclass(kw_only=True)
 class ContactResult:
     """The answer to a contact problem; a frictionless answer is one of these.
+
+    ``repr`` gives one line; in a notebook the result shows as a small table of the same
+    (``_repr_html_``: method, verdict, message, iterations, seconds, contacts by status and the
+    certificate's residuals).
 
     Attributes
     ----------
@@ -143,6 +155,44 @@ class ContactResult:
             "max_force": float(np.max(self.forces, initial=0.0)),
             "min_gap": float(np.min(self.gaps, initial=np.inf)),
         }
+
+    def _repr_html_(self) -> str:
+        """A small HTML table for notebooks: the verdict, the work done, the contacts by status
+        and the certificate's worst residual against its tolerance (every text escaped)."""
+        counts = status_counts(self.contact_status)
+        certificate = self.certificate
+        verdict = "passed" if certificate.passed else "failed"
+        rows = [
+            ("method", self.method),
+            ("success", f"{self.success} (status {self.status})"),
+            ("message", self.message),
+            ("iterations", str(self.iterations)),
+            ("seconds", f"{self.seconds:.3g}"),
+            (
+                "contacts",
+                f"{self.n_contacts}: "
+                + ", ".join(f"{counts[s.label]} {s.label}" for s in self.STATUSES),
+            ),
+            (
+                "certificate",
+                f"{verdict}: worst residual {certificate.worst:.2e} "
+                f"(tolerance {certificate.tol:.0e})",
+            ),
+            (
+                "residuals",
+                ", ".join(
+                    f"{name} {_figure(value)}"
+                    for name, value in certificate.as_dict().items()
+                    if name not in ("tol", "passed")
+                ),
+            ),
+        ]
+        body = "".join(
+            f"<tr><th style='text-align:left'>{html.escape(name)}</th>"
+            f"<td style='text-align:left'>{html.escape(value)}</td></tr>"
+            for name, value in rows
+        )
+        return f"<table><caption>{html.escape(type(self).__name__)}</caption>{body}</table>"
 
     def __repr__(self) -> str:
         counts = status_counts(self.contact_status)

@@ -11,7 +11,8 @@ symmetric ``W`` the local problem is the convex second-order cone program
 whose optimality conditions are exactly those of the Coulomb problem at ``s_i = mu_i r_N,i``
 (``u_N >= 0`` complementary to ``r_N``, sliding opposite to ``r_T`` on the bound, sticking
 inside). Updating ``s = mu r_N`` and solving again is the Tresca fixed point; it converges for
-small ``mu`` (where the Coulomb solution is unique) and is a classical reference route.
+small ``mu`` (where the Coulomb solution is unique) and is a classical reference route
+[1]_, [2]_; the cone programs are solved by Clarabel [3]_.
 A slightly unsymmetric ``W`` (e.g. FCLIB files written with few digits) is split into its
 symmetric part, kept in the cone program, and its skew part, moved to the right-hand side with
 the previous reactions, so that a fixed point solves the problem with the given ``W``. Cohesion

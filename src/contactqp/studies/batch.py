@@ -114,7 +114,7 @@ def run_batch(
     limit: int | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> BatchSummary:
-    """Solve samples ``0 .. n_samples-1`` of ``source`` with ``case``; store and resume.
+    """Solve samples ``0`` to ``n_samples - 1`` of ``source`` with ``case``; store and resume.
 
     Parameters
     ----------
