@@ -59,7 +59,7 @@ numpydoc_xref_param_type = False
 nitpicky = True
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|scipy|sp|h5py|meshio|skfem|matplotlib|dask|distributed|ansys)\..*"),
-    (r"py:.*", r"(qpsolvers|enum\.IntEnum|abc\.ABC)"),
+    (r"py:.*", r"(qpsolvers|rich\..*|enum\.IntEnum|abc\.ABC)"),
 ]
 
 myst_heading_anchors = 3
