@@ -275,6 +275,18 @@ class LocalForm:
         self.offset[:: frames.dim] = constraints.gaps
         self._model = model
 
+    def restricted(self, contacts: np.ndarray, dim: int, gaps: np.ndarray) -> LocalForm:
+        """The form of the contacts ``contacts`` (indices) only, on initial gaps ``gaps``
+        (m, one per kept contact): rows, columns and blocks of this one, nothing assembled."""
+        rows = (dim * np.asarray(contacts, dtype=int)[:, None] + np.arange(dim)).ravel()
+        twin = copy.copy(self)
+        twin.operator = self.operator[rows]
+        twin.influence = self.influence[:, rows]
+        twin.W = self.W[np.ix_(rows, rows)]
+        twin.offset = np.zeros(len(rows))
+        twin.offset[::dim] = gaps
+        return twin
+
     def free_displacements(self, loads: np.ndarray) -> np.ndarray:
         """``R P`` (m)."""
         return self._model.displacements(loads)
@@ -449,6 +461,63 @@ class FrictionalProblem:
         twin = copy.copy(self)
         twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
         twin._local = self.local()
+        twin.previous = previous
+        twin._previous_tangential()
+        return twin
+
+    def restricted(self, contacts, *, loads=None, gaps=None, previous=None) -> FrictionalProblem:
+        """The same model and law on the contacts ``contacts`` only (e.g. those a fastener
+        leaves), their local form sliced from this problem's: nothing is assembled again.
+
+        Parameters
+        ----------
+        contacts : array_like of int
+            Distinct indices of the kept contacts, in the order they take.
+        loads : array_like, shape (n_freedoms,), optional
+            External forces (N); this problem's by default.
+        gaps : array_like, shape (len(contacts),), optional
+            Initial gaps of the kept contacts (m); theirs in this problem by default.
+        previous : FrictionalResult, optional
+            The state the increment starts from, a result with the kept contacts (None: rest).
+        """
+        kept = np.asarray(contacts, dtype=int).reshape(-1)
+        k = self.n_contacts
+        if kept.size == 0 or kept.min() < 0 or kept.max() >= k or np.unique(kept).size < kept.size:
+            raise InvalidInputError(
+                f"contacts must be distinct indices in 0..{k - 1}, at least one"
+            )
+        values = self.constraints.gaps[kept]
+        if gaps is not None:
+            values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
+            if values.shape != kept.shape:
+                raise InvalidInputError(f"gaps must have shape ({kept.size},), got {values.shape}")
+        d = self.dim
+        rows = (d * kept[:, None] + np.arange(d)).ravel()
+        twin = copy.copy(self)
+        constraints = self.constraints
+        twin.constraints = dataclasses.replace(
+            constraints,
+            matrix=constraints.matrix[kept],
+            gaps=values,
+            nodes=constraints.nodes[kept],
+            labels=[constraints.labels[i] for i in kept] if constraints.labels else [],
+        )
+        frames = self.frames
+        twin.frames = dataclasses.replace(
+            frames,
+            normals=frames.normals[kept],
+            tangents=frames.tangents[kept],
+            operator=frames.operator[rows],
+        )
+        law = self.law
+        twin.law = FrictionLaw(
+            law.mu[kept], law.cohesion[kept], law.facets, n_contacts=int(kept.size)
+        )
+        if np.any((twin.law.cohesion > 0) & (values > 0)):
+            raise InvalidInputError("cohesion models a bonded interface, which starts closed")
+        twin._local = self.local().restricted(kept, d, values)
+        if loads is not None:
+            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
         twin.previous = previous
         twin._previous_tangential()
         return twin
