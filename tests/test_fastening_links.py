@@ -102,3 +102,29 @@ def test_links_refused_when_dependent_or_malformed():
         Links(E, [0.0], [0.0, 0.0])
     with pytest.raises(InvalidInputError, match="freedoms"):
         LinkedModel(ReducedModel(flexibility=np.eye(2)), Links(E[:, :1], [0.0], [0.0]))
+
+
+def test_frictional_problem_restricted_equals_one_built_on_the_kept_contacts():
+    """FrictionalProblem.restricted slices the local form; a problem assembled afresh on the
+    kept contacts is the truth (operator, step and solution)."""
+    from contactqp import FrictionalProblem, NodePairs, solve
+
+    rng = np.random.default_rng(11)
+    k = 6
+    model = ReducedModel(flexibility=_symmetric(np.linalg.inv(_spd(rng, 6 * k))), dofs_per_node=3)
+    pairs = np.column_stack([np.arange(k), k + np.arange(k)])
+    gaps = rng.uniform(-1e-3, 1e-3, k)
+    loads = rng.standard_normal(6 * k)
+    normals = np.tile([0.0, 0.0, 1.0], (k, 1))
+    whole = FrictionalProblem(model, loads, [NodePairs(pairs, gaps, normals)], 0.3)
+    kept = np.array([0, 2, 3, 5])
+    shifted = gaps[kept] + 1e-4
+    restricted = whole.restricted(kept, gaps=shifted)
+    fresh = FrictionalProblem(model, loads, [NodePairs(pairs[kept], shifted, normals[kept])], 0.3)
+    assert np.allclose(restricted.local().W, fresh.local().W, rtol=1e-12, atol=0)
+    assert np.allclose(restricted.step().local.q, fresh.step().local.q, rtol=1e-12, atol=1e-15)
+    a, b = solve(restricted), solve(fresh)
+    assert a.success and b.success
+    assert np.allclose(a.forces, b.forces, rtol=1e-8, atol=1e-10 * np.abs(b.forces).max())
+    with pytest.raises(InvalidInputError, match="distinct indices"):
+        whole.restricted([0, 0])

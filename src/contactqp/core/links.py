@@ -176,11 +176,16 @@ class LinkedModel:
         return np.asarray(operator @ self.influence)
 
     def reduced_operator(self, W: ArrayLike, coupling: ArrayLike) -> np.ndarray:
-        """``W' = W - B S^{-1} B^T``: the contact operator ``W = G R G^T`` with the links,
-        symmetrised (its asymmetry is round-off)."""
+        """``W' = W - B S^{-1} B^T``: the contact operator ``W = G R G^T`` (symmetric) with
+        the links."""
         B = np.asarray(coupling, dtype=float)
-        reduced = np.asarray(W, dtype=float) - B @ self.solve_schur(B.T)
-        return 0.5 * (reduced + reduced.T)
+        if self._factor is None:
+            return np.array(W, dtype=float)
+        # S = L L^T: B S^-1 B^T = X^T X with X = L^-1 B^T, symmetric by construction
+        X = scipy.linalg.solve_triangular(
+            self._factor[0], np.ascontiguousarray(B.T), lower=True, check_finite=False
+        )
+        return np.asarray(W, dtype=float) - X.T @ X
 
     def offset(self, coupling: ArrayLike, free_relative: ArrayLike) -> np.ndarray:
         """``B S^{-1} (d0 - E^T R P)`` (m): what the links add to ``G R P``."""

@@ -97,7 +97,10 @@ class Fastener:
         Global pair index (the interfaces' pairs concatenated in order).
     kind : str
         ``"closure"``: the gap is closed to 0 and held (a rigid normal link). ``"clamp"``:
-        tightened to the preload ``force``, the fastener then an axial spring of ``stiffness``.
+        tightened to the preload ``force`` (it pulls with exactly that in the stage that
+        installs it), then an axial spring of ``stiffness`` about that state; where it presses
+        the parts together their pair bears (gap 0, a compression >= 0) instead of
+        penetrating.
     force : float
         Clamp preload (N), > 0 pulling the parts together; 0 for a closure.
     stiffness : float

@@ -9,7 +9,11 @@ tension is ``-f_n``):
 * ``"clamp"``: tightened to its preload ``F``: in the stage that installs it the fastener pulls
   with exactly ``F`` (an external load on the pair); from then on it is an axial spring of
   stiffness ``k`` about that state, tension ``F + k (d - d_inst)`` with ``d`` the pair's opening
-  (it rises when the parts are pulled apart, falls when they come together);
+  (it rises when the parts are pulled apart, falls when they come together). Where it presses
+  the parts together, its pair *bears*: the gap is held at 0 (a rigid axial link, the tension
+  still ``F + k (d - d_inst)``) and the difference between the link force and the tension is
+  the compression the parts bear there, >= 0. Each stage switches clamps between spring and
+  bearing until no pair penetrates and none bears in tension (a few solves at most);
 * ``"bonded"`` shear: rigid tangential, ``d0_t`` the relative tangential displacement of the
   pair before its installation.
 

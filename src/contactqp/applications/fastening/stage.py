@@ -24,7 +24,8 @@ class AssemblyStage:
     gaps : ndarray, shape (k,)
         Residual gap (m).
     normal_forces : ndarray, shape (k,)
-        Contact compression (N, >= 0); 0 at fastened pairs (see ``fastener_forces``).
+        Contact compression (N, >= 0). At fastened pairs: 0 for a closure (its force is in
+        ``fastener_forces``), the compression the parts bear under a clamp.
     tangential_forces : ndarray, shape (k, 2)
         Friction force on the first part, in the pair's tangents ``(t1, t2)`` (N); zeros
         without friction.
