@@ -81,6 +81,10 @@ def _blocks_assembly(blocks, mu=0.0, **fastener):
     return Assembly(parts, [_interface(friction.n_pairs)], fasteners, mu=mu)
 
 
+def _symmetric(matrix):
+    return 0.5 * (matrix + matrix.T)
+
+
 def _relative(a, b):
     return np.max(np.abs(np.asarray(a) - np.asarray(b))) / max(np.max(np.abs(b)), 1e-300)
 
@@ -365,3 +369,77 @@ def test_a_broken_fastener_law_fails_the_stage(blocks, monkeypatch):
     stage = sequence.final
     assert not stage.success and stage.result.status == 2
     assert f"fastener 0 (pair {pairs[0]})" in stage.result.message
+
+
+def test_clamps_with_friction_under_shear_are_certified_and_reproduced(blocks):
+    """Bonded clamps, mu = 0.3, a shear load and its removal: every stage certified, the
+    dissipation non-negative, the final state reproduced by the full FE parts, and each clamp's
+    tension its preload plus stiffness times its opening since tightening."""
+    friction, parts, gaps, pairs = blocks
+    stiffness = 2e6
+    assembly = _blocks_assembly(blocks, mu=0.3, kind="clamp", force=60.0, stiffness=stiffness)
+    shear = assembly.load_vector("upper", np.arange(friction.n_pairs), [150.0, 0.0, 0.0])
+    sequence = assembly.sequence(gaps, load_steps=[("shear", shear), ("unloaded", 0 * shear)])
+    assert sequence.success, [s.result.message for s in sequence.stages]
+    k = friction.n_pairs
+    openings = {}
+    for number, stage in enumerate(sequence.stages):
+        U = stage.result.displacements.reshape(2 * k, 3)
+        opening = {p: float(U[k + p, 2] - U[p, 2]) for p in stage.fasteners}
+        if number < len(pairs):
+            openings[stage.fasteners[-1]] = opening[stage.fasteners[-1]]
+            assert stage.fastener_forces[-1] == 60.0
+        for p, tension in zip(stage.fasteners, stage.fastener_forces, strict=True):
+            bearing = abs(stage.gaps[p]) < 1e-12
+            if not bearing:
+                assert abs(tension - 60.0 - stiffness * (opening[p] - openings[p])) < 1e-6 * 60
+            assert stage.gaps[p] >= -1e-12 and stage.normal_forces[p] >= -1e-9
+        assert np.all(stage.result.dissipation >= -1e-12)
+    final = sequence.final.result
+    applied = (final.loads + final.nodal_forces).reshape(2 * k, 3)
+    for side, (body, nodes) in enumerate(friction.parts):
+        nodal = np.zeros((body.n_nodes, 3))
+        nodal[nodes] = applied[side * k : (side + 1) * k]
+        reduced = final.displacements.reshape(2 * k, 3)[side * k : (side + 1) * k]
+        assert np.max(np.abs(body.solve(nodal)[nodes] - reduced)) < 1e-8 * np.abs(reduced).max()
+
+
+def test_parts_given_as_stiffness_give_the_same_assembly(blocks):
+    friction, parts, gaps, pairs = blocks
+    stiff = AssemblyPart(
+        "upper",
+        ReducedModel(stiffness=_symmetric(parts[1].model.stiffness), dofs_per_node=3),
+        parts[1].coordinates,
+    )
+    mixed = Assembly(
+        [parts[0], stiff], [_interface(friction.n_pairs)], [Fastener(p) for p in pairs], mu=0.3
+    )
+    both = [
+        AssemblyPart(
+            p.name,
+            ReducedModel(stiffness=_symmetric(p.model.stiffness), dofs_per_node=3),
+            p.coordinates,
+        )
+        for p in parts
+    ]
+    stiffness = Assembly(both, [_interface(friction.n_pairs)], [Fastener(p) for p in pairs], mu=0.3)
+    assert mixed.model.given == "flexibility" and stiffness.model.given == "stiffness"
+    reference = _blocks_assembly(blocks, mu=0.3).sequence(gaps)
+    for assembly in (mixed, stiffness):
+        sequence = assembly.sequence(gaps)
+        assert sequence.success
+        assert _relative(sequence.final.gaps, reference.final.gaps) < 1e-6
+        assert _relative(sequence.final.fastener_forces, reference.final.fastener_forces) < 1e-6
+
+
+def test_an_array_warm_start_is_taken_and_checked(plates):
+    riveting, parts, gaps = plates
+    fasteners = [Fastener(int(p), shear="free") for p in riveting.fasteners]
+    assembly = Assembly(parts, [_interface(riveting.n_pairs)], fasteners)
+    cold = assembly.sequence(gaps)
+    warm = assembly.sequence(gaps, r0=cold.stages[0].normal_forces, method="active-set")
+    assert warm.success and _relative(warm.final.gaps, cold.final.gaps) < 1e-8
+    with pytest.raises(InvalidInputError, match="r0 must hold one normal force per pair"):
+        assembly.sequence(gaps, r0=np.zeros(3))
+    with pytest.raises(InvalidInputError, match="does not solve a frictionless assembly"):
+        assembly.sequence(gaps, method="coulomb")

@@ -388,17 +388,13 @@ class Assembly:
         return values
 
     def _side_by_side(self, coordinates: np.ndarray) -> ReducedModel:
+        """The parts' matrices block-diagonal: stiffnesses when every part holds one, else
+        flexibilities (each symmetrised: an inverse carries round-off asymmetry)."""
         models = [part.model for part in self.parts]
-        if len(models) == 1:
-            single = models[0]
-            matrix = single.flexibility if single.given == "flexibility" else single.stiffness
-            given = single.given
-        elif all(model.given == "stiffness" for model in models):
-            matrix, given = scipy.linalg.block_diag(*(m.stiffness for m in models)), "stiffness"
-        else:
-            matrix = scipy.linalg.block_diag(*(m.flexibility for m in models))
-            given = "flexibility"
-        if given == "stiffness":
+        stiff = all(model.given == "stiffness" for model in models)
+        blocks = [model.stiffness if stiff else model.flexibility for model in models]
+        matrix = scipy.linalg.block_diag(*(0.5 * (block + block.T) for block in blocks))
+        if stiff:
             return ReducedModel(
                 stiffness=matrix, dofs_per_node=self.dofs_per_node, coordinates=coordinates
             )
