@@ -7,7 +7,8 @@ certified :class:`AssemblyStage` s (see :mod:`~contactqp.applications.fastening.
 the mechanics).
 """
 
-from .model import Assembly, AssemblyPart, Fastener, InterfacePairs
+from .model import Assembly
+from .parts import AssemblyPart, Fastener, InterfacePairs
 from .stage import AssemblySequence, AssemblyStage
 
 __all__ = [

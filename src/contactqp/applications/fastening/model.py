@@ -18,9 +18,8 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Sequence
-from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -31,93 +30,14 @@ from ...core.friction import polygon_normals
 from ...core.model import MAX_MAGNITUDE, ReducedModel, finite_array, real_array
 from ...core.problem import ContactProblem, FrictionalProblem
 from ...errors import InvalidInputError
+from .parts import FASTENER_KINDS, SHEARS, AssemblyPart, Fastener, InterfacePairs
+from .sequence import run_sequence
+from .stage import AssemblySequence
 
-if TYPE_CHECKING:
-    from .stage import AssemblySequence
-
-__all__ = ["AssemblyPart", "InterfacePairs", "Fastener", "Assembly", "FASTENER_KINDS", "SHEARS"]
-
-#: Fastener kinds: ``"closure"`` (a rigid normal link closing the gap) and ``"clamp"`` (a
-#: preload with an axial stiffness).
-FASTENER_KINDS = ("closure", "clamp")
-
-#: Tangential behaviour of a fastener: ``"bonded"`` (relative tangential motion frozen at
-#: installation) or ``"free"`` (no tangential link).
-SHEARS = ("bonded", "free")
+__all__ = ["Assembly", "UNIT_RTOL"]
 
 #: A pair normal is unit when its length is 1 within this tolerance.
 UNIT_RTOL = 1e-6
-
-
-@dataclass(frozen=True)
-class AssemblyPart:
-    """One part: its reduced model and the coordinates of every node of it.
-
-    Attributes
-    ----------
-    name : str
-    model : ReducedModel
-        The part's own reduced model (flexibility or stiffness), 1 or 3 freedoms per node.
-    coordinates : ndarray, shape (n_nodes, 3)
-        Position of each node of ``model`` (m).
-    """
-
-    name: str
-    model: ReducedModel
-    coordinates: np.ndarray
-
-
-@dataclass(frozen=True)
-class InterfacePairs:
-    """Node pairs between two parts.
-
-    Attributes
-    ----------
-    first, second : str
-        Part names.
-    nodes : ndarray of int, shape (k, 2)
-        Node of ``first``, node of ``second`` (indices into each part's model).
-    normals : ndarray, shape (k, 3)
-        Unit normals from ``first`` towards ``second``.
-    """
-
-    first: str
-    second: str
-    nodes: np.ndarray
-    normals: np.ndarray
-
-
-@dataclass(frozen=True)
-class Fastener:
-    """A fastener at one interface pair (a link between its two nodes, in the pair frame).
-
-    Attributes
-    ----------
-    pair : int
-        Global pair index (the interfaces' pairs concatenated in order).
-    kind : str
-        ``"closure"``: the gap is closed to 0 and held (a rigid normal link). ``"clamp"``:
-        tightened to the preload ``force`` (it pulls with exactly that in the stage that
-        installs it), then an axial spring of ``stiffness`` about that state; where it presses
-        the parts together their pair bears (gap 0, a compression >= 0) instead of
-        penetrating.
-    force : float
-        Clamp preload (N), > 0 pulling the parts together; 0 for a closure.
-    stiffness : float
-        Axial stiffness of a clamp (N/m, finite and > 0); inf for a closure.
-    shear : str
-        ``"bonded"``: the relative tangential motion of the pair is frozen at installation;
-        ``"free"``: no tangential link (the only choice for 1-freedom models).
-    label : str
-        A name for the stage that installs it (default ``"fastener <position>"``).
-    """
-
-    pair: int
-    kind: str = "closure"
-    force: float = 0.0
-    stiffness: float = math.inf
-    shear: str = "bonded"
-    label: str = ""
 
 
 def _name(value: object, what: str) -> str:
@@ -531,8 +451,6 @@ class Assembly:
         AssemblySequence
             Every stage, failed ones included (check :attr:`AssemblySequence.success`).
         """
-        from .sequence import run_sequence
-
         return run_sequence(self, gaps, order, load_steps, method, r0, options)
 
     def __repr__(self) -> str:

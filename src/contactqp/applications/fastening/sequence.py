@@ -36,7 +36,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -53,18 +53,45 @@ from ...methods import solve
 from ...methods.box_qp import solve_box_qp
 from ...methods.dispatch import resolve
 from ...methods.lawson_hanson import solve_nonnegative_qp
+from .parts import Fastener
 from .stage import AssemblySequence, AssemblyStage
 
 if TYPE_CHECKING:
-    from .model import Assembly, Fastener
+    from ...core.contact import NodePairs
+    from ...core.model import ReducedModel
 
-__all__ = ["run_sequence", "FRICTIONLESS_METHODS"]
+__all__ = ["run_sequence", "AssemblyLayout", "FRICTIONLESS_METHODS"]
 
 #: Methods of the frictionless reduced QP and the options each takes.
 FRICTIONLESS_METHODS: dict[str, tuple[str, ...]] = {
     "lawson-hanson": ("tol",),
     "active-set": ("tol", "max_iter"),
 }
+
+
+class AssemblyLayout(Protocol):
+    """What a sequence needs of an assembly
+    (:class:`~contactqp.applications.fastening.model.Assembly`)."""
+
+    fasteners: tuple[Fastener, ...]
+    pairs: np.ndarray
+    normals: np.ndarray
+    tangents: np.ndarray
+    dofs_per_node: int
+    model: ReducedModel
+
+    @property
+    def n_pairs(self) -> int: ...
+
+    @property
+    def n_freedoms(self) -> int: ...
+
+    @property
+    def base_problem(self) -> ContactProblem | FrictionalProblem: ...
+
+    def node_freedoms(self, node: int) -> np.ndarray: ...
+
+    def node_pairs(self, gaps, pairs=None) -> NodePairs: ...
 
 
 @dataclass
@@ -132,7 +159,7 @@ class _Fastening:
         return float(axial_force + self.tension(opening, axial_force))
 
 
-def _checked_order(assembly: Assembly, order: Sequence[int] | None) -> list[int]:
+def _checked_order(assembly: AssemblyLayout, order: Sequence[int] | None) -> list[int]:
     n = len(assembly.fasteners)
     positions = list(range(n)) if order is None else np.asarray(order).reshape(-1).tolist()
     for position in positions:
@@ -145,7 +172,7 @@ def _checked_order(assembly: Assembly, order: Sequence[int] | None) -> list[int]
     return positions
 
 
-def _checked_steps(assembly: Assembly, load_steps) -> list[tuple[str, np.ndarray]]:
+def _checked_steps(assembly: AssemblyLayout, load_steps) -> list[tuple[str, np.ndarray]]:
     steps = []
     for position, step in enumerate(load_steps):
         if not (isinstance(step, tuple | list) and len(step) == 2 and isinstance(step[0], str)):
@@ -163,7 +190,7 @@ def _checked_steps(assembly: Assembly, load_steps) -> list[tuple[str, np.ndarray
 
 
 def run_sequence(
-    assembly: Assembly,
+    assembly: AssemblyLayout,
     gaps,
     order: Sequence[int] | None,
     load_steps,
@@ -171,7 +198,7 @@ def run_sequence(
     r0: Any,
     options: dict,
 ) -> AssemblySequence:
-    """:meth:`Assembly.sequence` (see there)."""
+    """:meth:`~contactqp.applications.fastening.model.Assembly.sequence` (see there)."""
     g0 = finite_array(real_array(gaps, "gaps").reshape(-1), "gaps", 1)
     if g0.shape != (assembly.n_pairs,):
         raise InvalidInputError(
@@ -195,7 +222,7 @@ def run_sequence(
 class _Sequencer:
     """The state carried from stage to stage, and the solve of one stage."""
 
-    def __init__(self, assembly: Assembly, gaps: np.ndarray, method, options: dict, r0):
+    def __init__(self, assembly: AssemblyLayout, gaps: np.ndarray, method, options: dict, r0):
         self.assembly, self.gaps = assembly, gaps
         self.model = assembly.model
         self.base = assembly.base_problem
