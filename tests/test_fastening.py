@@ -443,3 +443,23 @@ def test_an_array_warm_start_is_taken_and_checked(plates):
         assembly.sequence(gaps, r0=np.zeros(3))
     with pytest.raises(InvalidInputError, match="does not solve a frictionless assembly"):
         assembly.sequence(gaps, method="coulomb")
+
+
+def test_soft_clamps_reproduce_the_clamp_forces_of_riveting_friction(blocks):
+    """mu = 0: riveting_friction's sequence (each fastener a clamping force on a contact pair)
+    is a clamp of vanishing stiffness whose pair bears: every stage agrees, the compression at
+    a fastener pair included."""
+    friction, parts, gaps, pairs = blocks
+    positions = [(1, 2), (4, 2), (7, 2)]
+    assert [friction.pair(*p) for p in positions] == pairs
+    truth = friction.fasten(gaps, positions, 0.0, clamp=500.0)
+    assembly = _blocks_assembly(
+        blocks, kind="clamp", force=500.0, stiffness=1.0, shear="free"
+    )  # 1 N/m: a change of opening of 0.1 mm changes the tension by 1e-4 N
+    sequence = assembly.sequence(gaps)
+    assert sequence.success
+    for stage, step in zip(sequence.stages, truth, strict=True):
+        assert step.result.success
+        assert _relative(stage.gaps, step.result.gaps) < 1e-9
+        assert _relative(stage.normal_forces, step.result.normal_forces) < 1e-9
+        assert np.allclose(stage.fastener_forces, 500.0, rtol=1e-6)
