@@ -122,6 +122,7 @@ class Assembly:
             facets = int(facets)
         self.facets = facets
         self.model = self._side_by_side(coordinates)
+        self._links_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     # ------------------------------------------------------------------ validation
 
@@ -398,6 +399,30 @@ class Assembly:
         return np.array([force @ self.normals[0]])
 
     # ------------------------------------------------------------------ shared problems
+
+    def fastener_links(self, position: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(E, R E)`` of fastener ``position``: its link directions in the pair frame (axial
+        ``n``, then ``t1, t2`` when bonded), each the relative displacement of the second node
+        minus the first, and the displacements they cause; computed once and kept."""
+        cached = self._links_cache.get(position)
+        if cached is not None:
+            return cached
+        fastener = self.fasteners[position]
+        a, b = self.pairs[fastener.pair]
+        if self.dofs_per_node == 1:
+            vectors = np.ones((1, 1))
+        elif fastener.shear == "free":
+            vectors = self.normals[fastener.pair][None, :]
+        else:
+            vectors = np.vstack([self.normals[fastener.pair], self.tangents[fastener.pair]])
+        columns = np.zeros((self.n_freedoms, len(vectors)))
+        columns[self.node_freedoms(b)] = vectors.T
+        columns[self.node_freedoms(a)] = -vectors.T
+        influence = np.asarray(self.model.displacements(columns)).reshape(columns.shape)
+        for array in (columns, influence):
+            array.setflags(write=False)
+        self._links_cache[position] = (columns, influence)
+        return columns, influence
 
     @cached_property
     def base_problem(self) -> ContactProblem | FrictionalProblem:

@@ -89,7 +89,7 @@ class AssemblyLayout(Protocol):
     @property
     def base_problem(self) -> ContactProblem | FrictionalProblem: ...
 
-    def node_freedoms(self, node: int) -> np.ndarray: ...
+    def fastener_links(self, position: int) -> tuple[np.ndarray, np.ndarray]: ...
 
     def node_pairs(self, gaps, pairs=None) -> NodePairs: ...
 
@@ -272,22 +272,12 @@ class _Sequencer:
 
     def _fastening(self, position: int) -> _Fastening:
         fastener = self.assembly.fasteners[position]
-        a, b = self.assembly.pairs[fastener.pair]
-        fa, fb = self.assembly.node_freedoms(a), self.assembly.node_freedoms(b)
-        if self.assembly.dofs_per_node == 1:
-            vectors = np.ones((1, 1))
-        else:
-            normal = self.assembly.normals[fastener.pair]
-            tangents = self.assembly.tangents[fastener.pair]
-            vectors = normal[None, :] if fastener.shear == "free" else np.vstack([normal, tangents])
-        columns = np.zeros((self.assembly.n_freedoms, len(vectors)))
-        columns[fb] = vectors.T
-        columns[fa] = -vectors.T
+        columns, influence = self.assembly.fastener_links(position)
         return _Fastening(
             position=position,
             fastener=fastener,
             columns=columns,
-            influence=np.asarray(self.model.displacements(columns)).reshape(columns.shape),
+            influence=influence,
             gap=float(self.gaps[fastener.pair]),
             tangential=columns[:, 1:].T @ self.displacements,  # frozen as found
         )
