@@ -128,3 +128,25 @@ def test_frictional_problem_restricted_equals_one_built_on_the_kept_contacts():
     assert np.allclose(a.forces, b.forces, rtol=1e-8, atol=1e-10 * np.abs(b.forces).max())
     with pytest.raises(InvalidInputError, match="distinct indices"):
         whole.restricted([0, 0])
+
+
+def test_contact_problem_restricted_equals_one_built_on_the_kept_contacts():
+    from contactqp import ContactProblem, NodePairs, solve
+
+    rng = np.random.default_rng(5)
+    k = 8
+    model = ReducedModel(flexibility=_symmetric(np.linalg.inv(_spd(rng, 2 * k))))
+    pairs = np.column_stack([np.arange(k), k + np.arange(k)])
+    gaps = rng.uniform(-1e-3, 1e-3, k)
+    loads = rng.standard_normal(2 * k)
+    whole = ContactProblem(model, np.zeros(2 * k), [NodePairs(pairs, gaps)])
+    whole.dual()
+    kept = np.array([1, 2, 4, 7])
+    restricted = whole.restricted(kept, loads=loads, gaps=gaps[kept] * 2)
+    fresh = ContactProblem(model, loads, [NodePairs(pairs[kept], gaps[kept] * 2)])
+    assert np.allclose(restricted.dual().W, fresh.dual().W, rtol=1e-12, atol=0)
+    assert np.allclose(restricted.dual().b, fresh.dual().b, rtol=1e-12, atol=1e-15)
+    a, b = solve(restricted), solve(fresh)
+    assert a.success and b.success and np.allclose(a.forces, b.forces, rtol=1e-9)
+    with pytest.raises(InvalidInputError, match="gaps must have shape"):
+        whole.restricted(kept, gaps=gaps)

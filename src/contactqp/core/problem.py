@@ -77,6 +77,30 @@ def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.nda
     return P
 
 
+def _restricted_constraints(
+    constraints: Constraints, contacts, gaps
+) -> tuple[np.ndarray, Constraints]:
+    """``(kept, constraints)``: the rows ``contacts`` (distinct indices) of ``constraints``, on
+    the initial gaps ``gaps`` (m, one per kept row; theirs by default)."""
+    kept = np.asarray(contacts, dtype=int).reshape(-1)
+    m = constraints.n_constraints
+    if kept.size == 0 or kept.min() < 0 or kept.max() >= m or np.unique(kept).size < kept.size:
+        raise InvalidInputError(f"contacts must be distinct indices in 0..{m - 1}, at least one")
+    values = constraints.gaps[kept]
+    if gaps is not None:
+        values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
+        if values.shape != kept.shape:
+            raise InvalidInputError(f"gaps must have shape ({kept.size},), got {values.shape}")
+    restricted = dataclasses.replace(
+        constraints,
+        matrix=constraints.matrix[kept],
+        gaps=values,
+        nodes=constraints.nodes[kept],
+        labels=[constraints.labels[i] for i in kept] if constraints.labels else [],
+    )
+    return kept, restricted
+
+
 class DualForm:
     """The dual quadratic program of a frictionless contact problem.
 
@@ -182,6 +206,25 @@ class ContactProblem:
         twin._dual = dual
         return twin
 
+    def restricted(self, contacts, *, loads=None, gaps=None) -> ContactProblem:
+        """The same model on the constraints ``contacts`` only (distinct indices, in the order
+        they take; e.g. those fasteners leave), without assembling them again; its dual is
+        assembled on first use.
+
+        Parameters
+        ----------
+        loads : array_like, shape (n_freedoms,), optional
+            External forces (N); this problem's by default.
+        gaps : array_like, shape (len(contacts),), optional
+            Initial gaps of the kept constraints (m); theirs in this problem by default.
+        """
+        twin = copy.copy(self)
+        _, twin.constraints = _restricted_constraints(self.constraints, contacts, gaps)
+        if loads is not None:
+            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
+        twin._dual = None
+        return twin
+
     def energy(self, displacements: np.ndarray, forces: np.ndarray) -> float:
         """Potential energy ``1/2 U^T K U - P^T U`` (J) at equilibrium.
 
@@ -259,8 +302,6 @@ class LocalForm:
     ----------
     W : ndarray, shape (d k, d k)
         ``H R H^T`` (m/N), contact by contact, normal first.
-    influence : ndarray, shape (n, d k)
-        ``R H^T``: displacements caused by unit local contact forces.
     offset : ndarray, shape (d k,)
         ``w``: the initial gaps in the normal slots, zeros in the tangential ones (m).
     operator : scipy.sparse.csr_matrix, shape (d k, n)
@@ -270,18 +311,26 @@ class LocalForm:
     def __init__(self, model: ReducedModel, constraints: Constraints, frames: LocalFrames):
         H = frames.operator
         self.operator = H
-        self.influence, self.W = _delassus(model, H)
+        self._influence, self.W = _delassus(model, H)
+        self._columns: np.ndarray | None = None  # a restricted form's columns of _influence
         self.offset = np.zeros(H.shape[0])
         self.offset[:: frames.dim] = constraints.gaps
         self._model = model
 
+    @property
+    def influence(self) -> np.ndarray:
+        """``R H^T`` (m/N, shape (n, d k)): displacements caused by unit local forces."""
+        if self._columns is None:
+            return self._influence
+        return self._influence[:, self._columns]
+
     def restricted(self, contacts: np.ndarray, dim: int, gaps: np.ndarray) -> LocalForm:
         """The form of the contacts ``contacts`` (indices) only, on initial gaps ``gaps``
-        (m, one per kept contact): rows, columns and blocks of this one, nothing assembled."""
+        (m, one per kept contact): rows and blocks of this one, its influence shared."""
         rows = (dim * np.asarray(contacts, dtype=int)[:, None] + np.arange(dim)).ravel()
         twin = copy.copy(self)
         twin.operator = self.operator[rows]
-        twin.influence = self.influence[:, rows]
+        twin._columns = rows if self._columns is None else self._columns[rows]
         twin.W = self.W[np.ix_(rows, rows)]
         twin.offset = np.zeros(len(rows))
         twin.offset[::dim] = gaps
@@ -297,7 +346,11 @@ class LocalForm:
 
     def displacements(self, loads: np.ndarray, forces: np.ndarray) -> np.ndarray:
         """``U = R (P + H^T r)`` (m) for local forces ``r`` (N, shape (d k,))."""
-        return self.free_displacements(loads) + self.influence @ forces
+        if self._columns is None:
+            return self.free_displacements(loads) + self._influence @ forces
+        spread = np.zeros(self._influence.shape[1])
+        spread[self._columns] = forces
+        return self.free_displacements(loads) + self._influence @ spread
 
 
 class FrictionStep:
@@ -480,28 +533,12 @@ class FrictionalProblem:
         previous : FrictionalResult, optional
             The state the increment starts from, a result with the kept contacts (None: rest).
         """
-        kept = np.asarray(contacts, dtype=int).reshape(-1)
-        k = self.n_contacts
-        if kept.size == 0 or kept.min() < 0 or kept.max() >= k or np.unique(kept).size < kept.size:
-            raise InvalidInputError(
-                f"contacts must be distinct indices in 0..{k - 1}, at least one"
-            )
-        values = self.constraints.gaps[kept]
-        if gaps is not None:
-            values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
-            if values.shape != kept.shape:
-                raise InvalidInputError(f"gaps must have shape ({kept.size},), got {values.shape}")
+        kept, twin_constraints = _restricted_constraints(self.constraints, contacts, gaps)
+        values = twin_constraints.gaps
         d = self.dim
         rows = (d * kept[:, None] + np.arange(d)).ravel()
         twin = copy.copy(self)
-        constraints = self.constraints
-        twin.constraints = dataclasses.replace(
-            constraints,
-            matrix=constraints.matrix[kept],
-            gaps=values,
-            nodes=constraints.nodes[kept],
-            labels=[constraints.labels[i] for i in kept] if constraints.labels else [],
-        )
+        twin.constraints = twin_constraints
         frames = self.frames
         twin.frames = dataclasses.replace(
             frames,

@@ -450,15 +450,15 @@ class _Sequencer:
             )
             message = solution.message
         forces = solution.x
-        U = free - dual.influence[:, contacts] @ forces
+        spread = np.zeros(self.assembly.n_pairs)
+        spread[contacts] = forces
+        U = free - dual.influence @ spread
         link_forces = np.zeros(0)
         if linked is not None:
             link_forces = linked.forces(linked.links.relative(U))
             U = U + linked.influence @ link_forces
             P = P + linked.links.directions @ link_forces
-        problem = ContactProblem(
-            self.model, P, [self.assembly.node_pairs(self.gaps[contacts], contacts)]
-        )
+        problem = base.restricted(contacts, loads=P, gaps=self.gaps[contacts])
         result = problem.make_result(
             U,
             forces,
@@ -502,7 +502,7 @@ class _Sequencer:
         r = step.force_unit * np.asarray(solution.forces).reshape(-1) - step.apex_shift
         link_forces = np.zeros(0)
         if linked is not None:
-            U0 = free + form.influence @ r
+            U0 = form.displacements(P, r)
             link_forces = linked.forces(linked.links.relative(U0))
             problem = problem.with_loads(
                 P + linked.links.directions @ link_forces, previous=previous
