@@ -89,6 +89,30 @@ def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.nda
     return P
 
 
+def _restricted_constraints(
+    constraints: Constraints, contacts, gaps
+) -> tuple[np.ndarray, Constraints]:
+    """``(kept, constraints)``: the rows ``contacts`` (distinct indices) of ``constraints``, on
+    the initial gaps ``gaps`` (m, one per kept row; theirs by default)."""
+    kept = np.asarray(contacts, dtype=int).reshape(-1)
+    m = constraints.n_constraints
+    if kept.size == 0 or kept.min() < 0 or kept.max() >= m or np.unique(kept).size < kept.size:
+        raise InvalidInputError(f"contacts must be distinct indices in 0..{m - 1}, at least one")
+    values = constraints.gaps[kept]
+    if gaps is not None:
+        values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
+        if values.shape != kept.shape:
+            raise InvalidInputError(f"gaps must have shape ({kept.size},), got {values.shape}")
+    restricted = dataclasses.replace(
+        constraints,
+        matrix=constraints.matrix[kept],
+        gaps=values,
+        nodes=constraints.nodes[kept],
+        labels=[constraints.labels[i] for i in kept] if constraints.labels else [],
+    )
+    return kept, restricted
+
+
 class DualForm:
     """The dual quadratic program of a frictionless contact problem.
 
@@ -194,6 +218,25 @@ class ContactProblem:
         twin._dual = dual
         return twin
 
+    def restricted(self, contacts, *, loads=None, gaps=None) -> ContactProblem:
+        """The same model on the constraints ``contacts`` only (distinct indices, in the order
+        they take; e.g. those fasteners leave), without assembling them again; its dual is
+        assembled on first use.
+
+        Parameters
+        ----------
+        loads : array_like, shape (n_freedoms,), optional
+            External forces (N); this problem's by default.
+        gaps : array_like, shape (len(contacts),), optional
+            Initial gaps of the kept constraints (m); theirs in this problem by default.
+        """
+        twin = copy.copy(self)
+        _, twin.constraints = _restricted_constraints(self.constraints, contacts, gaps)
+        if loads is not None:
+            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
+        twin._dual = None
+        return twin
+
     def energy(self, displacements: np.ndarray, forces: np.ndarray) -> float:
         """Potential energy ``1/2 U^T K U - P^T U`` (J) at equilibrium.
 
@@ -271,8 +314,6 @@ class LocalForm:
     ----------
     W : ndarray, shape (d k, d k)
         ``H R H^T`` (m/N), contact by contact, normal first.
-    influence : ndarray, shape (n, d k)
-        ``R H^T``: displacements caused by unit local contact forces.
     offset : ndarray, shape (d k,)
         ``w``: the initial gaps in the normal slots, zeros in the tangential ones (m).
     operator : scipy.sparse.csr_matrix, shape (d k, n)
@@ -282,12 +323,33 @@ class LocalForm:
     def __init__(self, model: ReducedModel, constraints: Constraints, frames: LocalFrames):
         H = frames.operator
         self.operator = H
-        self.influence, self.W = _delassus(model, H)
+        self._influence, self.W = _delassus(model, H)
+        self._columns: np.ndarray | None = None  # a restricted form's columns of _influence
         self.offset = np.zeros(H.shape[0])
         self.offset[:: frames.dim] = constraints.gaps
         self.dim = frames.dim
         self._model = model
         self._templates: dict[int, tuple[FrictionLaw, LocalProblem]] = {}
+
+    @property
+    def influence(self) -> np.ndarray:
+        """``R H^T`` (m/N, shape (n, d k)): displacements caused by unit local forces."""
+        if self._columns is None:
+            return self._influence
+        return self._influence[:, self._columns]
+
+    def restricted(self, contacts: np.ndarray, dim: int, gaps: np.ndarray) -> LocalForm:
+        """The form of the contacts ``contacts`` (indices) only, on initial gaps ``gaps``
+        (m, one per kept contact): rows and blocks of this one, its influence shared."""
+        rows = (dim * np.asarray(contacts, dtype=int)[:, None] + np.arange(dim)).ravel()
+        twin = copy.copy(self)
+        twin.operator = self.operator[rows]
+        twin._columns = rows if self._columns is None else self._columns[rows]
+        twin.W = self.W[np.ix_(rows, rows)]
+        twin.offset = np.zeros(len(rows))
+        twin.offset[::dim] = gaps
+        twin._templates = {}  # its W is new: no shared FCLIB problem
+        return twin
 
     def free_displacements(self, loads: np.ndarray) -> np.ndarray:
         """``R P`` (m); of a flexibility model, read on the columns of the loaded freedoms
@@ -305,10 +367,11 @@ class LocalForm:
         ``R P`` when known. Only the columns of ``R H^T`` under nonzero forces are read."""
         if free is None:
             free = self.free_displacements(loads)
+        if self._columns is None and np.all(forces != 0):
+            return free + self._influence @ forces
         used = np.flatnonzero(forces)
-        if used.size == forces.size:
-            return free + self.influence @ forces
-        return free + self.influence[:, used] @ forces[used]
+        columns = used if self._columns is None else self._columns[used]
+        return free + self._influence[:, columns] @ forces[used]
 
     def fclib_template(self, law: FrictionLaw) -> LocalProblem:
         """``W / max diag(W)`` as a :class:`LocalProblem` with ``law``'s ``mu`` (q zero),
@@ -505,6 +568,49 @@ class FrictionalProblem:
         form.offset = np.zeros_like(form.offset)
         form.offset[:: self.dim] = values
         twin._local = form
+        return twin
+
+    def restricted(self, contacts, *, loads=None, gaps=None, previous=None) -> FrictionalProblem:
+        """The same model and law on the contacts ``contacts`` only (e.g. those a fastener
+        leaves), their local form sliced from this problem's: nothing is assembled again.
+
+        Parameters
+        ----------
+        contacts : array_like of int
+            Distinct indices of the kept contacts, in the order they take.
+        loads : array_like, shape (n_freedoms,), optional
+            External forces (N); this problem's by default.
+        gaps : array_like, shape (len(contacts),), optional
+            Initial gaps of the kept contacts (m); theirs in this problem by default.
+        previous : FrictionalResult, optional
+            The state the increment starts from, a result with the kept contacts (None: rest).
+        """
+        kept, twin_constraints = _restricted_constraints(self.constraints, contacts, gaps)
+        values = twin_constraints.gaps
+        d = self.dim
+        rows = (d * kept[:, None] + np.arange(d)).ravel()
+        twin = copy.copy(self)
+        twin.constraints = twin_constraints
+        frames = self.frames
+        twin.frames = dataclasses.replace(
+            frames,
+            normals=frames.normals[kept],
+            tangents=frames.tangents[kept],
+            operator=frames.operator[rows],
+        )
+        law = self.law
+        twin.law = FrictionLaw(
+            law.mu[kept], law.cohesion[kept], law.facets, n_contacts=int(kept.size)
+        )
+        if np.any((twin.law.cohesion > 0) & (values > 0)):
+            raise InvalidInputError("cohesion models a bonded interface, which starts closed")
+        twin._local = self.local().restricted(kept, d, values)
+        twin._templates = {}  # W and the law are new: no shared local problem
+        if loads is not None:
+            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
+            twin._free_displacements = None
+        twin.previous = previous
+        twin._previous_tangential()
         return twin
 
     def _previous_tangential(self) -> np.ndarray:
