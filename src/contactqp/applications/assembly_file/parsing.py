@@ -1,7 +1,8 @@
 """Reading an assembly file: TOML to an :class:`~.result.AssemblyInput`.
 
-Every table is checked against its keys (:mod:`~contactqp.applications.assembly_file.schema`) and every value against its type,
-shape and range; each error is one line that starts with the file and names the key
+Every table is checked against its keys
+(:mod:`~contactqp.applications.assembly_file.schema`) and every value against its type, shape and
+range; each error is one line that starts with the file and names the key
 (:class:`contactqp.io.problem_file.messages.Where`). The file is only read, never written.
 """
 

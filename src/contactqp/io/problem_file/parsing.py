@@ -1,7 +1,8 @@
 """Parsing a problem file: TOML text to a :class:`ProblemSpec` (a problem and how to solve it).
 
-Every table is checked against its keys (:mod:`~contactqp.io.problem_file.schema`), every value against its type, shape and
-range; each error is one line naming the file and the key (:mod:`.messages`).
+Every table is checked against its keys (:mod:`~contactqp.io.problem_file.schema`), every value
+against its type, shape and range; each error is one line naming the file and the key
+(:mod:`.messages`).
 """
 
 from __future__ import annotations
