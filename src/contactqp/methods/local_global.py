@@ -258,7 +258,7 @@ def solve_frictionless(
     normal = np.arange(problem.n_contacts) * problem.dim
     dense = not sp.issparse(problem.W)
     if dense:
-        W_dense = as_operator(problem.W).matrix
+        W_dense = np.asarray(problem.W)
         W_nn, symmetric, row_sums = _dense_normal_block(W_dense, problem.dim)
     else:
         normal_columns, W_nn = _sparse_normal_columns(problem.W, problem.dim)
