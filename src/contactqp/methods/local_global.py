@@ -37,6 +37,7 @@ from ..core.model import warm_start
 from ..core.operators import as_operator
 from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
 from ..errors import InvalidInputError, NotPositiveDefiniteError
+from .active_set import cold_start
 from .box_qp import solve_box_qp
 
 __all__ = ["certify_global", "finish", "local_result", "solve_frictionless"]
@@ -268,11 +269,13 @@ def solve_frictionless(
         check_diagonal(W_sym, "W's normal block")
     q_n = problem.q[normal]
     if r0 is None:
-        if not (dense and symmetric):
-            row_sums = np.abs(W_sym).sum(axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):  # a zero row of W_NN: start at 0
-            first = np.maximum(-q_n, 0.0) / row_sums  # the guess of active_set.cold_start
-            first = np.nan_to_num(first, nan=0.0, posinf=0.0)
+            guess = (
+                np.maximum(-q_n, 0.0) / row_sums  # cold_start's, from the sums of the pass
+                if dense and symmetric
+                else cold_start(W_sym, -q_n)
+            )
+            first = np.nan_to_num(guess, nan=0.0, posinf=0.0)
     else:
         first = np.maximum(warm_start(r0, problem.W.shape[0])[normal], 0.0)
     try:  # the box-QP's own factorisations of free blocks validate them
