@@ -324,9 +324,10 @@ def _abs_product(A, x) -> np.ndarray:
     """``|A| |x|`` for a dense or sparse ``A``; a dense ``A`` by blocks of rows, so that no copy
     of a large ``W`` is made."""
     ax = np.abs(np.asarray(x, dtype=float)).ravel()
-    sparse: Any = A
-    if sp.issparse(sparse) and sparse.nnz <= _SPARSE_BLOCK:  # scipy's |A|: a small copy
-        return np.asarray(abs(sparse) @ ax).ravel()
+    if sp.issparse(A):
+        sparse: Any = A
+        if sparse.nnz <= _SPARSE_BLOCK:  # scipy's |A|: a small copy, no new CSR matrix
+            return np.asarray(abs(sparse) @ ax).ravel()
     if not isinstance(A, np.ndarray):
         return _abs_sparse_product(sp.csr_matrix(A), ax)  # no copy of a CSR matrix
     A = np.asarray(A)  # e.g. a numpy.matrix
