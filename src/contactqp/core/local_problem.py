@@ -342,10 +342,18 @@ class AccuracyLimits:
 _EPS = float(np.finfo(float).eps)
 
 
+#: Stored entries of a block of rows of a sparse matrix in :func:`_abs_product`.
+_SPARSE_BLOCK = 1 << 18
+
+
 def _abs_product(A, x) -> np.ndarray:
     """``|A| |x|`` for a dense or sparse ``A``; a dense ``A`` by blocks of rows, so that no copy
     of a large ``W`` is made."""
     ax = np.abs(np.asarray(x, dtype=float)).ravel()
+    if sp.issparse(A):
+        sparse: Any = A
+        if sparse.nnz <= _SPARSE_BLOCK:  # scipy's |A|: a small copy, no new CSR matrix
+            return np.asarray(abs(sparse) @ ax).ravel()
     if not isinstance(A, np.ndarray):
         return _abs_sparse_product(sp.csr_matrix(A), ax)  # no copy of a CSR matrix
     A = np.asarray(A)  # e.g. a numpy.matrix
@@ -362,7 +370,7 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
     The absolute values of a block go into one reused buffer (2 MB, which stays in cache) rather
     than into a copy of all of ``A``'s values.
     """
-    indptr, entries = A.indptr, 1 << 18
+    indptr, entries = A.indptr, _SPARSE_BLOCK
     out = np.empty(A.shape[0])
     scratch = np.empty(min(entries, A.nnz))
     first = 0

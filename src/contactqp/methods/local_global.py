@@ -123,21 +123,16 @@ def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
     return best
 
 
-def _normal_columns(W, dim: int) -> tuple[Any, np.ndarray]:
-    """``(C, W_NN)``, ``N`` the normal components: ``C`` what :func:`finish` reads ``W r`` and
-    ``|W| |r|`` from (a dense ``W`` itself, read in place; the CSR columns ``W[:, N]`` of a sparse
-    one) and ``W_NN`` a dense copy.
+def _sparse_normal_columns(W: Any, dim: int) -> tuple[Any, np.ndarray]:
+    """``(W[:, N], W_NN)`` of a sparse ``W``, ``N`` the normal components: the CSR columns
+    :func:`finish` reads ``W r`` and ``|W| |r|`` from, and a dense copy of the normal block.
 
     The frictionless route's reactions are zero off the normal components, so these columns
     give all it needs of ``W``: the normal block, ``W r`` and ``|W| |r|``.
     """
-    operator = as_operator(W)
-    if sp.issparse(W):
-        matrix: Any = operator.matrix
-        columns = matrix[:, np.arange(operator.shape[1] // dim) * dim]
-        return columns, columns[::dim].toarray()
-    dense = operator.matrix
-    return dense, np.ascontiguousarray(dense[::dim, ::dim])  # a third of W's memory read
+    matrix: Any = as_operator(W).matrix
+    columns = matrix[:, np.arange(matrix.shape[1] // dim) * dim]
+    return columns, columns[::dim].toarray()
 
 
 def _is_symmetric(A: np.ndarray, block: int = 128) -> bool:
@@ -146,6 +141,71 @@ def _is_symmetric(A: np.ndarray, block: int = 128) -> bool:
     return all(
         np.array_equal(A[i : i + block, i:], A[i:, i : i + block].T) for i in range(0, n, block)
     )
+
+
+#: Entries of a block of rows (512 kB, in cache) by which the dense normal block is copied,
+#: tested and summed, and ``W``'s tangential rows read.
+_BLOCK_ENTRIES = 1 << 16
+
+
+def _dense_normal_block(W: np.ndarray, dim: int) -> tuple[np.ndarray, bool, np.ndarray]:
+    """``(W_NN, symmetric, s)`` of a dense ``W`` in one pass over its normal rows.
+
+    ``W_NN`` is a contiguous copy of the normal block, ``symmetric`` whether ``W_NN == W_NN^T``
+    exactly and ``s`` the row sums of ``|W_NN|``. Each block of rows is copied, summed and
+    compared with the rows copied before it (``A[i:j, :j] == A[:j, i:j]^T``, which covers
+    every pair) while it is in cache.
+    """
+    n = W.shape[0] // dim
+    W_nn = np.empty((n, n))
+    row_sums = np.empty(n)
+    rows = max(1, _BLOCK_ENTRIES // max(1, n))
+    scratch = np.empty((min(rows, n), n))
+    symmetric = True
+    for start in range(0, n, rows):
+        stop = min(start + rows, n)
+        block = W_nn[start:stop]
+        block[...] = W[start * dim : stop * dim : dim, ::dim]
+        np.abs(block, out=scratch[: stop - start]).sum(axis=1, out=row_sums[start:stop])
+        symmetric = symmetric and np.array_equal(block[:, :stop], W_nn[:stop, start:stop].T)
+    return W_nn, symmetric, row_sums
+
+
+def _dense_normal_products(
+    W: np.ndarray, W_nn: np.ndarray, x: np.ndarray, dim: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(W r, |W| |r|)`` of the ``r`` that is ``x`` on the normal components and zero off
+    them, exactly (the terms left out are zero).
+
+    Only the columns from the first to the last nonzero entry of ``x`` are read: the normal
+    rows from the copy ``W_nn`` (the same numbers as ``W``'s), the tangential rows from ``W``
+    in place, by blocks of rows that stay in cache.
+    """
+    m = W.shape[0]
+    product, magnitude = np.zeros(m), np.zeros(m)
+    loaded = np.flatnonzero(x)
+    if loaded.size == 0:
+        return product, magnitude
+    first, last = int(loaded[0]), int(loaded[-1]) + 1
+    xs = x[first:last]
+    ax = np.abs(xs)
+    spread = np.zeros((last - first) * dim)  # x on W's columns first * dim ... last * dim
+    spread[::dim] = xs
+    span = slice(first * dim, last * dim)
+    rows = max(1, _BLOCK_ENTRIES // spread.size)
+    scratch = np.empty((rows, xs.size))
+    for start in range(0, W_nn.shape[0], rows):
+        stop = min(start + rows, W_nn.shape[0])
+        part = W_nn[start:stop, first:last]
+        product[start * dim : stop * dim : dim] = part @ xs
+        absolute = np.abs(part, out=scratch[: stop - start])
+        magnitude[start * dim : stop * dim : dim] = absolute @ ax
+        for k in range(1, dim):  # the tangential rows of these contacts
+            part = W[start * dim + k : stop * dim : dim, span]
+            product[start * dim + k : stop * dim : dim] = part @ spread
+            absolute = np.abs(part[:, ::dim], out=scratch[: stop - start])
+            magnitude[start * dim + k : stop * dim : dim] = absolute @ ax
+    return product, magnitude
 
 
 def solve_frictionless(
@@ -197,16 +257,25 @@ def solve_frictionless(
         raise InvalidInputError("the frictionless route needs mu = 0 on every contact")
     start = time.perf_counter()
     normal = np.arange(problem.n_contacts) * problem.dim
-    normal_columns, W_nn = _normal_columns(problem.W, problem.dim)
-    columns = (normal, normal_columns)  # W r and |W| |r| for finish
-    symmetric = _is_symmetric(W_nn)
+    dense = not sp.issparse(problem.W)
+    if dense:
+        W_dense = np.asarray(problem.W)
+        W_nn, symmetric, row_sums = _dense_normal_block(W_dense, problem.dim)
+    else:
+        normal_columns, W_nn = _sparse_normal_columns(problem.W, problem.dim)
+        symmetric = _is_symmetric(W_nn)
     W_sym = W_nn if symmetric else 0.5 * (W_nn + W_nn.T)
     if check_psd:
         check_diagonal(W_sym, "W's normal block")
     q_n = problem.q[normal]
     if r0 is None:
         with np.errstate(divide="ignore", invalid="ignore"):  # a zero row of W_NN: start at 0
-            first = np.nan_to_num(cold_start(W_sym, -q_n), nan=0.0, posinf=0.0)
+            guess = (
+                np.maximum(-q_n, 0.0) / row_sums  # cold_start's, from the sums of the pass
+                if dense and symmetric
+                else cold_start(W_sym, -q_n)
+            )
+            first = np.nan_to_num(guess, nan=0.0, posinf=0.0)
     else:
         first = np.maximum(warm_start(r0, problem.W.shape[0])[normal], 0.0)
     try:  # the box-QP's own factorisations of free blocks validate them
@@ -225,6 +294,10 @@ def solve_frictionless(
     reactions = solution.x if symmetric else _polish(problem, W_nn, q_n, normal, solution.x)
     r = np.zeros(problem.W.shape[0])
     r[normal] = reactions
+    if dense:  # W r and |W| |r| of the given W, over the columns where r is not zero
+        products = _dense_normal_products(W_dense, W_nn, reactions, problem.dim)
+    else:
+        products = column_products(normal_columns, reactions)
     return finish(
         problem,
         r,
@@ -234,7 +307,7 @@ def solve_frictionless(
         solution.message,
         method="normal-qp",
         per_contact=per_contact,
-        columns=columns,
+        products=products,
     )
 
 
@@ -248,7 +321,7 @@ def finish(
     *,
     method: str,
     per_contact: bool = False,
-    columns=None,
+    products: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> LocalResult:
     """The :class:`~contactqp.core.result.LocalResult` of reactions ``r``, checked by the
     natural-map error.
@@ -257,19 +330,14 @@ def finish(
     independently of the solver; ``start`` is the solver's ``time.perf_counter()`` at entry and
     ``detail`` its account of the iterations, put in the message beside the verdict and error.
     ``per_contact`` chooses the error (:func:`~contactqp.core.local_problem.natural_map_error`).
-    ``columns = (index, A)``, ``index`` the components outside which ``r`` is zero and ``A``
-    either ``W[:, index]`` or ``W`` itself, lets ``W r`` and ``|W| |r|`` read only those
-    columns, in one pass (:func:`~contactqp.core.local_problem.column_products`; the same sums:
-    the other terms are zero).
+    ``products = (W r, |W| |r|)``, when the caller has read them from the given ``W`` (over
+    the columns where ``r`` is not zero), saves reading ``W`` again.
     """
-    if columns is None:
+    if products is None:
         u = np.asarray(problem.W @ r).reshape(-1) + problem.q
         limits = accuracy_limits(problem, r, u)
     else:
-        index, block = columns
-        product, magnitude = column_products(
-            block, r[index], None if block.shape[1] == index.size else index
-        )
+        product, magnitude = products
         u = product + problem.q
         limits = accuracy_limits(problem, r, u, magnitude=magnitude)
     error = natural_map_error(problem, r, u, per_contact=per_contact)
