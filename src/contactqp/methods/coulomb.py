@@ -60,6 +60,7 @@ from .. import kernels
 from ..core.local_problem import (
     LocalProblem,
     better_dense,
+    column_products,
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
@@ -490,26 +491,30 @@ def solve_coulomb(
         return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
 
     r = r + shift
-    columns = None
+    loaded = None  # the components outside which the answer is zero, when known
     if isinstance(W, np.ndarray) and problem.n_contacts >= ACTIVE_SET_MIN:
         r, iterations, stages, index = _active_set(W, q, mu, d, r, tol, max_iter, per_contact)
         if index is not None:  # r is zero outside index, the apex shifts' normals aside
             shifted = np.flatnonzero(shift)
-            columns = (np.union1d(index, shifted) if shifted.size else index, W)
+            loaded = np.union1d(index, shifted) if shifted.size else index
         else:  # the reduction gave up: the whole problem from where it stopped
             r, k, more = _rounds(W, q, mu, d, r, tol, max_iter - iterations, measure)
             iterations += k
             stages += ["whole problem:"] + more
     else:
         r, iterations, stages = _rounds(W, q, mu, d, r, tol, max_iter, measure)
+    reactions = r - shift
+    # W r and |W| |r| for the certificate, read over the loaded columns only (the other terms
+    # are zero)
+    products = None if loaded is None else column_products(W, reactions[loaded], loaded)
     return finish(
         problem,
-        r - shift,
+        reactions,
         tol,
         iterations,
         start,
         ", ".join(stages),
         method="coulomb",
         per_contact=per_contact,
-        columns=columns,
+        products=products,
     )
