@@ -80,3 +80,65 @@ def test_dense_and_sparse_routes_give_the_same_answer(skew):
     assert dense.certificate.limits.rounding == pytest.approx(
         sparse.certificate.limits.rounding, rel=1e-12
     )
+
+
+def test_box_qp_decrease_is_accurate_where_objective_values_cancel():
+    """Near a minimiser the decrease of a tiny step is far below the rounding of f itself; the
+    projected Newton search judges steps by it, so it must keep its digits (exact reference)."""
+    from fractions import Fraction
+
+    from contactqp.core.operators import as_operator
+    from contactqp.methods.box_qp import _BoxQP
+
+    rng = np.random.default_rng(5)
+    n = 8
+    B = rng.standard_normal((n, n))
+    W = B @ B.T + np.eye(n)
+    c = rng.standard_normal(n)
+    qp = _BoxQP(as_operator(W), c, np.full(n, -np.inf), np.full(n, np.inf), 1e-12)
+    x = np.linalg.solve(W, -c) + 1e-6 * rng.standard_normal(n)
+    step = -1e-9 * (W @ x + c)
+    exact_W = [[Fraction(v) for v in row] for row in W]
+
+    def exact_f(z):
+        z = [Fraction(v) for v in z]
+        Wz = [sum(a * b for a, b in zip(row, z, strict=True)) for row in exact_W]
+        return sum(
+            zi * (Fraction(1, 2) * wi + Fraction(ci)) for zi, wi, ci in zip(z, Wz, c, strict=True)
+        )
+
+    trial = x + step
+    exact = float(exact_f(x) - exact_f(trial))
+    assert exact > 0
+    assert qp.decrease(x, W @ x + c, trial - x) == pytest.approx(exact, rel=1e-6, abs=0)
+    difference = float(x @ (0.5 * (W @ x) + c) - trial @ (0.5 * (W @ trial) + c))
+    assert difference != pytest.approx(exact, rel=0.5, abs=0)  # what the old search compared
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_singular_normal_block_converges_whatever_the_blas_threads(threads):
+    """Capsules-i122's normal block is singular and slightly unsymmetric; its frictionless twin
+    needs the projected Newton phase, whose line search once stalled one step short (error
+    3.9e-8) with one BLAS thread only."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    fclib = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
+    script = (
+        "import numpy as np\n"
+        "from contactqp import solve\n"
+        "from contactqp.core.local_problem import LocalProblem, natural_map_error\n"
+        "from contactqp.io.fclib import read_problem\n"
+        f"p = read_problem({str(fclib / 'Capsules-i122-1617.dat')!r})\n"
+        "p = LocalProblem(p.W, p.q, np.zeros_like(p.mu), p.dim)\n"
+        "result = solve(p)\n"
+        "print(result.success, natural_map_error(p, result.forces))\n"
+    )
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": threads, "OMP_NUM_THREADS": threads}
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True
+    )
+    success, error = proc.stdout.split()
+    assert success == "True" and float(error) <= 1e-8
