@@ -57,7 +57,34 @@ def test_dense_normal_products_are_those_of_the_whole_matrix(small_blocks, dim, 
         W, np.ascontiguousarray(W[::dim, ::dim]), x, dim
     )
     np.testing.assert_allclose(product, W @ r, rtol=1e-14, atol=1e-14)
-    np.testing.assert_allclose(magnitude, np.abs(W) @ np.abs(r), rtol=1e-14, atol=0)
+    # |W| |r| on the normal rows, the only ones a frictionless certificate depends on
+    np.testing.assert_allclose(magnitude[::dim], (np.abs(W) @ np.abs(r))[::dim], rtol=1e-14, atol=0)
+    assert not magnitude.reshape(n, dim)[:, 1:].any()
+
+
+@pytest.mark.parametrize("mu", [[0.0, 0.0, 0.0], [0.3, 0.0, 0.5], [0.3, 0.2, 0.5]])
+def test_certified_rows_are_those_the_natural_map_depends_on(mu):
+    """The rows left out of the certificate's limits (tangential rows of frictionless contacts)
+    do not move the natural map's numerator, whatever u there; all others are kept."""
+    from contactqp.core.local_problem import natural_map_residual
+
+    rng = np.random.default_rng(7)
+    dim, n = 3, len(mu)
+    frictionless = np.array(mu) == 0
+    B = rng.standard_normal((n * dim, n * dim))
+    problem = LocalProblem(B @ B.T, rng.standard_normal(n * dim), np.array(mu), dim)
+    expected = np.ones((n, dim), dtype=bool)
+    expected[frictionless, 1:] = False
+    kept = np.zeros(n * dim, dtype=bool)
+    kept[problem.certified_rows] = True
+    np.testing.assert_array_equal(kept, expected.ravel())
+    for _ in range(5):
+        r = rng.standard_normal(n * dim)
+        r.reshape(n, dim)[frictionless, 1:] = 0.0  # a frictionless contact's r_T is 0
+        u = rng.standard_normal(n * dim)
+        residual = natural_map_residual(problem, r, u)[0]
+        moved = u + np.where(kept, 0.0, 10.0 * rng.standard_normal(n * dim))
+        assert natural_map_residual(problem, r, moved)[0] == residual
 
 
 @pytest.mark.parametrize("skew", [0.0, 1e-4])

@@ -215,6 +215,25 @@ class LocalProblem:
             self._checks["semidefinite"] = True
 
     @functools.cached_property
+    def certified_rows(self) -> slice | np.ndarray:
+        """The rows of ``u`` that :func:`natural_map_error`'s numerator depends on.
+
+        On a contact without friction (``mu_i = 0``) the cone is the normal ray, so the
+        tangential part of the natural map is ``r_T - 0 = r_T`` whatever ``u_T``: those rows of
+        ``u`` (and their rounding) move the error only through its scale, at relative rounding
+        level. Every row (a full slice) when every contact has friction; the normal rows (a
+        slice) when none has; else an index array.
+        """
+        frictionless = self.mu == 0
+        if self.dim == 1 or not frictionless.any():
+            return slice(None)
+        if frictionless.all():
+            return slice(None, None, self.dim)
+        keep = np.ones((self.n_contacts, self.dim), dtype=bool)
+        keep[frictionless, 1:] = False
+        return np.flatnonzero(keep)
+
+    @functools.cached_property
     def apex_shift(self) -> np.ndarray:
         """Shape (m,): ``c_i / mu_i`` on each normal component, 0 elsewhere.
 
@@ -400,14 +419,16 @@ def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyL
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
     ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
-    array's digits. ``magnitude`` is ``|W| |r|`` when the caller has it already
-    (:func:`column_products`).
+    array's digits, the norm of ``|W| |r|`` taken over the rows the error depends on
+    (:attr:`LocalProblem.certified_rows`: all but the tangential rows of contacts without
+    friction). ``magnitude`` is ``|W| |r|`` when the caller has it already
+    (:func:`column_products`); only those rows of it are read.
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
     if magnitude is None:
         magnitude = _abs_product(problem.W, rv)
-    product = float(np.linalg.norm(magnitude))
+    product = float(np.linalg.norm(magnitude[problem.certified_rows]))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
     data = (

@@ -175,7 +175,9 @@ def _dense_normal_products(
     W: np.ndarray, W_nn: np.ndarray, x: np.ndarray, dim: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(W r, |W| |r|)`` of the ``r`` that is ``x`` on the normal components and zero off
-    them, exactly (the terms left out are zero).
+    them, exactly (the terms left out are zero), ``|W| |r|`` on the normal rows only (zero on
+    the tangential ones, which a frictionless certificate does not depend on:
+    :attr:`~contactqp.core.local_problem.LocalProblem.certified_rows`).
 
     Only the columns from the first to the last nonzero entry of ``x`` are read: the normal
     rows from the copy ``W_nn`` (the same numbers as ``W``'s), the tangential rows from ``W``
@@ -200,11 +202,9 @@ def _dense_normal_products(
         product[start * dim : stop * dim : dim] = part @ xs
         absolute = np.abs(part, out=scratch[: stop - start])
         magnitude[start * dim : stop * dim : dim] = absolute @ ax
-        for k in range(1, dim):  # the tangential rows of these contacts
+        for k in range(1, dim):  # the tangential rows of these contacts: u_T only
             part = W[start * dim + k : stop * dim : dim, span]
             product[start * dim + k : stop * dim : dim] = part @ spread
-            absolute = np.abs(part[:, ::dim], out=scratch[: stop - start])
-            magnitude[start * dim + k : stop * dim : dim] = absolute @ ax
     return product, magnitude
 
 
