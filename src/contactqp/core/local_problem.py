@@ -48,6 +48,7 @@ __all__ = [
     "column_products",
     "condense_global",
     "contact_status",
+    "contact_status_unchecked",
     "natural_map_error",
     "natural_map_residual",
     "project_rows",
@@ -213,6 +214,13 @@ class LocalProblem:
         if not self._checks.get("semidefinite", False):
             check_positive_semidefinite(self.W)
             self._checks["semidefinite"] = True
+
+    @functools.cached_property
+    def _largest_diagonal(self) -> float:
+        """``max |W_ii|`` (1 when every entry is 0): the velocity scale of
+        :func:`contact_status`."""
+        diagonal = np.abs(np.asarray(self.W.diagonal(), dtype=float))
+        return float(diagonal.max(initial=0.0)) or 1.0
 
     @functools.cached_property
     def certified_rows(self) -> slice | np.ndarray:
@@ -939,20 +947,28 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     -------
     numpy.ndarray of int, shape (n_contacts,)
     """
+    rv, uv = _candidate(problem, r, u)
+    return contact_status_unchecked(problem, rv, uv, rtol)
+
+
+def contact_status_unchecked(problem: LocalProblem, r, u, rtol: float = 1e-6) -> np.ndarray:
+    """:func:`contact_status` of float arrays ``r``, ``u`` of shape (m,), without checks (for
+    methods, whose arrays are their own)."""
     d = problem.dim
     nc = problem.n_contacts
-    rv, uv = _candidate(problem, r, u)
-    diagonal = np.abs(np.asarray(problem.W.diagonal(), dtype=float))
-    w = float(diagonal.max(initial=0.0)) or 1.0
+    w = problem._largest_diagonal
+    size = math.sqrt(r @ r)
+    shift = problem.apex_shift
+    apex = r + shift
     largest = max(
-        np.linalg.norm(rv),
-        np.linalg.norm(rv + problem.apex_shift),
-        np.linalg.norm(problem.q) / w,
-        np.linalg.norm(uv) / w,
+        size,
+        math.sqrt(apex @ apex),
+        math.sqrt(problem.q @ problem.q) / w,
+        math.sqrt(u @ u) / w,
     )
     force = largest if largest > 0 else 1.0
     return problem.law.status(
-        rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force, rtol * w * force
+        r.reshape(nc, d), u.reshape(nc, d)[:, 1:], rtol * force, rtol * w * force
     )
 
 

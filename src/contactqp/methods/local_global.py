@@ -30,8 +30,9 @@ from ..core.local_problem import (
     accuracy_limits,
     check_diagonal,
     column_products,
-    contact_status,
+    contact_status_unchecked,
     natural_map_error,
+    natural_map_residual,
 )
 from ..core.model import warm_start
 from ..core.operators import as_operator
@@ -78,7 +79,7 @@ def local_result(
         forces=r,
         nodal_forces=r,
         gaps=u[:: problem.dim],
-        contact_status=contact_status(problem, r, u),
+        contact_status=contact_status_unchecked(problem, r, u),
         energy=float("nan"),
         success=bool(converged),
         status=SUCCESS if converged else NOT_CONVERGED,
@@ -333,6 +334,7 @@ def finish(
     ``products = (W r, |W| |r|)``, when the caller has read them from the given ``W`` (over
     the columns where ``r`` is not zero), saves reading ``W`` again.
     """
+    r = np.asarray(r, dtype=float)
     if products is None:
         u = np.asarray(problem.W @ r).reshape(-1) + problem.q
         limits = accuracy_limits(problem, r, u)
@@ -340,7 +342,7 @@ def finish(
         product, magnitude = products
         u = product + problem.q
         limits = accuracy_limits(problem, r, u, magnitude=magnitude)
-    error = natural_map_error(problem, r, u, per_contact=per_contact)
+    error = natural_map_residual(problem, r, u, per_contact=per_contact)[1]
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     return local_result(
