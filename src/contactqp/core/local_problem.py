@@ -233,7 +233,7 @@ class LocalProblem:
         slice) when none has; else an index array.
         """
         frictionless = self.mu == 0
-        if self.dim == 1 or not frictionless.any():
+        if not frictionless.any():
             return slice(None)
         if frictionless.all():
             return slice(None, None, self.dim)
