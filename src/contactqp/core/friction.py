@@ -42,6 +42,8 @@ from .status import ContactStatus
 
 __all__ = ["FrictionLaw", "MAX_FACETS", "apex_distance", "polygon_normals"]
 
+_OPEN, _STICK, _SLIP = int(ContactStatus.OPEN), int(ContactStatus.STICK), int(ContactStatus.SLIP)
+
 
 #: Most sides of a polygonal cone: 1024 sides are within 5e-6 of the circle, and more would only
 #: add rows to every cone program; the exact cone (``facets=None``) is the route beyond that.
@@ -212,8 +214,7 @@ class FrictionLaw:
         closed and ``||s_T|| > slip_tol`` (m). Stick otherwise. Each tolerance is a scalar or
         holds one value per contact.
         """
-        carries = np.linalg.norm(self.apex_forces(forces), axis=1) > force_tol
+        measured = self.apex_forces(forces) if self.cohesion.any() else forces
+        carries = np.linalg.norm(measured, axis=1) > force_tol
         slipping = np.linalg.norm(np.asarray(slips, dtype=float), axis=1) > slip_tol
-        return np.where(
-            carries, np.where(slipping, ContactStatus.SLIP, ContactStatus.STICK), ContactStatus.OPEN
-        )
+        return np.where(carries, np.where(slipping, _SLIP, _STICK), _OPEN)

@@ -48,6 +48,7 @@ __all__ = [
     "column_products",
     "condense_global",
     "contact_status",
+    "contact_status_unchecked",
     "natural_map_error",
     "natural_map_residual",
     "project_rows",
@@ -213,6 +214,32 @@ class LocalProblem:
         if not self._checks.get("semidefinite", False):
             check_positive_semidefinite(self.W)
             self._checks["semidefinite"] = True
+
+    @functools.cached_property
+    def _largest_diagonal(self) -> float:
+        """``max |W_ii|`` (1 when every entry is 0): the velocity scale of
+        :func:`contact_status`."""
+        diagonal = np.abs(np.asarray(self.W.diagonal(), dtype=float))
+        return float(diagonal.max(initial=0.0)) or 1.0
+
+    @functools.cached_property
+    def certified_rows(self) -> slice | np.ndarray:
+        """The rows of ``u`` that :func:`natural_map_error`'s numerator depends on.
+
+        On a contact without friction (``mu_i = 0``) the cone is the normal ray, so the
+        tangential part of the natural map is ``r_T - 0 = r_T`` whatever ``u_T``: those rows of
+        ``u`` (and their rounding) move the error only through its scale, at relative rounding
+        level. Every row (a full slice) when every contact has friction; the normal rows (a
+        slice) when none has; else an index array.
+        """
+        frictionless = self.mu == 0
+        if not frictionless.any():
+            return slice(None)
+        if frictionless.all():
+            return slice(None, None, self.dim)
+        keep = np.ones((self.n_contacts, self.dim), dtype=bool)
+        keep[frictionless, 1:] = False
+        return np.flatnonzero(keep)
 
     @functools.cached_property
     def apex_shift(self) -> np.ndarray:
@@ -400,14 +427,16 @@ def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyL
     With ``s = max(||q||, ||r||, ||u||)`` (the scale of :func:`natural_map_error`):
     ``rounding = eps (|| |W| |r| || + ||q||) / s`` and
     ``data = (d_W || |W| |r| || + d_q ||q||) / s``, ``d`` the :func:`relative_rounding` of each
-    array's digits. ``magnitude`` is ``|W| |r|`` when the caller has it already
-    (:func:`column_products`).
+    array's digits, the norm of ``|W| |r|`` taken over the rows the error depends on
+    (:attr:`LocalProblem.certified_rows`: all but the tangential rows of contacts without
+    friction). ``magnitude`` is ``|W| |r|`` when the caller has it already
+    (:func:`column_products`); only those rows of it are read.
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
     scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
     if magnitude is None:
         magnitude = _abs_product(problem.W, rv)
-    product = float(np.linalg.norm(magnitude))
+    product = float(np.linalg.norm(magnitude[problem.certified_rows]))
     size_q = float(np.linalg.norm(problem.q))
     digits = problem.digits
     data = (
@@ -918,20 +947,28 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     -------
     numpy.ndarray of int, shape (n_contacts,)
     """
+    rv, uv = _candidate(problem, r, u)
+    return contact_status_unchecked(problem, rv, uv, rtol)
+
+
+def contact_status_unchecked(problem: LocalProblem, r, u, rtol: float = 1e-6) -> np.ndarray:
+    """:func:`contact_status` of float arrays ``r``, ``u`` of shape (m,), without checks (for
+    methods, whose arrays are their own)."""
     d = problem.dim
     nc = problem.n_contacts
-    rv, uv = _candidate(problem, r, u)
-    diagonal = np.abs(np.asarray(problem.W.diagonal(), dtype=float))
-    w = float(diagonal.max(initial=0.0)) or 1.0
+    w = problem._largest_diagonal
+    size = math.sqrt(r @ r)
+    shift = problem.apex_shift
+    apex = r + shift
     largest = max(
-        np.linalg.norm(rv),
-        np.linalg.norm(rv + problem.apex_shift),
-        np.linalg.norm(problem.q) / w,
-        np.linalg.norm(uv) / w,
+        size,
+        math.sqrt(apex @ apex),
+        math.sqrt(problem.q @ problem.q) / w,
+        math.sqrt(u @ u) / w,
     )
     force = largest if largest > 0 else 1.0
     return problem.law.status(
-        rv.reshape(nc, d), uv.reshape(nc, d)[:, 1:], rtol * force, rtol * w * force
+        r.reshape(nc, d), u.reshape(nc, d)[:, 1:], rtol * force, rtol * w * force
     )
 
 

@@ -72,7 +72,7 @@ class BlockFactor:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve the (shifted) block's system for ``rhs`` (shape (k,) or (k, j))."""
-        return scipy.linalg.cho_solve((self.lower, True), rhs, check_finite=False)
+        return scipy.linalg.cho_solve((self.lower.T, False), rhs, check_finite=False)
 
 
 def _indices(selection, n: int):
@@ -93,7 +93,10 @@ def _everything(selection) -> bool:
 
 
 def _cholesky(block: np.ndarray) -> np.ndarray:
-    return scipy.linalg.cholesky(block, lower=True, overwrite_a=True, check_finite=False)
+    """Lower Cholesky factor of the lower triangle of ``block``, in place when ``block`` is
+    C-contiguous: ``block.T`` is then the same memory in LAPACK's column order, whose upper
+    triangle holds ``block``'s lower one, and its upper factor ``U`` is ``L^T`` (no copy)."""
+    return scipy.linalg.cholesky(block.T, lower=False, overwrite_a=True, check_finite=False).T
 
 
 class Operator(ABC):
@@ -192,11 +195,11 @@ class Operator(ABC):
         )
 
     def _factorise(self, index: np.ndarray) -> BlockFactor:
-        block = self.block(index, index)
-        try:  # LAPACK's column order made here: faster than the conversion inside scipy
-            return BlockFactor(index, _cholesky(np.asfortranarray(block)))
+        try:  # factored in place: the block is fetched again if it is not definite
+            return BlockFactor(index, _cholesky(self.block(index, index)))
         except np.linalg.LinAlgError:
             pass
+        block = self.block(index, index)
         diagonal = block.diagonal().copy()
         uniform = self.singular_shift()
         try:

@@ -126,8 +126,12 @@ class _BoxQP:
     def gradient(self, x):
         return self.W @ x + self.c
 
-    def objective(self, x):
-        return float(x @ (0.5 * (self.W @ x) + self.c))
+    def decrease(self, x, g, step):
+        """``f(x) - f(x + step)`` for the gradient ``g`` at ``x``, as
+        ``-(g^T s + 1/2 s^T W s)``: its rounding error scales with the step, not with ``f``, so
+        it keeps its sign near the minimiser, where the difference of two objective values is
+        lost to cancellation."""
+        return -float(step @ (g + 0.5 * (self.W @ step)))
 
     def project(self, x):
         return np.clip(x, self.lower, self.upper)
@@ -215,14 +219,13 @@ def _projected_newton_phase(qp: _BoxQP, x, max_iter):
         direction = -qp.sigma * g
         if free.any():
             direction[free] = -qp.blocks.solve(free, g[free])
-        f0 = qp.objective(x)
         alpha = 1.0
         while True:
             trial = qp.project(x + alpha * direction)
             expected = alpha * -(g[free] @ direction[free]) + g[binding] @ (
                 x[binding] - trial[binding]
             )
-            if f0 - qp.objective(trial) >= 1e-4 * expected:
+            if qp.decrease(x, g, trial - x) >= 1e-4 * expected:
                 break
             alpha *= 0.5
             if alpha < 1e-14:

@@ -64,7 +64,6 @@ from ..core.local_problem import (
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
-from ..core.operators import as_operator
 from ..errors import InvalidInputError
 from .local_global import finish
 from .pgs import GaussSeidel
@@ -478,7 +477,7 @@ def solve_coulomb(
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
-    W, d, mu = as_operator(problem.W).matrix, problem.dim, problem.mu  # Newton works on entries
+    W, d, mu = problem.W, problem.dim, problem.mu  # a float ndarray or CSR, as validated
     if sp.issparse(W) and better_dense(W):
         W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
     if check_psd:

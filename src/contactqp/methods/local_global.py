@@ -30,8 +30,9 @@ from ..core.local_problem import (
     accuracy_limits,
     check_diagonal,
     column_products,
-    contact_status,
+    contact_status_unchecked,
     natural_map_error,
+    natural_map_residual,
 )
 from ..core.model import warm_start
 from ..core.operators import as_operator
@@ -78,7 +79,7 @@ def local_result(
         forces=r,
         nodal_forces=r,
         gaps=u[:: problem.dim],
-        contact_status=contact_status(problem, r, u),
+        contact_status=contact_status_unchecked(problem, r, u),
         energy=float("nan"),
         success=bool(converged),
         status=SUCCESS if converged else NOT_CONVERGED,
@@ -175,7 +176,9 @@ def _dense_normal_products(
     W: np.ndarray, W_nn: np.ndarray, x: np.ndarray, dim: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(W r, |W| |r|)`` of the ``r`` that is ``x`` on the normal components and zero off
-    them, exactly (the terms left out are zero).
+    them, exactly (the terms left out are zero), ``|W| |r|`` on the normal rows only (zero on
+    the tangential ones, which a frictionless certificate does not depend on:
+    :attr:`~contactqp.core.local_problem.LocalProblem.certified_rows`).
 
     Only the columns from the first to the last nonzero entry of ``x`` are read: the normal
     rows from the copy ``W_nn`` (the same numbers as ``W``'s), the tangential rows from ``W``
@@ -200,11 +203,9 @@ def _dense_normal_products(
         product[start * dim : stop * dim : dim] = part @ xs
         absolute = np.abs(part, out=scratch[: stop - start])
         magnitude[start * dim : stop * dim : dim] = absolute @ ax
-        for k in range(1, dim):  # the tangential rows of these contacts
+        for k in range(1, dim):  # the tangential rows of these contacts: u_T only
             part = W[start * dim + k : stop * dim : dim, span]
             product[start * dim + k : stop * dim : dim] = part @ spread
-            absolute = np.abs(part[:, ::dim], out=scratch[: stop - start])
-            magnitude[start * dim + k : stop * dim : dim] = absolute @ ax
     return product, magnitude
 
 
@@ -333,6 +334,7 @@ def finish(
     ``products = (W r, |W| |r|)``, when the caller has read them from the given ``W`` (over
     the columns where ``r`` is not zero), saves reading ``W`` again.
     """
+    r = np.asarray(r, dtype=float)
     if products is None:
         u = np.asarray(problem.W @ r).reshape(-1) + problem.q
         limits = accuracy_limits(problem, r, u)
@@ -340,7 +342,7 @@ def finish(
         product, magnitude = products
         u = product + problem.q
         limits = accuracy_limits(problem, r, u, magnitude=magnitude)
-    error = natural_map_error(problem, r, u, per_contact=per_contact)
+    error = natural_map_residual(problem, r, u, per_contact=per_contact)[1]
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     return local_result(
