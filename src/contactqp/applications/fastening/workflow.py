@@ -35,6 +35,7 @@ from typing import Any
 
 from ...errors import InvalidInputError
 from ...studies import BatchSummary, GapStatistics, GaussianGapField, load_batch, run_batch
+from ...studies.executors import check_scheduler
 from .model import Assembly
 from .output import plot_statistics_maps, write_sequence, write_statistics
 from .stage import AssemblySequence
@@ -151,7 +152,8 @@ def run_assembly_study(
     workers : int
         Local worker processes (ignored with ``scheduler``).
     scheduler : str, optional
-        Dask scheduler address (``tcp://host:port``).
+        Dask scheduler address (``tcp://host:port``), checked before any solve. ``workers``
+        and ``scheduler`` are not used without a ``[variation]``.
     plot : bool
         Also write the figures (the ``plot`` extra).
     progress : callable, optional
@@ -180,8 +182,6 @@ def run_assembly_study(
     samples = _count(samples, name("samples"), minimum=1)
     seed = _count(seed, name("seed"), minimum=0)
     workers_count = _count(workers, name("workers"), minimum=1)
-    if scheduler is not None and not isinstance(scheduler, str):
-        raise InvalidInputError(f"{name('scheduler')} must be an address string, got {scheduler!r}")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InvalidInputError(f"{name('out')}: '{out}' is a file, not a directory")
@@ -197,6 +197,8 @@ def run_assembly_study(
     if source is None:
         nominal = assembly.sequence(given.gaps, **options)
     else:
+        if scheduler is not None:  # a bad address is told before the nominal solve
+            check_scheduler(scheduler)
         case = SequenceVariation(assembly, given.gaps, **options)
         nominal = case.nominal
     out.mkdir(parents=True, exist_ok=True)
