@@ -10,8 +10,8 @@ import csv
 import meshio
 import numpy as np
 import pytest
-from assembly_files import PLATES, blocks, write
 
+from assembly_files import PLATES, blocks, write
 from contactqp.applications.assembly_file import read_assembly_file
 from contactqp.applications.fastening.workflow import run_assembly_study
 from contactqp.core.status import status_labels
