@@ -199,7 +199,8 @@ def test_a_seed_given_replaces_the_files_seed(tmp_path):
     doc["variation"]["seed"] = 9
     same = run_assembly_study(write(tmp_path / "b", doc), tmp_path / "b", samples=3)
     assert_same_store(tmp_path / "a" / "samples.h5", tmp_path / "b" / "samples.h5")
-    assert "seed 9" in seeded.input.variation_description or seeded.notes()
+    assert seeded.input.variation_description.endswith("seed 9 (seed)")
+    assert seeded.notes()[-1] == f"variation: {seeded.input.variation_description}"
     np.testing.assert_array_equal(seeded.statistics.mean, same.statistics.mean)
     doc["variation"]["seed"] = 4
     other = run_assembly_study(write(tmp_path / "c", doc), tmp_path / "c", samples=3)

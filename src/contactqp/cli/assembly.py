@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from contextlib import nullcontext
 from pathlib import Path
 
 import click
@@ -60,7 +61,9 @@ def assembly(assembly_file, samples, seed, workers, scheduler, out, as_json, plo
 
     names = {param.name: param.opts[0] for param in click.get_current_context().command.params}
     names["assembly_file"] = "ASSEMBLY.toml"
-    with progress("sample") as report:
+    # a progress bar on a terminal only: elsewhere stderr stays for the one error line
+    bar = progress("sample") if sys.stderr.isatty() else nullcontext(None)
+    with bar as report:
         study = run_assembly_study(
             assembly_file,
             out,

@@ -26,6 +26,7 @@ either way) and writes:
 
 from __future__ import annotations
 
+import dataclasses
 import numbers
 import os
 from collections.abc import Callable
@@ -191,6 +192,7 @@ def run_assembly_study(
     given = read_assembly_file(Path(assembly_file))
     _check_no_overwrite(Path(assembly_file), out, name("out"))
     assembly = given.to_assembly()
+    given = _seeded(given, seed, name)
     source, samples = _variation_source(given, samples, seed, name)
     options = {"load_steps": given.load_steps, "method": given.method, **given.options}
     case = None
@@ -249,6 +251,23 @@ def _count(value: Any, what: str, *, minimum: int) -> Any:
     return int(value)
 
 
+def _seeded(given: Any, seed: int | None, name) -> Any:
+    """``given`` with its random gap fields drawn from ``seed`` instead of the file's (and
+    its variation's description saying so); as it is without a seed or a random variation."""
+    source = given.variation
+    if seed is None or not isinstance(source, GaussianGapField):
+        return given
+    seeded = GaussianGapField(
+        source.coordinates, source.amplitude, source.correlation_length, source.mean, seed
+    )
+    description = given.variation_description.rsplit(", seed ", 1)[0]
+    return dataclasses.replace(
+        given,
+        variation=seeded,
+        variation_description=f"{description}, seed {seed} ({name('seed')})",
+    )
+
+
 def _variation_source(given: Any, samples: int | None, seed: int | None, name) -> tuple:
     """``(gap source, samples)`` of the study, or ``(None, None)`` without a variation."""
     source = given.variation
@@ -260,14 +279,6 @@ def _variation_source(given: Any, samples: int | None, seed: int | None, name) -
                 )
         return None, None
     if isinstance(source, GaussianGapField):
-        if seed is not None:
-            source = GaussianGapField(
-                source.coordinates,
-                source.amplitude,
-                source.correlation_length,
-                mean=source.mean,
-                seed=seed,
-            )
         return source, DEFAULT_SAMPLES if samples is None else samples
     if seed is not None:
         raise InvalidInputError(
