@@ -70,6 +70,10 @@ def test_the_tables_and_the_notes(tmp_path, capsys):
         assert " ".join(line.split()) in text
     assert "gap interpolation (thin-plate" in text and "unmatched" in text
     assert "variation study: 2 samples, 2 computed, 0 reused, 0 failed" in text
+    shims = np.flatnonzero(study.nominal.final.gaps > study.input.shim_tolerance)
+    assert shims.size == 2
+    listed = f"{shims.size}: {', '.join(map(str, shims))} (shims.csv)" if shims.size else "none"
+    assert f"pairs needing a shim (gap > 5e-05 mm after the last stage): {listed}" in text
     for name in ("gap.png", "status.png", "fastener_forces.png", "statistics.png"):
         assert (tmp_path / "out" / name).stat().st_size > 0, name
 

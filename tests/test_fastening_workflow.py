@@ -105,6 +105,9 @@ def test_the_files_hold_the_direct_sequence(example, blocks_file, blocks_study, 
 
 def test_the_frictional_example_slips_and_dissipates(blocks_study):
     study, _ = blocks_study
+    upper = study.input.part("upper")
+    shear = study.assembly.load_vector("upper", np.arange(upper.model.n_nodes), [200.0, 0, 0])
+    np.testing.assert_array_equal(study.input.load_steps[0][1], shear)  # h3's layout is h2's
     labels = [stage.label for stage in study.nominal.stages]
     assert labels[-2:] == ["shear", "shear removed"]
     assert "slip" in status_labels(study.nominal.stages[-2].status)
