@@ -51,8 +51,8 @@ class SequenceVariation:
     nominal_gaps : array_like, shape (k,)
         The gap field (m) of the nominal sequence, e.g. the gap source's mean.
     order, load_steps, method, **options
-        As :meth:`~contactqp.applications.fastening.Assembly.sequence` takes them, the same
-        for every sample.
+        As :meth:`~contactqp.applications.fastening.Assembly.sequence` takes them, the same for
+        every sample.
     start : {"nominal", "previous"}
         Where each stage's solve starts from (above).
 
