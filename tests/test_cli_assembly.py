@@ -147,3 +147,14 @@ def test_help_names_every_option(capsys):
     for option in ("--samples", "--seed", "--workers", "--scheduler", "--out", "--json", "--plot"):
         assert option in text
     assert "ASSEMBLY.toml" in text
+
+
+def test_a_missing_plot_extra_is_told_before_anything_is_written(tmp_path, capsys, monkeypatch):
+    import sys
+
+    path = write(tmp_path / "in", blocks())
+    monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # an import that fails
+    code, out, err = run(capsys, path, "--samples", 2, "--out", tmp_path / "out", "--plot")
+    assert (code, out) == (2, "") and err.count("\n") == 1
+    assert "figures needs matplotlib: pip install 'contactqp[plot]'" in err
+    assert not (tmp_path / "out").exists()

@@ -235,6 +235,7 @@ def listing(folder):
         ("out over an input", r"^out: the study would overwrite its input file '.*stages\.csv'"),
         ("bad samples", r"^samples must be an integer >= 1, got 0"),
         ("bad scheduler", r"Dask scheduler 'no-port'"),
+        ("no workers", r"^workers must be an integer >= 1, got None"),
     ],
 )
 def test_bad_input_is_refused_before_anything_is_written(tmp_path, case, message):
@@ -259,6 +260,8 @@ def test_bad_input_is_refused_before_anything_is_written(tmp_path, case, message
         options["samples"] = 0
     elif case == "bad scheduler":
         options["scheduler"] = "no-port"
+    elif case == "no workers":
+        options["workers"] = None
     path = write(folder, doc)
     (folder / "rows.csv").write_text("\n".join(["0.0," * 5 + "0.0"] * 2) + "\n", encoding="utf-8")
     (folder / "stages.csv").write_text((folder / "gaps.csv").read_text(), encoding="utf-8")
