@@ -126,3 +126,22 @@ def test_linear_operator_wrapped_as_operator_needs_a_subclass():
     # a bare LinearOperator is not a matrix: as_operator does not guess its blocks
     with pytest.raises(InvalidInputError, match="LinearOperator"):
         as_operator(LinearOperator((3, 3), matvec=lambda x: x, dtype=float))
+
+
+def test_symmetric_dense_operator_reads_one_triangle_for_the_same_product():
+    from contactqp.core.operators import SymmetricDenseOperator
+
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((40, 40))
+    A = A + A.T
+    x = rng.standard_normal(40)
+    X = rng.standard_normal((40, 3))
+    op = SymmetricDenseOperator(A)
+    np.testing.assert_allclose(op @ x, A @ x, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(op @ X, A @ X, rtol=1e-13, atol=1e-13)
+    # the lower triangle alone is read: changing the upper one changes nothing
+    B = np.tril(A).copy()
+    np.testing.assert_allclose(SymmetricDenseOperator(B) @ x, A @ x, rtol=1e-13, atol=1e-13)
+    for bad in (A[:, :30].copy(), np.asfortranarray(A), A.astype(np.float32)):
+        with pytest.raises(InvalidInputError, match="symmetric operator"):
+            SymmetricDenseOperator(bad)

@@ -35,7 +35,7 @@ from ..core.local_problem import (
     natural_map_residual,
 )
 from ..core.model import warm_start
-from ..core.operators import as_operator
+from ..core.operators import SymmetricDenseOperator, as_operator
 from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
 from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .active_set import cold_start
@@ -281,7 +281,7 @@ def solve_frictionless(
         first = np.maximum(warm_start(r0, problem.W.shape[0])[normal], 0.0)
     try:  # the box-QP's own factorisations of free blocks validate them
         solution = solve_box_qp(
-            W_sym,
+            SymmetricDenseOperator(W_sym) if dense else W_sym,  # W_sym == W_sym.T exactly
             q_n,
             lower=0.0,
             x0=first,
