@@ -49,6 +49,8 @@ __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "L
 
 #: A contact is reported closed when its force exceeds this fraction of the problem's force scale.
 CLOSED_RTOL = 1e-10
+#: How many restrictions to contact sets a problem keeps (:meth:`FrictionalProblem.restricted`).
+RESTRICTIONS_KEPT = 16
 
 
 def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
@@ -511,6 +513,8 @@ class FrictionalProblem:
         self._free_displacements: np.ndarray | None = None
         # validated once, shared with the with_loads twins (same W and law; q replaced)
         self._templates: dict[str, LocalProblem] = {}
+        # restrictions to contact sets (restricted), shared with the with_loads twins
+        self._restrictions: dict[bytes, FrictionalProblem] = {}
         self.previous = previous
         self._previous_tangential()  # checked now, not at the solve
 
@@ -574,6 +578,10 @@ class FrictionalProblem:
         """The same model and law on the contacts ``contacts`` only (e.g. those a fastener
         leaves), their local form sliced from this problem's: nothing is assembled again.
 
+        The slice of a contact set (its ``W``, law and validated local problems) is kept and
+        shared by every later restriction to the same contacts (a sequence's stages on each
+        sample of a study): only the gaps, loads and state are new.
+
         Parameters
         ----------
         contacts : array_like of int
@@ -587,31 +595,54 @@ class FrictionalProblem:
         """
         kept, twin_constraints = _restricted_constraints(self.constraints, contacts, gaps)
         values = twin_constraints.gaps
-        d = self.dim
-        rows = (d * kept[:, None] + np.arange(d)).ravel()
-        twin = copy.copy(self)
-        twin.constraints = twin_constraints
-        frames = self.frames
-        twin.frames = dataclasses.replace(
-            frames,
-            normals=frames.normals[kept],
-            tangents=frames.tangents[kept],
-            operator=frames.operator[rows],
-        )
-        law = self.law
-        twin.law = FrictionLaw(
-            law.mu[kept], law.cohesion[kept], law.facets, n_contacts=int(kept.size)
-        )
-        if np.any((twin.law.cohesion > 0) & (values > 0)):
+        prototype = self._restriction(kept)
+        if np.any((prototype.law.cohesion > 0) & (values > 0)):
             raise InvalidInputError("cohesion models a bonded interface, which starts closed")
-        twin._local = self.local().restricted(kept, d, values)
-        twin._templates = {}  # W and the law are new: no shared local problem
-        if loads is not None:
-            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
-            twin._free_displacements = None
+        twin = copy.copy(prototype)
+        twin.constraints = twin_constraints
+        form = copy.copy(prototype.local())  # W, influence and FCLIB templates shared
+        form.offset = np.zeros_like(form.offset)
+        form.offset[:: self.dim] = values
+        twin._local = form
+        twin._free_displacements = None
+        twin.loads = (
+            self.loads if loads is None else _checked_loads(self.model, loads, self.certificate_tol)
+        )
         twin.previous = previous
         twin._previous_tangential()
         return twin
+
+    def _restriction(self, kept: np.ndarray) -> FrictionalProblem:
+        """The problem on the contacts ``kept`` (this one's loads, from rest), sliced once and
+        kept (the last :data:`RESTRICTIONS_KEPT` contact sets)."""
+        key = kept.tobytes()
+        cached = self._restrictions.pop(key, None)
+        if cached is None:
+            _, constraints = _restricted_constraints(self.constraints, kept, None)
+            d = self.dim
+            rows = (d * kept[:, None] + np.arange(d)).ravel()
+            cached = copy.copy(self)
+            cached.constraints = constraints
+            frames = self.frames
+            cached.frames = dataclasses.replace(
+                frames,
+                normals=frames.normals[kept],
+                tangents=frames.tangents[kept],
+                operator=frames.operator[rows],
+            )
+            law = self.law
+            cached.law = FrictionLaw(
+                law.mu[kept], law.cohesion[kept], law.facets, n_contacts=int(kept.size)
+            )
+            cached._local = self.local().restricted(kept, d, constraints.gaps)
+            cached._templates = {}  # W and the law are new: no shared local problem
+            cached._restrictions = {}
+            cached._free_displacements = None
+            cached.previous = None
+            while len(self._restrictions) >= RESTRICTIONS_KEPT:
+                self._restrictions.pop(next(iter(self._restrictions)))
+        self._restrictions[key] = cached  # the most recent last
+        return cached
 
     def _previous_tangential(self) -> np.ndarray:
         """``(H U_prev)_T`` of shape (k, d - 1): zero from rest."""

@@ -123,6 +123,9 @@ class Assembly:
         self.facets = facets
         self.model = self._side_by_side(coordinates)
         self._links_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: What the stages of every sequence share (linked models, reduced operators), by
+        #: the links' structure and the contacts (filled by the sequences).
+        self.operators: dict = {}
 
     # ------------------------------------------------------------------ validation
 

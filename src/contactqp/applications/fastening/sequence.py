@@ -45,7 +45,7 @@ from ...core.contact import local_frames
 from ...core.links import LinkedModel, Links
 from ...core.local_problem import LocalProblem
 from ...core.model import finite_array, iteration_cap, positive_tolerance, real_array
-from ...core.problem import ContactProblem, FrictionalProblem, FrictionStep
+from ...core.problem import ContactProblem, FrictionalProblem
 from ...core.result import CERTIFICATE_FAILED, ContactResult, FrictionalResult
 from ...core.status import ContactStatus
 from ...errors import InvalidInputError
@@ -79,6 +79,7 @@ class AssemblyLayout(Protocol):
     tangents: np.ndarray
     dofs_per_node: int
     model: ReducedModel
+    operators: dict  # what the stages share: linked models and reduced operators, by structure
 
     @property
     def n_pairs(self) -> int: ...
@@ -157,6 +158,19 @@ class _Fastening:
             return 0.0
         assert axial_force is not None
         return float(axial_force + self.tension(opening, axial_force))
+
+
+#: How many linked models and reduced operators an assembly keeps (its :attr:`operators`).
+OPERATORS_KEPT = 48
+
+
+def _kept(cache: dict, key: tuple, value: Any) -> Any:
+    """Keep ``value`` under ``key`` in ``cache``, the oldest entries dropped past
+    :data:`OPERATORS_KEPT`; return ``value``."""
+    while len(cache) >= OPERATORS_KEPT:
+        cache.pop(next(iter(cache)))
+    cache[key] = value
+    return value
 
 
 def _checked_order(assembly: AssemblyLayout, order: Sequence[int] | None) -> list[int]:
@@ -284,6 +298,12 @@ class _Sequencer:
 
     def install(self, position: int) -> AssemblyStage:
         fastening = self._fastening(position)
+        if fastening.clamp and isinstance(self.warm, AssemblySequence):
+            # start the new clamp bearing where it bore in the warm start's stage: a guess
+            # (the stage switches it if wrong) that saves a solve per stage
+            if self.stage_index < len(self.warm.stages):
+                stage = self.warm.stages[self.stage_index]
+                fastening.bearing = bool(stage.normal_forces[fastening.fastener.pair] > 0)
         self.installed.append(fastening)
         label = fastening.fastener.label or fastening.name
         stage = self._solve(label, self.loads)
@@ -296,15 +316,17 @@ class _Sequencer:
         self.loads = loads
         return self._solve(label, loads)
 
-    def _links(self) -> tuple[LinkedModel | None, list[tuple[_Fastening, int | None]]]:
-        """The links of this stage and, per installed fastener, the index of its axial link
-        component (None while its preload is a load)."""
-        columns, compliance, reference, influence, axial = [], [], [], [], []
+    def _links(self) -> tuple[LinkedModel | None, list[tuple[_Fastening, int | None]], tuple]:
+        """The links of this stage, per installed fastener the index of its axial link
+        component (None while its preload is a load), and the links' structure (what ``S``
+        and ``W'`` depend on: the components and their compliances, not the references)."""
+        columns, compliance, reference, influence, axial, structure = [], [], [], [], [], []
         offset = 0
         for fastening in self.installed:
             E, c, d0 = fastening.components()
             tangential_only = fastening.axial() is None
             axial.append((fastening, None if tangential_only else offset))
+            structure.append((fastening.position, tangential_only, *c.tolist()))
             if E.shape[1]:
                 columns.append(E)
                 compliance.append(c)
@@ -313,10 +335,18 @@ class _Sequencer:
                     fastening.influence[:, 1:] if tangential_only else fastening.influence
                 )
             offset += E.shape[1]
+        key = tuple(structure)
         if not columns:
-            return None, axial
-        links = Links(np.hstack(columns), np.concatenate(compliance), np.concatenate(reference))
-        return LinkedModel(self.model, links, np.hstack(influence)), axial
+            return None, axial, key
+        cache = self.assembly.operators
+        linked = cache.get(("links", key))
+        if linked is None:  # S factored once per link structure, shared by every sample
+            links = Links(np.hstack(columns), np.concatenate(compliance), np.concatenate(reference))
+            linked = _kept(
+                cache, ("links", key), LinkedModel(self.model, links, np.hstack(influence))
+            )
+            return linked, axial, key
+        return linked.with_reference(np.concatenate(reference)), axial, key
 
     def _prescribed(self) -> np.ndarray:
         """Loads of the clamps being tightened: their preload along the pair's axis (N)."""
@@ -366,9 +396,9 @@ class _Sequencer:
         clamps = [f for f in self.installed if f.clamp]
         for _ in range(2 * len(clamps) + 2):
             P = loads + self._prescribed()
-            linked, axial = self._links()
+            linked, axial, structure = self._links()
             if self.frictional:
-                result, link_forces = self._frictional(contacts, P, linked, start)
+                result, link_forces = self._frictional(contacts, P, linked, start, structure)
             else:
                 result, link_forces = self._frictionless(contacts, P, linked, start)
             switched = self._switch_bearing(result, linked, link_forces, axial, P)
@@ -471,7 +501,7 @@ class _Sequencer:
         )
         return result, link_forces
 
-    def _frictional(self, contacts, P, linked, start):
+    def _frictional(self, contacts, P, linked, start, structure):
         clock = time.perf_counter()
         base = self.base
         assert isinstance(base, FrictionalProblem)
@@ -480,29 +510,30 @@ class _Sequencer:
         form = problem.local()
         d, k = problem.dim, len(contacts)
         tangential = np.zeros((k, d - 1)) if previous is None else previous.tangential_displacements
-        free = self.model.displacements(P)
+        free = form.free_displacements(P)
         q = (form.operator @ free + form.offset).reshape(k, d)
         q[:, 1:] -= tangential
         q = q.reshape(-1)
-        W = form.W
-        if linked is not None:
-            B = linked.coupling(form.operator)
-            W = linked.reduced_operator(W, B)
-            q = q + linked.offset(B, linked.links.relative(free))
-        step = FrictionStep(tangential, LocalProblem(W, q, problem.law.mu, d))
+        if linked is None:
+            template = form.fclib_template(problem.law)
+            scale = float(np.max(form.W.diagonal()))
+        else:
+            coupling, scale, template = self._reduced(contacts, structure, linked, problem)
+            q = q + linked.offset(coupling, linked.links.relative(free))
+        # the FCLIB problem W' / w, q / L (FrictionStep's scaling; no cohesion here)
+        length = float(np.max(np.abs(q))) or 1.0
+        fclib, force_unit = template.with_q(q / length), length / scale
         _, entry, options = resolve(problem, self.method, self.options)
         if "facets" in entry.option_names:
             options["facets"] = problem.law.facets
         if start is not None and "r0" in entry.option_names:
-            options["r0"] = (np.asarray(start, dtype=float).reshape(-1) + step.apex_shift) / (
-                step.force_unit
-            )
+            options["r0"] = np.asarray(start, dtype=float).reshape(-1) / force_unit
         with np.errstate(over="ignore", invalid="ignore"):
-            solution = solve(step.fclib, entry.name, **options)
-        r = step.force_unit * np.asarray(solution.forces).reshape(-1) - step.apex_shift
+            solution = solve(fclib, entry.name, **options)
+        r = force_unit * np.asarray(solution.forces).reshape(-1)
         link_forces = np.zeros(0)
         if linked is not None:
-            U0 = form.displacements(P, r)
+            U0 = form.displacements(P, r, free)
             link_forces = linked.forces(linked.links.relative(U0))
             problem = problem.with_loads(
                 P + linked.links.directions @ link_forces, previous=previous
@@ -516,6 +547,22 @@ class _Sequencer:
             seconds=time.perf_counter() - clock,
         )
         return result, link_forces
+
+    def _reduced(self, contacts, structure, linked, problem):
+        """``(B, w, W' / w)`` of the contacts ``contacts`` under links of ``structure``:
+        ``B = H R E``, ``W' = W - B S^{-1} B^T`` scaled by its largest diagonal ``w`` as an
+        FCLIB problem (validated, and its semidefiniteness checked, once per structure)."""
+        cache = self.assembly.operators
+        key = ("reduced", contacts.tobytes(), structure)
+        cached = cache.get(key)
+        if cached is None:
+            form = problem.local()
+            coupling = linked.coupling(form.operator)
+            W = linked.reduced_operator(form.W, coupling)
+            scale = float(np.max(W.diagonal()))
+            template = LocalProblem(W / scale, np.zeros(W.shape[0]), problem.law.mu, problem.dim)
+            cached = _kept(cache, key, (coupling, scale, template))
+        return cached
 
     def _previous_on(self, contacts: np.ndarray) -> FrictionalResult | None:
         """The previous stage's result on ``contacts`` (a subset of its own), or None."""
