@@ -201,7 +201,9 @@ class LinkedModel:
         X = scipy.linalg.solve_triangular(
             self._factor[0], np.ascontiguousarray(B.T), lower=True, check_finite=False
         )
-        return np.asarray(W, dtype=float) - X.T @ X
+        X = np.ascontiguousarray(X)
+        correction = X.T @ X  # a symmetric rank-m product (BLAS syrk)
+        return np.subtract(np.asarray(W, dtype=float), correction, out=correction)
 
     def offset(self, coupling: ArrayLike, free_relative: ArrayLike) -> np.ndarray:
         """``B S^{-1} (d0 - E^T R P)`` (m): what the links add to ``G R P``."""

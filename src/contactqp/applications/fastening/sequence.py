@@ -173,6 +173,15 @@ def _kept(cache: dict, key: tuple, value: Any) -> Any:
     return value
 
 
+def _free_displacements(model: ReducedModel, loads: np.ndarray) -> np.ndarray:
+    """``R P`` (m); of a flexibility model, on the columns of the loaded freedoms when few
+    (a stage's loads are its clamps' preloads, on a handful of freedoms)."""
+    loaded = np.flatnonzero(loads)
+    if model.given != "flexibility" or 4 * loaded.size >= loads.size:
+        return np.asarray(model.displacements(loads)).reshape(-1)
+    return model.flexibility[:, loaded] @ loads[loaded]
+
+
 def _checked_order(assembly: AssemblyLayout, order: Sequence[int] | None) -> list[int]:
     n = len(assembly.fasteners)
     positions = list(range(n)) if order is None else np.asarray(order).reshape(-1).tolist()
@@ -298,12 +307,8 @@ class _Sequencer:
 
     def install(self, position: int) -> AssemblyStage:
         fastening = self._fastening(position)
-        if fastening.clamp and isinstance(self.warm, AssemblySequence):
-            # start the new clamp bearing where it bore in the warm start's stage: a guess
-            # (the stage switches it if wrong) that saves a solve per stage
-            if self.stage_index < len(self.warm.stages):
-                stage = self.warm.stages[self.stage_index]
-                fastening.bearing = bool(stage.normal_forces[fastening.fastener.pair] > 0)
+        if fastening.clamp:
+            fastening.bearing = self._bears(fastening)
         self.installed.append(fastening)
         label = fastening.fastener.label or fastening.name
         stage = self._solve(label, self.loads)
@@ -311,6 +316,22 @@ class _Sequencer:
             fastening.opening = float(fastening.columns[:, 0] @ stage.result.displacements)
             fastening.tightened = True
         return stage
+
+    def _bears(self, fastening: _Fastening) -> bool:
+        """A guess of whether a clamp being installed ends its stage bearing (the stage
+        switches it when wrong; a right guess saves a solve): as in the warm start's stage,
+        or when its preload alone would close its pair on the linked model."""
+        warm = self.warm
+        if isinstance(warm, AssemblySequence) and self.stage_index < len(warm.stages):
+            return bool(warm.stages[self.stage_index].normal_forces[fastening.fastener.pair] > 0)
+        axis, moved = fastening.columns[:, 0], fastening.influence[:, 0]
+        flexibility = float(axis @ moved)  # e^T R' e, R' the model with the installed links
+        linked = self._links()[0]
+        if linked is not None:
+            coupling = linked.links.relative(moved)
+            flexibility -= float(coupling @ linked.solve_schur(coupling))
+        gap = fastening.gap + float(axis @ self.displacements)
+        return gap - fastening.fastener.force * flexibility < 0.0
 
     def load_step(self, label: str, loads: np.ndarray) -> AssemblyStage:
         self.loads = loads
@@ -462,7 +483,7 @@ class _Sequencer:
         dual = base.dual()
         A = base.constraints.matrix[contacts]
         W = dual.W[np.ix_(contacts, contacts)]
-        free = self.model.displacements(P)
+        free = _free_displacements(self.model, P)
         offset = -(A @ free)
         if linked is not None:
             B = linked.coupling(-A)
@@ -560,7 +581,8 @@ class _Sequencer:
             coupling = linked.coupling(form.operator)
             W = linked.reduced_operator(form.W, coupling)
             scale = float(np.max(W.diagonal()))
-            template = LocalProblem(W / scale, np.zeros(W.shape[0]), problem.law.mu, problem.dim)
+            W /= scale  # W' is new here: scaled in place
+            template = LocalProblem(W, np.zeros(W.shape[0]), problem.law.mu, problem.dim)
             cached = _kept(cache, key, (coupling, scale, template))
         return cached
 
