@@ -191,7 +191,7 @@ class ContactProblem:
         """``R P`` (m): the displacements under the loads alone (the dual's, once assembled)."""
         if self._dual is not None:
             return self._dual.free_displacements
-        return self.model.displacements(self.loads)
+        return _sparse_product(self.model, self.loads)
 
     def variant(self, *, loads=None, gaps=None) -> ContactProblem:
         """The same model and constraints under other loads and/or initial gaps.

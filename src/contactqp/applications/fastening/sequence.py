@@ -421,7 +421,7 @@ class _Sequencer:
             if self.frictional:
                 result, link_forces = self._frictional(contacts, P, linked, start, structure)
             else:
-                result, link_forces = self._frictionless(contacts, P, linked, start)
+                result, link_forces = self._frictionless(contacts, P, linked, start, structure)
             switched = self._switch_bearing(result, linked, link_forces, axial, P)
             if not switched:
                 break
@@ -476,18 +476,24 @@ class _Sequencer:
 
     # ------------------------------------------------------------------ the two routes
 
-    def _frictionless(self, contacts, P, linked, start):
+    def _frictionless(self, contacts, P, linked, start, structure):
         clock = time.perf_counter()
         base = self.base
         assert isinstance(base, ContactProblem)
         dual = base.dual()
         A = base.constraints.matrix[contacts]
-        W = dual.W[np.ix_(contacts, contacts)]
         free = _free_displacements(self.model, P)
         offset = -(A @ free)
+        key = ("frictionless", contacts.tobytes(), structure)
+        cached = self.assembly.operators.get(key)
+        if cached is None:  # W' (B) once per contact set and link structure
+            W = dual.W[np.ix_(contacts, contacts)]
+            B = None if linked is None else linked.coupling(-A)
+            if linked is not None:
+                W = linked.reduced_operator(W, B)
+            cached = _kept(self.assembly.operators, key, (B, W))
+        B, W = cached
         if linked is not None:
-            B = linked.coupling(-A)
-            W = linked.reduced_operator(W, B)
             offset = offset + linked.offset(B, linked.links.relative(free))
         q = -(offset + self.gaps[contacts])
         x0 = None if start is None else np.maximum(np.asarray(start, dtype=float), 0.0)
@@ -501,9 +507,8 @@ class _Sequencer:
             )
             message = solution.message
         forces = solution.x
-        spread = np.zeros(self.assembly.n_pairs)
-        spread[contacts] = forces
-        U = free - dual.influence @ spread
+        loaded = np.flatnonzero(forces)  # U = R (P - A^T x), read on the loaded contacts
+        U = free - forces[loaded] @ dual.influence.T[contacts[loaded]]
         link_forces = np.zeros(0)
         if linked is not None:
             link_forces = linked.forces(linked.links.relative(U))
