@@ -264,11 +264,17 @@ class _Sequencer:
         self.warm = r0
         A = self.base.constraints.matrix
         self.normal_rows = A  # gaps: g = g0 - A U
-        self.frames = (
-            None
-            if assembly.dofs_per_node == 1
-            else local_frames(self.model, self.base.constraints).operator
-        )
+        self.frames = None if assembly.dofs_per_node == 1 else self._frames()
+
+    def _frames(self):
+        """``H`` of every pair (the slips' operator): the frictional problem's, or assembled
+        once per assembly and kept."""
+        if isinstance(self.base, FrictionalProblem):
+            return self.base.frames.operator
+        cache = self.assembly.operators
+        if ("frames",) not in cache:
+            _kept(cache, ("frames",), local_frames(self.model, self.base.constraints).operator)
+        return cache[("frames",)]
 
     # ------------------------------------------------------------------ options
 
