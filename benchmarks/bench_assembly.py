@@ -1,21 +1,24 @@
 """Frictional fastening sequence of a ~500-pair assembly: nominal time and variation cost.
 
-The assembly is :class:`contactqp.applications.riveting_friction.FrictionAssembly`: two
-200 x 100 mm aluminium parts (2 mm and 1.2 mm thick) meshed with ``--cells`` (27 x 18 by
-default: 26 x 19 = 494 pairs), condensed to their interface. Eight clamp fasteners (500 N each)
-are installed one by one along the middle row, ``mu = 0.3``; the initial gaps are 20 um plus a
-10 um white noise (seed 0). Building the model (meshing and condensation) is timed once, apart.
+The assembly is an :class:`contactqp.applications.fastening.Assembly` of the two finite-element
+parts of :class:`contactqp.applications.riveting_friction.FrictionAssembly`: 200 x 100 mm
+aluminium plates (2 mm and 1.2 mm thick) meshed with ``--cells`` (27 x 18 by default: 26 x 19
+= 494 pairs), each condensed to its interface (its own flexibility, 1,482 freedoms). The FE
+build (meshing and condensation, about a minute under load) is cached in a ``.npz`` in the
+temporary directory, keyed by the cells. Eight bonded clamp fasteners (500 N preload, axial
+stiffness 1e8 N/m) are installed one by one along the middle row, ``mu = 0.3``; the initial
+gaps are 20 um plus a 10 um white noise (seed 0).
 
 Printed, as a markdown table:
 
-* **nominal**: the whole sequence (the frictional problem assembled, then the 8 stages,
-  each :func:`contactqp.solve` from the previous stage): the first call (the headline) and the
-  best of 3;
-* **variation**: ``--samples`` sequences on perturbed gaps (another 5 um of noise per sample),
-  each stage warm started from the nominal stage of the same index, frictional
-  (``mu = 0.3``) and frictionless (the same samples with ``mu = 0``, the frictionless route),
-  per sample, their ratio, and the extrapolation to 10,000 samples on 2 cores (two independent
-  workers, half the samples each).
+* **nominal**: ``Assembly(...).sequence(gaps)`` on a fresh assembly (the contact operator
+  assembled, then the 8 stages): the first call (the headline) and the best of 3;
+* **variation**: ``--samples`` samples of
+  :class:`~contactqp.applications.fastening.SequenceVariation` (another 5 um of noise per
+  sample), each the whole sequence, warm started from the nominal stages
+  (``start="nominal"``) or from the sample's previous stage (``start="previous"``),
+  frictional (``mu = 0.3``) and frictionless (the same assembly with ``mu = 0``), per sample,
+  their ratio, and the extrapolation to 10,000 samples on 2 workers (half the samples each).
 
 Run ``python benchmarks/bench_assembly.py --help`` for the options. One BLAS thread is used
 (as each of two workers would).
@@ -30,104 +33,148 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
-from contactqp import FrictionalProblem, solve
-from contactqp.applications.assembly import Part
-from contactqp.applications.riveting_friction import FrictionAssembly
+from contactqp import ReducedModel
+from contactqp.applications.fastening import (
+    Assembly,
+    AssemblyPart,
+    Fastener,
+    InterfacePairs,
+)
+from contactqp.applications.fastening.study import SequenceVariation
 
 MU = 0.3
 CLAMP = 500.0  # N per fastener
+STIFFNESS = 1e8  # N/m, each fastener's axial stiffness
 FASTENERS = 8
 
 
-def build(cells):
-    """The reduced model and its fastener pairs (the middle row, evenly spaced)."""
-    assembly = FrictionAssembly(
+def fe_parts(cells) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int]]:
+    """``(R_lower, R_upper, coordinates, grid)`` of FrictionAssembly's parts, cached."""
+    nx, ny = (int(n) for n in cells)
+    cache = Path(tempfile.gettempdir()) / f"contactqp-bench-assembly-{nx}x{ny}.npz"
+    if cache.exists():
+        data = np.load(cache)
+        return data["lower"], data["upper"], data["coordinates"], tuple(data["grid"])
+    from contactqp.applications.assembly import Part
+    from contactqp.applications.riveting_friction import FrictionAssembly
+
+    built = FrictionAssembly(
         lower=Part(length=0.2, width=0.1),
         upper=Part(length=0.2, width=0.1, thickness=0.0012),
-        cells=cells,
-    )
-    model = assembly.build()
-    nx, ny = model.grid
+        cells=(nx, ny),
+    ).build()
+    k = built.n_pairs
+    R = built.model.flexibility
+    lower, upper = R[: 3 * k, : 3 * k].copy(), R[3 * k :, 3 * k :].copy()
+    coordinates, grid = built.model.coordinates, built.grid
+    np.savez(cache, lower=lower, upper=upper, coordinates=coordinates, grid=np.array(grid))
+    return lower, upper, coordinates, grid
+
+
+def make_assembly(parts, mu) -> Assembly:
+    """The two parts, their pairs node i to node i (normal +z), 8 clamps on the middle row."""
+    lower, upper, coordinates, (nx, ny) = parts
+    k = len(lower) // 3
     columns = np.linspace(1, nx - 2, FASTENERS).round().astype(int)
-    return model, [model.pair(int(i), ny // 2) for i in columns]
+    fasteners = [
+        Fastener(int(i + nx * (ny // 2)), kind="clamp", force=CLAMP, stiffness=STIFFNESS)
+        for i in columns
+    ]
+    interface = InterfacePairs(
+        "lower",
+        "upper",
+        np.column_stack([np.arange(k), np.arange(k)]),
+        np.tile([0, 0, 1.0], (k, 1)),
+    )
+    return Assembly(
+        [
+            AssemblyPart(
+                "lower", ReducedModel(flexibility=lower, dofs_per_node=3), coordinates[:k]
+            ),
+            AssemblyPart(
+                "upper", ReducedModel(flexibility=upper, dofs_per_node=3), coordinates[k:]
+            ),
+        ],
+        [interface],
+        fasteners,
+        mu=mu,
+    )
 
 
-def sequence(problem, history, r0s=None):
-    """Solve the stages of ``history`` from rest; each from the previous stage's state."""
-    results, previous = [], None
-    for k, loads in enumerate(history):
-        options = {} if r0s is None else {"r0": r0s[k]}
-        previous = solve(problem.with_loads(loads, previous=previous), **options)
-        results.append(previous)
-    return results
-
-
-def nominal(model, gaps, pairs, mu):
-    """One whole sequence: the problem assembled, then every stage; ``(seconds, results)``."""
+def nominal(parts, gaps, mu):
+    """``(seconds, sequence)``: a fresh assembly's whole sequence (its operator included)."""
+    assembly = make_assembly(parts, mu)
     start = time.perf_counter()
-    history = [model.clamp_loads(pairs[: n + 1], CLAMP) for n in range(len(pairs))]
-    problem = FrictionalProblem(model.model, history[0], model.obstacles(gaps), mu)
-    results = sequence(problem, history)
-    return time.perf_counter() - start, problem, history, results
+    sequence = assembly.sequence(gaps)
+    return time.perf_counter() - start, sequence
 
 
-def variation(problem, history, gap_samples, r0s):
-    """Seconds per sample of the sequences on ``gap_samples``, and how many succeeded."""
-    start, solved = time.perf_counter(), 0
-    for gaps in gap_samples:
-        results = sequence(problem.with_gaps(gaps), history, r0s)
-        solved += all(result.success for result in results)
-    return (time.perf_counter() - start) / len(gap_samples), solved
+def variation(parts, gaps, samples, mu, start):
+    """``(seconds per sample, CPU seconds per sample, certified samples)`` of a
+    SequenceVariation (its nominal sequence apart)."""
+    case = SequenceVariation(make_assembly(parts, mu), gaps, start=start)
+    clock, cpu, solved = time.perf_counter(), time.process_time(), 0
+    for sample in samples:
+        record, _ = case.solve_sample(sample, None)
+        solved += bool(record["success"])
+    n = len(samples)
+    return (time.perf_counter() - clock) / n, (time.process_time() - cpu) / n, solved
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cells", type=int, nargs=2, default=(27, 18), help="cells along x, y")
-    parser.add_argument("--samples", type=int, default=200, help="variation samples")
+    parser.add_argument("--samples", type=int, default=100, help="variation samples")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
-    start = time.perf_counter()
-    model, pairs = build(tuple(args.cells))
-    built = time.perf_counter() - start
+    clock = time.perf_counter()
+    parts = fe_parts(args.cells)
+    built = time.perf_counter() - clock
+    k = len(parts[0]) // 3
     rng = np.random.default_rng(args.seed)
-    gaps = 2e-5 + 1e-5 * rng.standard_normal(model.n_pairs)
-    first, problem, history, results = nominal(model, gaps, pairs, MU)
-    best = min(nominal(model, gaps, pairs, MU)[0] for _ in range(3))
-    iterations = [result.iterations for result in results]
-    ok = all(result.success for result in results)
-    samples = gaps + 5e-6 * rng.standard_normal((args.samples, model.n_pairs))
-    r0s = [result.forces for result in results]
-    frictional, solved = variation(problem, history, samples, r0s)
-    _, frictionless_problem, _, frictionless_results = nominal(model, gaps, pairs, 0.0)
-    frictionless, solved_0 = variation(
-        frictionless_problem, history, samples, [r.forces for r in frictionless_results]
-    )
-    total = 10_000 * frictional / 2  # two workers
+    gaps = 2e-5 + 1e-5 * rng.standard_normal(k)
+    first, sequence = nominal(parts, gaps, MU)
+    best = min(nominal(parts, gaps, MU)[0] for _ in range(3))
+    first_0, _ = nominal(parts, gaps, 0.0)
+    best_0 = min(nominal(parts, gaps, 0.0)[0] for _ in range(3))
+    samples = gaps + 5e-6 * rng.standard_normal((args.samples, k))
+    rows = {}
+    for mu in (MU, 0.0):
+        for start in ("nominal", "previous"):
+            rows[mu, start] = variation(parts, gaps, samples, mu, start)
     print(
-        f"model: {model.n_pairs} pairs, {FASTENERS} clamp fasteners, mu = {MU}; "
-        f"built in {built:.1f} s (once)"
+        f"model: {k} pairs, {FASTENERS} clamp fasteners ({CLAMP:g} N, {STIFFNESS:g} N/m), "
+        f"mu = {MU}; parts loaded in {built:.1f} s (FE build cached); load average "
+        f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
     )
-    print(f"nominal stages: Newton iterations {iterations}, all certified: {ok}\n")
-    print("| run | first call | best of 3 / per sample | target |")
+    iterations = [stage.result.iterations for stage in sequence.stages]
+    print(f"nominal stages: iterations {iterations}, all certified: {sequence.success}\n")
+    n = args.samples
+    print("| run | first call | best of 3 / per sample (CPU) | target |")
     print("| --- | ---: | ---: | --- |")
     print(f"| nominal sequence, mu = {MU} | {first:.3f} s | {best:.3f} s | < 0.5 s |")
-    print(
-        f"| variation, mu = {MU} ({solved}/{args.samples} certified) | | "
-        f"{1e3 * frictional:.1f} ms | <= 120 ms per core |"
-    )
-    print(
-        f"| variation, mu = 0 ({solved_0}/{args.samples} certified) | | "
-        f"{1e3 * frictionless:.1f} ms | |"
-    )
-    print(f"| ratio frictional / frictionless | | {frictional / frictionless:.1f}x | <= 40x |")
-    print(
-        f"| 10,000 frictional samples on 2 cores (extrapolated) | | {total / 60:.1f} min | "
-        f"<= 10 min |"
-    )
+    print(f"| nominal sequence, mu = 0 | {first_0:.3f} s | {best_0:.3f} s | |")
+    for start in ("nominal", "previous"):
+        (fr, fr_cpu, ok), (fl, fl_cpu, ok_0) = rows[MU, start], rows[0.0, start]
+        print(
+            f"| variation from {start}, mu = {MU} ({ok}/{n} certified) | | "
+            f"{1e3 * fr:.1f} ms ({1e3 * fr_cpu:.1f}) | <= 120 ms per core |"
+        )
+        print(
+            f"| variation from {start}, mu = 0 ({ok_0}/{n} certified) | | "
+            f"{1e3 * fl:.1f} ms ({1e3 * fl_cpu:.1f}) | |"
+        )
+        print(f"| ratio frictional / frictionless, from {start} | | {fr / fl:.1f}x | <= 40x |")
+        print(
+            f"| 10,000 frictional samples on 2 workers, from {start} (extrapolated) | | "
+            f"{10_000 * fr / 2 / 60:.1f} min | <= 10 min |"
+        )
 
 
 if __name__ == "__main__":

@@ -390,11 +390,23 @@ def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
         dissipation=_worst(np.abs(law.dissipation_gap(R, slip)) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
         natural_map=_finite_or_inf(
-            natural_map_error(step.fclib, (r + step.apex_shift) / step.force_unit, per_contact=True)
+            natural_map_error(step.fclib, *_fclib_candidate(step, r), per_contact=True)
         ),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )
+
+
+def _fclib_candidate(step, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(r~, W~ r~ + q~)`` of ``step``'s FCLIB problem for local forces ``r``; its ``W~``
+    (``H R H^T`` scaled, symmetric) read on the rows under nonzero forces only when they are
+    few (an assembly's stage loads a few of its contacts)."""
+    scaled = (r + step.apex_shift) / step.force_unit
+    W, q = step.fclib.W, step.fclib.q
+    support = np.flatnonzero(scaled)
+    if not isinstance(W, np.ndarray) or 4 * support.size >= scaled.size:
+        return scaled, np.asarray(W @ scaled).ravel() + q
+    return scaled, scaled[support] @ W[support] + q
 
 
 def _worst(relative) -> float:

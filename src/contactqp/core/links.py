@@ -33,6 +33,7 @@ complement, as :mod:`~contactqp.core.fastened` eliminates rigid closures).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -153,6 +154,21 @@ class LinkedModel:
         """Number of link components ``m``."""
         return self.links.n_components
 
+    def with_reference(self, reference: ArrayLike) -> LinkedModel:
+        """The same links (``S`` factored, ``R E`` kept) with other references ``d0`` (m,
+        shape (m,)): only ``d0`` is new, e.g. on another sample's gaps."""
+        d0 = finite_array(np.reshape(reference, -1), "link reference", 1)
+        if d0.shape != (self.n_components,):
+            raise InvalidInputError(
+                f"link reference must hold one value per component ({self.n_components}), "
+                f"got shape {d0.shape}"
+            )
+        links = copy.copy(self.links)
+        object.__setattr__(links, "reference", d0)
+        twin = copy.copy(self)
+        twin.links = links
+        return twin
+
     def solve_schur(self, rhs: ArrayLike) -> np.ndarray:
         """``S^{-1} rhs`` for ``rhs`` of shape (m,) or (m, p)."""
         values = np.asarray(rhs, dtype=float)
@@ -185,7 +201,9 @@ class LinkedModel:
         X = scipy.linalg.solve_triangular(
             self._factor[0], np.ascontiguousarray(B.T), lower=True, check_finite=False
         )
-        return np.asarray(W, dtype=float) - X.T @ X
+        X = np.ascontiguousarray(X)
+        correction = X.T @ X  # a symmetric rank-m product (BLAS syrk)
+        return np.subtract(np.asarray(W, dtype=float), correction, out=correction)
 
     def offset(self, coupling: ArrayLike, free_relative: ArrayLike) -> np.ndarray:
         """``B S^{-1} (d0 - E^T R P)`` (m): what the links add to ``G R P``."""

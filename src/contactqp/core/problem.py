@@ -49,6 +49,8 @@ __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "L
 
 #: A contact is reported closed when its force exceeds this fraction of the problem's force scale.
 CLOSED_RTOL = 1e-10
+#: How many restrictions to contact sets a problem keeps (:meth:`FrictionalProblem.restricted`).
+RESTRICTIONS_KEPT = 16
 
 
 def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
@@ -58,8 +60,9 @@ def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
         # only the freedoms the constraints touch enter R M^T
         used = np.unique(matrix.indices)
         # R is exactly symmetric (ReducedModel symmetrises it): R M^T = (M R)^T, one sparse
-        # product (a few entries per row of M) instead of a dense one
-        influence = np.ascontiguousarray((matrix[:, used] @ model.flexibility[used, :]).T)
+        # product (a few entries per row of M) instead of a dense one; kept as the transpose
+        # of M R, whose rows (one per local force) are contiguous
+        influence = np.asarray(matrix[:, used] @ model.flexibility[used, :]).T
     else:
         influence = model.displacements(matrix.T.toarray())
     W = np.asarray(matrix @ influence)
@@ -73,7 +76,8 @@ def _sparse_product(model: ReducedModel, loads: np.ndarray) -> np.ndarray:
     loaded = np.flatnonzero(loads)
     if 4 * loaded.size >= loads.size:
         return model.flexibility @ loads
-    return model.flexibility[:, loaded] @ loads[loaded]
+    # R is exactly symmetric: R[:, s] = R[s].T, read as contiguous rows
+    return loads[loaded] @ model.flexibility[loaded]
 
 
 def _checked_loads(model: ReducedModel, loads, certificate_tol: float) -> np.ndarray:
@@ -187,7 +191,7 @@ class ContactProblem:
         """``R P`` (m): the displacements under the loads alone (the dual's, once assembled)."""
         if self._dual is not None:
             return self._dual.free_displacements
-        return self.model.displacements(self.loads)
+        return _sparse_product(self.model, self.loads)
 
     def variant(self, *, loads=None, gaps=None) -> ContactProblem:
         """The same model and constraints under other loads and/or initial gaps.
@@ -371,7 +375,7 @@ class LocalForm:
             return free + self._influence @ forces
         used = np.flatnonzero(forces)
         columns = used if self._columns is None else self._columns[used]
-        return free + self._influence[:, columns] @ forces[used]
+        return free + forces[used] @ self._influence.T[columns]  # rows of (R H^T)^T
 
     def fclib_template(self, law: FrictionLaw) -> LocalProblem:
         """``W / max diag(W)`` as a :class:`LocalProblem` with ``law``'s ``mu`` (q zero),
@@ -511,6 +515,8 @@ class FrictionalProblem:
         self._free_displacements: np.ndarray | None = None
         # validated once, shared with the with_loads twins (same W and law; q replaced)
         self._templates: dict[str, LocalProblem] = {}
+        # restrictions to contact sets (restricted), shared with the with_loads twins
+        self._restrictions: dict[bytes, FrictionalProblem] = {}
         self.previous = previous
         self._previous_tangential()  # checked now, not at the solve
 
@@ -574,6 +580,10 @@ class FrictionalProblem:
         """The same model and law on the contacts ``contacts`` only (e.g. those a fastener
         leaves), their local form sliced from this problem's: nothing is assembled again.
 
+        The slice of a contact set (its ``W``, law and validated local problems) is kept and
+        shared by every later restriction to the same contacts (a sequence's stages on each
+        sample of a study): only the gaps, loads and state are new.
+
         Parameters
         ----------
         contacts : array_like of int
@@ -585,33 +595,59 @@ class FrictionalProblem:
         previous : FrictionalResult, optional
             The state the increment starts from, a result with the kept contacts (None: rest).
         """
-        kept, twin_constraints = _restricted_constraints(self.constraints, contacts, gaps)
-        values = twin_constraints.gaps
+        kept = np.asarray(contacts, dtype=int).reshape(-1)
+        prototype = self._restrictions.pop(kept.tobytes(), None)
+        if prototype is None:  # contacts checked, then sliced
+            prototype = self._restriction(*_restricted_constraints(self.constraints, kept, None))
+        self._restrictions[kept.tobytes()] = prototype  # the most recent last
+        values = self.constraints.gaps[kept]
+        if gaps is not None:
+            values = finite_array(gaps, "gaps", 1, magnitude=MAX_MAGNITUDE)
+            if values.shape != kept.shape:
+                raise InvalidInputError(f"gaps must have shape ({kept.size},), got {values.shape}")
+        if np.any((prototype.law.cohesion > 0) & (values > 0)):
+            raise InvalidInputError("cohesion models a bonded interface, which starts closed")
+        twin = copy.copy(prototype)
+        twin.constraints = dataclasses.replace(prototype.constraints, gaps=values)
+        form = copy.copy(prototype.local())  # W, influence and FCLIB templates shared
+        form.offset = np.zeros_like(form.offset)
+        form.offset[:: self.dim] = values
+        twin._local = form
+        twin._free_displacements = None
+        twin.loads = (
+            self.loads if loads is None else _checked_loads(self.model, loads, self.certificate_tol)
+        )
+        twin.previous = previous
+        twin._previous_tangential()
+        return twin
+
+    def _restriction(self, kept: np.ndarray, constraints: Constraints) -> FrictionalProblem:
+        """The problem on the contacts ``kept`` (checked; ``constraints`` their rows), this
+        one's loads, from rest: sliced once, then kept by :meth:`restricted` (the last
+        :data:`RESTRICTIONS_KEPT` contact sets)."""
         d = self.dim
         rows = (d * kept[:, None] + np.arange(d)).ravel()
-        twin = copy.copy(self)
-        twin.constraints = twin_constraints
+        cached = copy.copy(self)
+        cached.constraints = constraints
         frames = self.frames
-        twin.frames = dataclasses.replace(
+        cached.frames = dataclasses.replace(
             frames,
             normals=frames.normals[kept],
             tangents=frames.tangents[kept],
             operator=frames.operator[rows],
         )
         law = self.law
-        twin.law = FrictionLaw(
+        cached.law = FrictionLaw(
             law.mu[kept], law.cohesion[kept], law.facets, n_contacts=int(kept.size)
         )
-        if np.any((twin.law.cohesion > 0) & (values > 0)):
-            raise InvalidInputError("cohesion models a bonded interface, which starts closed")
-        twin._local = self.local().restricted(kept, d, values)
-        twin._templates = {}  # W and the law are new: no shared local problem
-        if loads is not None:
-            twin.loads = _checked_loads(self.model, loads, self.certificate_tol)
-            twin._free_displacements = None
-        twin.previous = previous
-        twin._previous_tangential()
-        return twin
+        cached._local = self.local().restricted(kept, d, constraints.gaps)
+        cached._templates = {}  # W and the law are new: no shared local problem
+        cached._restrictions = {}
+        cached._free_displacements = None
+        cached.previous = None
+        while len(self._restrictions) >= RESTRICTIONS_KEPT:
+            self._restrictions.pop(next(iter(self._restrictions)))
+        return cached
 
     def _previous_tangential(self) -> np.ndarray:
         """``(H U_prev)_T`` of shape (k, d - 1): zero from rest."""

@@ -123,6 +123,9 @@ class Assembly:
         self.facets = facets
         self.model = self._side_by_side(coordinates)
         self._links_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: What the stages of every sequence share (linked models, reduced operators), by
+        #: the links' structure and the contacts (filled by the sequences).
+        self.operators: dict = {}
 
     # ------------------------------------------------------------------ validation
 
@@ -418,7 +421,13 @@ class Assembly:
         columns = np.zeros((self.n_freedoms, len(vectors)))
         columns[self.node_freedoms(b)] = vectors.T
         columns[self.node_freedoms(a)] = -vectors.T
-        influence = np.asarray(self.model.displacements(columns)).reshape(columns.shape)
+        if self.model.given == "flexibility":  # R E = (E^T R)^T: the rows of the two nodes
+            touched = np.concatenate([self.node_freedoms(a), self.node_freedoms(b)])
+            influence = np.ascontiguousarray(
+                (columns[touched].T @ self.model.flexibility[touched]).T
+            )
+        else:
+            influence = np.asarray(self.model.displacements(columns)).reshape(columns.shape)
         for array in (columns, influence):
             array.setflags(write=False)
         self._links_cache[position] = (columns, influence)

@@ -45,7 +45,7 @@ from ...core.contact import local_frames
 from ...core.links import LinkedModel, Links
 from ...core.local_problem import LocalProblem
 from ...core.model import finite_array, iteration_cap, positive_tolerance, real_array
-from ...core.problem import ContactProblem, FrictionalProblem, FrictionStep
+from ...core.problem import ContactProblem, FrictionalProblem
 from ...core.result import CERTIFICATE_FAILED, ContactResult, FrictionalResult
 from ...core.status import ContactStatus
 from ...errors import InvalidInputError
@@ -79,6 +79,7 @@ class AssemblyLayout(Protocol):
     tangents: np.ndarray
     dofs_per_node: int
     model: ReducedModel
+    operators: dict  # what the stages share: linked models and reduced operators, by structure
 
     @property
     def n_pairs(self) -> int: ...
@@ -157,6 +158,28 @@ class _Fastening:
             return 0.0
         assert axial_force is not None
         return float(axial_force + self.tension(opening, axial_force))
+
+
+#: How many linked models and reduced operators an assembly keeps (its :attr:`operators`).
+OPERATORS_KEPT = 48
+
+
+def _kept(cache: dict, key: tuple, value: Any) -> Any:
+    """Keep ``value`` under ``key`` in ``cache``, the oldest entries dropped past
+    :data:`OPERATORS_KEPT`; return ``value``."""
+    while len(cache) >= OPERATORS_KEPT:
+        cache.pop(next(iter(cache)))
+    cache[key] = value
+    return value
+
+
+def _free_displacements(model: ReducedModel, loads: np.ndarray) -> np.ndarray:
+    """``R P`` (m); of a flexibility model, on the columns of the loaded freedoms when few
+    (a stage's loads are its clamps' preloads, on a handful of freedoms)."""
+    loaded = np.flatnonzero(loads)
+    if model.given != "flexibility" or 4 * loaded.size >= loads.size:
+        return np.asarray(model.displacements(loads)).reshape(-1)
+    return model.flexibility[:, loaded] @ loads[loaded]
 
 
 def _checked_order(assembly: AssemblyLayout, order: Sequence[int] | None) -> list[int]:
@@ -241,11 +264,17 @@ class _Sequencer:
         self.warm = r0
         A = self.base.constraints.matrix
         self.normal_rows = A  # gaps: g = g0 - A U
-        self.frames = (
-            None
-            if assembly.dofs_per_node == 1
-            else local_frames(self.model, self.base.constraints).operator
-        )
+        self.frames = None if assembly.dofs_per_node == 1 else self._frames()
+
+    def _frames(self):
+        """``H`` of every pair (the slips' operator): the frictional problem's, or assembled
+        once per assembly and kept."""
+        if isinstance(self.base, FrictionalProblem):
+            return self.base.frames.operator
+        cache = self.assembly.operators
+        if ("frames",) not in cache:
+            _kept(cache, ("frames",), local_frames(self.model, self.base.constraints).operator)
+        return cache[("frames",)]
 
     # ------------------------------------------------------------------ options
 
@@ -284,6 +313,8 @@ class _Sequencer:
 
     def install(self, position: int) -> AssemblyStage:
         fastening = self._fastening(position)
+        if fastening.clamp:
+            fastening.bearing = self._bears(fastening)
         self.installed.append(fastening)
         label = fastening.fastener.label or fastening.name
         stage = self._solve(label, self.loads)
@@ -292,19 +323,37 @@ class _Sequencer:
             fastening.tightened = True
         return stage
 
+    def _bears(self, fastening: _Fastening) -> bool:
+        """A guess of whether a clamp being installed ends its stage bearing (the stage
+        switches it when wrong; a right guess saves a solve): as in the warm start's stage,
+        or when its preload alone would close its pair on the linked model."""
+        warm = self.warm
+        if isinstance(warm, AssemblySequence) and self.stage_index < len(warm.stages):
+            return bool(warm.stages[self.stage_index].normal_forces[fastening.fastener.pair] > 0)
+        axis, moved = fastening.columns[:, 0], fastening.influence[:, 0]
+        flexibility = float(axis @ moved)  # e^T R' e, R' the model with the installed links
+        linked = self._links()[0]
+        if linked is not None:
+            coupling = linked.links.relative(moved)
+            flexibility -= float(coupling @ linked.solve_schur(coupling))
+        gap = fastening.gap + float(axis @ self.displacements)
+        return gap - fastening.fastener.force * flexibility < 0.0
+
     def load_step(self, label: str, loads: np.ndarray) -> AssemblyStage:
         self.loads = loads
         return self._solve(label, loads)
 
-    def _links(self) -> tuple[LinkedModel | None, list[tuple[_Fastening, int | None]]]:
-        """The links of this stage and, per installed fastener, the index of its axial link
-        component (None while its preload is a load)."""
-        columns, compliance, reference, influence, axial = [], [], [], [], []
+    def _links(self) -> tuple[LinkedModel | None, list[tuple[_Fastening, int | None]], tuple]:
+        """The links of this stage, per installed fastener the index of its axial link
+        component (None while its preload is a load), and the links' structure (what ``S``
+        and ``W'`` depend on: the components and their compliances, not the references)."""
+        columns, compliance, reference, influence, axial, structure = [], [], [], [], [], []
         offset = 0
         for fastening in self.installed:
             E, c, d0 = fastening.components()
             tangential_only = fastening.axial() is None
             axial.append((fastening, None if tangential_only else offset))
+            structure.append((fastening.position, tangential_only, *c.tolist()))
             if E.shape[1]:
                 columns.append(E)
                 compliance.append(c)
@@ -313,10 +362,18 @@ class _Sequencer:
                     fastening.influence[:, 1:] if tangential_only else fastening.influence
                 )
             offset += E.shape[1]
+        key = tuple(structure)
         if not columns:
-            return None, axial
-        links = Links(np.hstack(columns), np.concatenate(compliance), np.concatenate(reference))
-        return LinkedModel(self.model, links, np.hstack(influence)), axial
+            return None, axial, key
+        cache = self.assembly.operators
+        linked = cache.get(("links", key))
+        if linked is None:  # S factored once per link structure, shared by every sample
+            links = Links(np.hstack(columns), np.concatenate(compliance), np.concatenate(reference))
+            linked = _kept(
+                cache, ("links", key), LinkedModel(self.model, links, np.hstack(influence))
+            )
+            return linked, axial, key
+        return linked.with_reference(np.concatenate(reference)), axial, key
 
     def _prescribed(self) -> np.ndarray:
         """Loads of the clamps being tightened: their preload along the pair's axis (N)."""
@@ -366,11 +423,11 @@ class _Sequencer:
         clamps = [f for f in self.installed if f.clamp]
         for _ in range(2 * len(clamps) + 2):
             P = loads + self._prescribed()
-            linked, axial = self._links()
+            linked, axial, structure = self._links()
             if self.frictional:
-                result, link_forces = self._frictional(contacts, P, linked, start)
+                result, link_forces = self._frictional(contacts, P, linked, start, structure)
             else:
-                result, link_forces = self._frictionless(contacts, P, linked, start)
+                result, link_forces = self._frictionless(contacts, P, linked, start, structure)
             switched = self._switch_bearing(result, linked, link_forces, axial, P)
             if not switched:
                 break
@@ -425,18 +482,24 @@ class _Sequencer:
 
     # ------------------------------------------------------------------ the two routes
 
-    def _frictionless(self, contacts, P, linked, start):
+    def _frictionless(self, contacts, P, linked, start, structure):
         clock = time.perf_counter()
         base = self.base
         assert isinstance(base, ContactProblem)
         dual = base.dual()
         A = base.constraints.matrix[contacts]
-        W = dual.W[np.ix_(contacts, contacts)]
-        free = self.model.displacements(P)
+        free = _free_displacements(self.model, P)
         offset = -(A @ free)
+        key = ("frictionless", contacts.tobytes(), structure)
+        cached = self.assembly.operators.get(key)
+        if cached is None:  # W' (B) once per contact set and link structure
+            W = dual.W[np.ix_(contacts, contacts)]
+            B = None if linked is None else linked.coupling(-A)
+            if linked is not None:
+                W = linked.reduced_operator(W, B)
+            cached = _kept(self.assembly.operators, key, (B, W))
+        B, W = cached
         if linked is not None:
-            B = linked.coupling(-A)
-            W = linked.reduced_operator(W, B)
             offset = offset + linked.offset(B, linked.links.relative(free))
         q = -(offset + self.gaps[contacts])
         x0 = None if start is None else np.maximum(np.asarray(start, dtype=float), 0.0)
@@ -450,9 +513,8 @@ class _Sequencer:
             )
             message = solution.message
         forces = solution.x
-        spread = np.zeros(self.assembly.n_pairs)
-        spread[contacts] = forces
-        U = free - dual.influence @ spread
+        loaded = np.flatnonzero(forces)  # U = R (P - A^T x), read on the loaded contacts
+        U = free - forces[loaded] @ dual.influence.T[contacts[loaded]]
         link_forces = np.zeros(0)
         if linked is not None:
             link_forces = linked.forces(linked.links.relative(U))
@@ -471,7 +533,7 @@ class _Sequencer:
         )
         return result, link_forces
 
-    def _frictional(self, contacts, P, linked, start):
+    def _frictional(self, contacts, P, linked, start, structure):
         clock = time.perf_counter()
         base = self.base
         assert isinstance(base, FrictionalProblem)
@@ -480,29 +542,30 @@ class _Sequencer:
         form = problem.local()
         d, k = problem.dim, len(contacts)
         tangential = np.zeros((k, d - 1)) if previous is None else previous.tangential_displacements
-        free = self.model.displacements(P)
+        free = form.free_displacements(P)
         q = (form.operator @ free + form.offset).reshape(k, d)
         q[:, 1:] -= tangential
         q = q.reshape(-1)
-        W = form.W
-        if linked is not None:
-            B = linked.coupling(form.operator)
-            W = linked.reduced_operator(W, B)
-            q = q + linked.offset(B, linked.links.relative(free))
-        step = FrictionStep(tangential, LocalProblem(W, q, problem.law.mu, d))
+        if linked is None:
+            template = form.fclib_template(problem.law)
+            scale = float(np.max(form.W.diagonal()))
+        else:
+            coupling, scale, template = self._reduced(contacts, structure, linked, problem)
+            q = q + linked.offset(coupling, linked.links.relative(free))
+        # the FCLIB problem W' / w, q / L (FrictionStep's scaling; no cohesion here)
+        length = float(np.max(np.abs(q))) or 1.0
+        fclib, force_unit = template.with_q(q / length), length / scale
         _, entry, options = resolve(problem, self.method, self.options)
         if "facets" in entry.option_names:
             options["facets"] = problem.law.facets
         if start is not None and "r0" in entry.option_names:
-            options["r0"] = (np.asarray(start, dtype=float).reshape(-1) + step.apex_shift) / (
-                step.force_unit
-            )
+            options["r0"] = np.asarray(start, dtype=float).reshape(-1) / force_unit
         with np.errstate(over="ignore", invalid="ignore"):
-            solution = solve(step.fclib, entry.name, **options)
-        r = step.force_unit * np.asarray(solution.forces).reshape(-1) - step.apex_shift
+            solution = solve(fclib, entry.name, **options)
+        r = force_unit * np.asarray(solution.forces).reshape(-1)
         link_forces = np.zeros(0)
         if linked is not None:
-            U0 = form.displacements(P, r)
+            U0 = form.displacements(P, r, free)
             link_forces = linked.forces(linked.links.relative(U0))
             problem = problem.with_loads(
                 P + linked.links.directions @ link_forces, previous=previous
@@ -516,6 +579,23 @@ class _Sequencer:
             seconds=time.perf_counter() - clock,
         )
         return result, link_forces
+
+    def _reduced(self, contacts, structure, linked, problem):
+        """``(B, w, W' / w)`` of the contacts ``contacts`` under links of ``structure``:
+        ``B = H R E``, ``W' = W - B S^{-1} B^T`` scaled by its largest diagonal ``w`` as an
+        FCLIB problem (validated, and its semidefiniteness checked, once per structure)."""
+        cache = self.assembly.operators
+        key = ("reduced", contacts.tobytes(), structure)
+        cached = cache.get(key)
+        if cached is None:
+            form = problem.local()
+            coupling = linked.coupling(form.operator)
+            W = linked.reduced_operator(form.W, coupling)
+            scale = float(np.max(W.diagonal()))
+            W /= scale  # W' is new here: scaled in place
+            template = LocalProblem(W, np.zeros(W.shape[0]), problem.law.mu, problem.dim)
+            cached = _kept(cache, key, (coupling, scale, template))
+        return cached
 
     def _previous_on(self, contacts: np.ndarray) -> FrictionalResult | None:
         """The previous stage's result on ``contacts`` (a subset of its own), or None."""
