@@ -1,6 +1,7 @@
 """The ``contactqp`` command line: one module per command, each registering on :data:`cli`."""
 
 from . import (  # noqa: F401  (register the commands)
+    assembly,
     fclib,
     layers,
     methods,
