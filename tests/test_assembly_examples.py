@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import csv
 import importlib.util
 import re
 from pathlib import Path
@@ -41,8 +42,17 @@ def _relative(a, b) -> float:
 
 
 def _csv(path: Path) -> dict:
-    table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
-    return {name: table[name] for name in table.dtype.names}
+    """``{header: column}``: numbers as float arrays, words as lists."""
+    with open(path, newline="", encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    columns = {}
+    for name in rows[0]:
+        values = [row[name] for row in rows]
+        try:
+            columns[name] = np.array(values, dtype=float)
+        except ValueError:
+            columns[name] = values
+    return columns
 
 
 def _sequence(read, assembly, **extra):
@@ -361,3 +371,81 @@ def test_the_ansys_blocks_give_the_answers_of_the_assembly_built_in_python(
     steps = [("shear", shear), ("shear removed", np.zeros_like(shear))]
     reference = python.sequence(read.gaps, load_steps=steps)
     _same_stages(_sequence(read, read.to_assembly()), reference, 1e-7)
+
+
+# ---------------------------------------------------------------------------- contactqp assembly
+
+
+def _command(assembly_file: Path, out: Path, *options: str) -> Path:
+    from contactqp.cli import main
+
+    argv = ["assembly", str(assembly_file), "--out", str(out), "--samples", str(SAMPLES)]
+    assert main([*argv, *options]) == 0
+    return out
+
+
+def _stage(table: dict, number: int) -> dict:
+    """The rows of stage ``number`` (from 1) of ``stages.csv``, in pair order."""
+    rows = np.flatnonzero(table["stage"] == number)
+    assert np.array_equal(table["pair"][rows], np.arange(rows.size))
+    return {
+        name: (column[rows] if isinstance(column, np.ndarray) else [column[i] for i in rows])
+        for name, column in table.items()
+    }
+
+
+def test_contactqp_assembly_on_the_riveting_file_writes_todays_numbers(
+    plates, riveting_command, tmp_path
+):
+    """``contactqp assembly riveting.toml`` against ``contactqp riveting``: the nominal
+    sequence's tensions, the final gaps and statuses, and the statistics of the same samples."""
+    model, _, _ = plates
+    out = _command(EXAMPLES / "riveting.toml", tmp_path / "assembly", "--seed", str(SEED))
+    today = _csv(riveting_command / "nominal_sequence.csv")
+    fasteners = _csv(out / "fasteners.csv")
+    n = len(today["tension"])
+    installed = [
+        fasteners["force (N)"][(fasteners["stage"] == s) & (fasteners["fastener"] == s)][0]
+        for s in range(1, n + 1)
+    ]
+    assert _relative(installed, today["tension"]) < 1e-9
+    final = _stage(_csv(out / "stages.csv"), n)
+    contacts = _csv(riveting_command / "nominal_contacts.csv")
+    assert np.max(np.abs(final["gap (m)"] - contacts["gap"])) < 1e-12 * 2e-4
+    assert final["status"] == contacts["status"]
+    free = np.setdiff1d(np.arange(model.n_pairs), model.fasteners)
+    force = final["normal_force (N)"][free]
+    assert np.max(np.abs(force - contacts["force"][free])) < 1e-9 * np.max(contacts["force"])
+    statistics, expected = _csv(out / "statistics.csv"), _csv(riveting_command / "statistics.csv")
+    for name in ("mean_gap", "gap_q5", "gap_q50", "gap_q95"):
+        assert np.max(np.abs(statistics[f"{name} (m)"] - expected[name])) < 1e-9 * 2e-4
+    assert np.array_equal(statistics["contact_probability (-)"], expected["contact_probability"])
+
+
+def test_contactqp_assembly_on_the_blocks_files_writes_their_sequences(
+    block_files, blocks, tmp_path
+):
+    """Both blocks files through the command: every stage in ``stages.csv`` and
+    ``fasteners.csv`` is the library's sequence, and both files' variation studies agree."""
+    read, assembly, sequences = blocks
+    statistics = []
+    for name in ("blocks.toml", "blocks-ansys.toml"):
+        out = _command(block_files / name, tmp_path / name.removesuffix(".toml"))
+        table, forces = _csv(out / "stages.csv"), _csv(out / "fasteners.csv")
+        for number, stage in enumerate(sequences["file"].stages, start=1):
+            rows = _stage(table, number)
+            assert rows["label"][0] == stage.label
+            assert _relative(rows["gap (m)"], stage.gaps) < 1e-7
+            assert _relative(rows["normal_force (N)"], stage.normal_forces) < 1e-7
+            tangential = np.column_stack(
+                [rows["tangential_force_t1 (N)"], rows["tangential_force_t2 (N)"]]
+            )
+            assert _relative(tangential, stage.tangential_forces) < 1e-7
+            written = forces["force (N)"][forces["stage"] == number]
+            assert _relative(written, stage.fastener_forces) < 1e-7
+        statistics.append(_csv(out / "statistics.csv"))
+    blocks_statistics, ansys_statistics = statistics
+    for column in ("mean_gap (m)", "gap_q5 (m)", "gap_q95 (m)"):
+        assert _relative(ansys_statistics[column], blocks_statistics[column]) < 1e-7
+    shim = [c for c in blocks_statistics if c.startswith("shim_probability")]
+    assert shim and np.all((0 <= blocks_statistics[shim[0]]) & (blocks_statistics[shim[0]] <= 1))
