@@ -28,8 +28,8 @@ in the assembly files, ``order = 2``), both clamped at their short end faces ``x
     flagged as constrained) and its nodes' coordinates (``node, x, y, z``), read by
     ``blocks-ansys.toml``.
 
-The functions below (:func:`lower_body`, :func:`upper_body`, :func:`interface_box`, ...) build
-the same parts in Python; the tests use them as the reference.
+The functions below (``lower_body``, ``upper_body``, ``interface_nodes``, ...) build the same
+parts in Python; the tests use them as the reference.
 """
 
 from __future__ import annotations
