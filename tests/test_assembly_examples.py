@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 import contactqp
 from contactqp import ContactProblem, NodePairs, ReducedModel
@@ -254,15 +255,8 @@ def test_mu_zero_through_the_file_is_the_frictionless_fastened_problem(
     assert read.kind == "fastened" and not assembly.frictional
     sequence = _sequence(read, assembly)
     assert sequence.success
-    model = ReducedModel(
-        flexibility=np.block(
-            [
-                [reference_parts[0][2].flexibility, np.zeros((135, 135))],
-                [np.zeros((135, 135)), reference_parts[1][2].flexibility],
-            ]
-        ),
-        dofs_per_node=3,
-    )
+    blocks = [model.flexibility for _, _, model in reference_parts]
+    model = ReducedModel(flexibility=scipy.linalg.block_diag(*blocks), dofs_per_node=3)
     k = assembly.n_pairs
     pairs = NodePairs(assembly.pairs, read.gaps, np.tile([0.0, 0.0, 1.0], (k, 1)))
     shear = np.zeros((2 * k, 3))
