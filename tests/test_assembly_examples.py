@@ -335,7 +335,7 @@ def test_the_ansys_part_is_the_mesh_part(ansys_blocks, blocks, reference_parts):
 def test_the_ansys_blocks_give_the_mesh_blocks_answers(ansys_blocks, blocks):
     read, assembly = ansys_blocks
     _, _, sequences = blocks
-    _same_stages(_sequence(read, assembly), sequences["file"], 1e-7)
+    _same_stages(_sequence(read, assembly), sequences["file"], 1e-8)
 
 
 def test_the_ansys_blocks_give_the_answers_of_the_assembly_built_in_python(
@@ -364,7 +364,7 @@ def test_the_ansys_blocks_give_the_answers_of_the_assembly_built_in_python(
     shear = python.load_vector("upper", np.arange(k), [150.0, 0.0, 0.0])
     steps = [("shear", shear), ("shear removed", np.zeros_like(shear))]
     reference = python.sequence(read.gaps, load_steps=steps)
-    _same_stages(_sequence(read, read.to_assembly()), reference, 1e-7)
+    _same_stages(_sequence(read, read.to_assembly()), reference, 1e-8)
 
 
 # ---------------------------------------------------------------------------- contactqp assembly
