@@ -53,7 +53,7 @@ BLOCKS = {
     "fastening": {"tolerance": 1.0, "order": [1, 0]},
     "friction": {"mu": 0.3},
     "loads": [{"label": "shear", "part": "upper", "force": [200.0, 0.0, 0.0]}],
-    "criteria": {"shim_tolerance": 0.0005},
+    "criteria": {"shim_tolerance": 0.00005},
 }
 
 

@@ -105,6 +105,9 @@ def test_the_files_hold_the_direct_sequence(example, blocks_file, blocks_study, 
 
 def test_the_frictional_example_slips_and_dissipates(blocks_study):
     study, _ = blocks_study
+    upper = study.input.part("upper")
+    shear = study.assembly.load_vector("upper", np.arange(upper.model.n_nodes), [200.0, 0, 0])
+    np.testing.assert_array_equal(study.input.load_steps[0][1], shear)  # h3's layout is h2's
     labels = [stage.label for stage in study.nominal.stages]
     assert labels[-2:] == ["shear", "shear removed"]
     assert "slip" in status_labels(study.nominal.stages[-2].status)
@@ -199,7 +202,8 @@ def test_a_seed_given_replaces_the_files_seed(tmp_path):
     doc["variation"]["seed"] = 9
     same = run_assembly_study(write(tmp_path / "b", doc), tmp_path / "b", samples=3)
     assert_same_store(tmp_path / "a" / "samples.h5", tmp_path / "b" / "samples.h5")
-    assert "seed 9" in seeded.input.variation_description or seeded.notes()
+    assert seeded.input.variation_description.endswith("seed 9 (seed)")
+    assert seeded.notes()[-1] == f"variation: {seeded.input.variation_description}"
     np.testing.assert_array_equal(seeded.statistics.mean, same.statistics.mean)
     doc["variation"]["seed"] = 4
     other = run_assembly_study(write(tmp_path / "c", doc), tmp_path / "c", samples=3)
@@ -231,6 +235,7 @@ def listing(folder):
         ("out over an input", r"^out: the study would overwrite its input file '.*stages\.csv'"),
         ("bad samples", r"^samples must be an integer >= 1, got 0"),
         ("bad scheduler", r"Dask scheduler 'no-port'"),
+        ("no workers", r"^workers must be an integer >= 1, got None"),
     ],
 )
 def test_bad_input_is_refused_before_anything_is_written(tmp_path, case, message):
@@ -255,6 +260,8 @@ def test_bad_input_is_refused_before_anything_is_written(tmp_path, case, message
         options["samples"] = 0
     elif case == "bad scheduler":
         options["scheduler"] = "no-port"
+    elif case == "no workers":
+        options["workers"] = None
     path = write(folder, doc)
     (folder / "rows.csv").write_text("\n".join(["0.0," * 5 + "0.0"] * 2) + "\n", encoding="utf-8")
     (folder / "stages.csv").write_text((folder / "gaps.csv").read_text(), encoding="utf-8")

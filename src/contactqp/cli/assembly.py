@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 import sys
+from contextlib import nullcontext
 from pathlib import Path
 
 import click
 
 from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
+
+#: Columns of the printed tables when stdout is not a terminal.
+WIDE = 160
 
 
 @cli.command()
@@ -60,7 +64,9 @@ def assembly(assembly_file, samples, seed, workers, scheduler, out, as_json, plo
 
     names = {param.name: param.opts[0] for param in click.get_current_context().command.params}
     names["assembly_file"] = "ASSEMBLY.toml"
-    with progress("sample") as report:
+    # a progress bar on a terminal only: elsewhere stderr stays for the one error line
+    bar = progress("sample") if sys.stderr.isatty() else nullcontext(None)
+    with bar as report:
         study = run_assembly_study(
             assembly_file,
             out,
@@ -132,6 +138,8 @@ def _print(study, tolerance) -> None:
     from ..applications.fastening.output import sequence_table
 
     out = console()
+    if not out.is_terminal:  # a log or a pipe: room for the table's columns, unwrapped
+        out.width = max(out.width, WIDE)
     name = study.input.name or study.input.path.name
     out.print(
         sequence_table(
@@ -142,6 +150,8 @@ def _print(study, tolerance) -> None:
     )
     for line in study.notes():
         out.print(line)
+    if tolerance is not None:
+        out.print(_shim_line(study.nominal.final, tolerance))
     summary, stats = study.summary, study.statistics
     if summary is not None:
         line = (
@@ -158,3 +168,14 @@ def _print(study, tolerance) -> None:
         out.print(line)
     folders = sorted({str(path.parent) for path in study.files.values()})
     out.print(f"wrote {len(study.files)} files to {', '.join(folders)}")
+
+
+def _shim_line(stage, tolerance: float, shown: int = 20) -> str:
+    """The pairs of the last stage above the shim tolerance, the first ``shown`` of them."""
+    from ..applications.fastening.output import shim_pairs
+
+    pairs = shim_pairs(stage, tolerance).tolist()
+    listed = ", ".join(map(str, pairs[:shown])) + (", ..." if len(pairs) > shown else "")
+    return f"pairs needing a shim (gap > {tolerance * 1e3:.4g} mm after the last stage): " + (
+        f"{len(pairs)}: {listed} (shims.csv)" if pairs else "none"
+    )

@@ -51,15 +51,17 @@ class SequenceVariation:
     nominal_gaps : array_like, shape (k,)
         The gap field (m) of the nominal sequence, e.g. the gap source's mean.
     order, load_steps, method, **options
-        As :meth:`Assembly.sequence` takes them, the same for every sample.
+        As :meth:`~contactqp.applications.fastening.Assembly.sequence` takes them, the same for
+        every sample.
     start : {"nominal", "previous"}
         Where each stage's solve starts from (above).
 
     Raises
     ------
     InvalidInputError
-        Bad arguments (those of :meth:`Assembly.sequence`, checked on the nominal sequence),
-        or an unknown ``start``.
+        Bad arguments (those of
+        :meth:`~contactqp.applications.fastening.Assembly.sequence`, checked on the nominal
+        sequence), or an unknown ``start``.
     """
 
     def __init__(

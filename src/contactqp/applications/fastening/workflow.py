@@ -26,6 +26,7 @@ either way) and writes:
 
 from __future__ import annotations
 
+import dataclasses
 import numbers
 import os
 from collections.abc import Callable
@@ -34,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InvalidInputError
+from ...optional import require
 from ...studies import BatchSummary, GapStatistics, GaussianGapField, load_batch, run_batch
 from ...studies.executors import check_scheduler
 from .model import Assembly
@@ -155,7 +157,7 @@ def run_assembly_study(
         Dask scheduler address (``tcp://host:port``), checked before any solve. ``workers``
         and ``scheduler`` are not used without a ``[variation]``.
     plot : bool
-        Also write the figures (the ``plot`` extra).
+        Also write the figures (the ``plot`` extra: refused at once when it is missing).
     progress : callable, optional
         ``progress(done, samples)`` after each stored chunk of samples.
     names : dict, optional
@@ -181,7 +183,9 @@ def run_assembly_study(
 
     samples = _count(samples, name("samples"), minimum=1)
     seed = _count(seed, name("seed"), minimum=0)
-    workers_count = _count(workers, name("workers"), minimum=1)
+    workers_count = _count(workers, name("workers"), minimum=1, required=True)
+    if plot:  # a missing plot extra is told before anything is solved or written
+        require("matplotlib.figure", "figures", "plot", "matplotlib")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InvalidInputError(f"{name('out')}: '{out}' is a file, not a directory")
@@ -191,6 +195,7 @@ def run_assembly_study(
     given = read_assembly_file(Path(assembly_file))
     _check_no_overwrite(Path(assembly_file), out, name("out"))
     assembly = given.to_assembly()
+    given = _seeded(given, seed, name)
     source, samples = _variation_source(given, samples, seed, name)
     options = {"load_steps": given.load_steps, "method": given.method, **given.options}
     case = None
@@ -204,8 +209,7 @@ def run_assembly_study(
     out.mkdir(parents=True, exist_ok=True)
     store = out / "samples.h5"
     if case is not None:
-        # a bad scheduler, or a store of another study in out, is refused before the nominal
-        # files are written
+        # a store of another study in out is refused before the nominal files are written
         run_batch(case, source, samples, store, scheduler=scheduler, limit=0)
     files = write_sequence(
         out,
@@ -240,13 +244,31 @@ def run_assembly_study(
     return AssemblyStudy(given, assembly, nominal, summary, statistics, files)
 
 
-def _count(value: Any, what: str, *, minimum: int) -> Any:
-    """``value`` as an int >= ``minimum`` (None stays None); else one clear line."""
-    if value is None:
+def _count(value: Any, what: str, *, minimum: int, required: bool = False) -> Any:
+    """``value`` as an int >= ``minimum`` (None stays None unless ``required``); else one
+    clear line."""
+    if value is None and not required:
         return None
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < minimum:
         raise InvalidInputError(f"{what} must be an integer >= {minimum}, got {value!r}")
     return int(value)
+
+
+def _seeded(given: Any, seed: int | None, name) -> Any:
+    """``given`` with its random gap fields drawn from ``seed`` instead of the file's (and
+    its variation's description saying so); as it is without a seed or a random variation."""
+    source = given.variation
+    if seed is None or not isinstance(source, GaussianGapField):
+        return given
+    seeded = GaussianGapField(
+        source.coordinates, source.amplitude, source.correlation_length, source.mean, seed
+    )
+    description = given.variation_description.rsplit(", seed ", 1)[0]
+    return dataclasses.replace(
+        given,
+        variation=seeded,
+        variation_description=f"{description}, seed {seed} ({name('seed')})",
+    )
 
 
 def _variation_source(given: Any, samples: int | None, seed: int | None, name) -> tuple:
@@ -260,14 +282,6 @@ def _variation_source(given: Any, samples: int | None, seed: int | None, name) -
                 )
         return None, None
     if isinstance(source, GaussianGapField):
-        if seed is not None:
-            source = GaussianGapField(
-                source.coordinates,
-                source.amplitude,
-                source.correlation_length,
-                mean=source.mean,
-                seed=seed,
-            )
         return source, DEFAULT_SAMPLES if samples is None else samples
     if seed is not None:
         raise InvalidInputError(
