@@ -48,7 +48,11 @@ WIDE = 160
     is_flag=True,
     help="End with one JSON line: the nominal sequence's summary and the study's.",
 )
-@click.option("--plot", is_flag=True, help="Also write the figures (PNG) in --out.")
+@click.option(
+    "--plot",
+    is_flag=True,
+    help="Also write gap.png, status.png, fastener_forces.png and statistics.png in --out.",
+)
 def assembly(assembly_file, samples, seed, workers, scheduler, out, as_json, plot):
     """Fasten the parts of an assembly file, then vary its gaps.
 
@@ -57,7 +61,7 @@ def assembly(assembly_file, samples, seed, workers, scheduler, out, as_json, plo
     stage), stage_001.vtu ... with stages.pvd (ParaView), shims.csv (with a shim tolerance).
     With a [variation] table, also samples.h5 (one row per sample, resumable) and
     statistics.csv (per pair: mean and quantiles of the residual gap, probability of contact
-    and of a gap above the shim tolerance). The file's schema: the assembly-file reference.
+    and of a gap above the shim tolerance). The file's schema: docs/assembly-files.md.
     """
     from ..applications.fastening.output import sequence_summary
     from ..applications.fastening.workflow import run_assembly_study

@@ -35,7 +35,6 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InvalidInputError
-from ...optional import require
 from ...studies import BatchSummary, GapStatistics, GaussianGapField, load_batch, run_batch
 from ...studies.executors import check_scheduler
 from .model import Assembly
@@ -157,7 +156,8 @@ def run_assembly_study(
         Dask scheduler address (``tcp://host:port``), checked before any solve. ``workers``
         and ``scheduler`` are not used without a ``[variation]``.
     plot : bool
-        Also write the figures (the ``plot`` extra: refused at once when it is missing).
+        Also write the figures (the ``plot`` extra; without it a
+        :class:`~contactqp.errors.MissingDependencyError` once the nominal files are written).
     progress : callable, optional
         ``progress(done, samples)`` after each stored chunk of samples.
     names : dict, optional
@@ -184,8 +184,6 @@ def run_assembly_study(
     samples = _count(samples, name("samples"), minimum=1)
     seed = _count(seed, name("seed"), minimum=0)
     workers_count = _count(workers, name("workers"), minimum=1, required=True)
-    if plot:  # a missing plot extra is told before anything is solved or written
-        require("matplotlib.figure", "figures", "plot", "matplotlib")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InvalidInputError(f"{name('out')}: '{out}' is a file, not a directory")
