@@ -21,14 +21,12 @@ from .gaps import InterpolationError
 from .pairing import UnmatchedNodes
 from .parsing import read_assembly_file
 from .parts import PartInput
-from .result import AssemblyInput, FastenerInput, InterfaceInput, load_vector
+from .result import AssemblyInput, load_vector
 
 __all__ = [
     "read_assembly_file",
     "AssemblyInput",
     "PartInput",
-    "InterfaceInput",
-    "FastenerInput",
     "UnmatchedNodes",
     "InterpolationError",
     "load_vector",

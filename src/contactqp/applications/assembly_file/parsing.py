@@ -18,10 +18,11 @@ from ...errors import ContactError, FileFormatError, InvalidInputError
 from ...io.problem_file.messages import Where, as_table, check_keys, counted, describe
 from ...io.problem_file.options import route_options, solver_options
 from ...methods.registry import default_method
+from ..fastening import Fastener, InterfacePairs
 from .gaps import Cloud
 from .pairing import UnmatchedNodes, geometric_normals, pair_by_proximity, pair_distances
 from .parts import PartInput, _box, read_part
-from .result import AssemblyInput, FastenerInput, InterfaceInput, load_vector, pair_points
+from .result import AssemblyInput, load_vector, pair_points
 from .schema import (
     CRITERIA_KEYS,
     FASTENER_KEYS,
@@ -199,7 +200,7 @@ def _interfaces(where: Where, doc: dict, parts, units: Units):
         normals = _normals(
             where, table.get("normal", "geometry"), f"{key}.normal", first, second, pairs
         )
-        interfaces.append(InterfaceInput(first.name, second.name, pairs, normals))
+        interfaces.append(InterfacePairs(first.name, second.name, pairs, normals))
     return tuple(interfaces), tuple(unmatched)
 
 
@@ -388,7 +389,7 @@ def _fasteners(where: Where, doc: dict, points, freedoms, units: Units):
     from scipy.spatial import cKDTree
 
     trees: dict[int, cKDTree] = {}
-    fasteners: list[FastenerInput] = []
+    fasteners: list[Fastener] = []
     used: dict[int, int] = {}
     for index, table in enumerate(tables):
         key = f"fasteners[{index}]"
@@ -456,7 +457,7 @@ def _fasteners(where: Where, doc: dict, points, freedoms, units: Units):
             if "label" in table
             else f"fastener {index} (pair {pair})"
         )
-        fasteners.append(FastenerInput(pair, kind, force, stiffness, shear, label))
+        fasteners.append(Fastener(pair, kind, force, stiffness, shear, label))
     if "order" in setting:
         return tuple(fasteners[i] for i in _order(where, setting["order"], fasteners))
     return tuple(fasteners)

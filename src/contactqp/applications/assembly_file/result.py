@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -10,34 +9,12 @@ from typing import Any
 import numpy as np
 
 from ...errors import InvalidInputError
+from ..fastening import Assembly, AssemblyPart, Fastener, InterfacePairs
 from .gaps import InterpolationError
 from .pairing import UnmatchedNodes
 from .parts import PartInput
 
-__all__ = ["InterfaceInput", "FastenerInput", "AssemblyInput", "load_vector"]
-
-
-@dataclass(frozen=True)
-class InterfaceInput:
-    """Node pairs between two parts: ``nodes[:, 0]`` of ``first``, ``nodes[:, 1]`` of
-    ``second``; ``normals`` (unit) point from the first part towards the second."""
-
-    first: str
-    second: str
-    nodes: np.ndarray
-    normals: np.ndarray
-
-
-@dataclass(frozen=True)
-class FastenerInput:
-    """A fastener at a global pair index (interfaces concatenated in file order)."""
-
-    pair: int
-    kind: str = "closure"
-    force: float = 0.0
-    stiffness: float = math.inf
-    shear: str = "bonded"
-    label: str = ""
+__all__ = ["AssemblyInput", "load_vector"]
 
 
 @dataclass(frozen=True)
@@ -50,7 +27,7 @@ class AssemblyInput:
     path : Path
         The assembly file.
     parts : tuple of PartInput
-    interfaces : tuple of InterfaceInput
+    interfaces : tuple of InterfacePairs
     unmatched : tuple of UnmatchedNodes
         Nodes proximity pairing left without a partner (``describe()`` gives a line each).
     gaps : ndarray, shape (k,)
@@ -61,7 +38,7 @@ class AssemblyInput:
         One line saying where the variation comes from ("" without one).
     interpolation_error : InterpolationError or None
         Leave-one-out error of the interpolated gaps (None when they were not interpolated).
-    fasteners : tuple of FastenerInput
+    fasteners : tuple of Fastener
         In installation order.
     mu : ndarray, shape (k,)
     facets : int or None
@@ -81,13 +58,13 @@ class AssemblyInput:
     name: str
     path: Path
     parts: tuple[PartInput, ...]
-    interfaces: tuple[InterfaceInput, ...]
+    interfaces: tuple[InterfacePairs, ...]
     unmatched: tuple[UnmatchedNodes, ...]
     gaps: np.ndarray
     variation: Any
     variation_description: str
     interpolation_error: InterpolationError | None
-    fasteners: tuple[FastenerInput, ...]
+    fasteners: tuple[Fastener, ...]
     mu: np.ndarray
     facets: int | None
     load_steps: tuple[tuple[str, np.ndarray], ...]
@@ -113,33 +90,10 @@ class AssemblyInput:
                 return part
         raise InvalidInputError(f"no part named {name!r}")
 
-    def to_assembly(self):
-        """The :class:`contactqp.applications.fastening.Assembly` of this input.
-
-        Raises
-        ------
-        InvalidInputError
-            When this version of :mod:`contactqp.applications.fastening` has no ``Assembly``.
-        """
-        from .. import fastening  # h2's module; read by name so that this builds before it
-
-        names = ("Assembly", "AssemblyPart", "Fastener", "InterfacePairs")
-        if not all(hasattr(fastening, name) for name in names):
-            raise InvalidInputError(
-                "contactqp.applications.fastening has no Assembly yet: use the parts, "
-                "interfaces and fasteners of this input directly"
-            )
-        Assembly, AssemblyPart, Fastener, InterfacePairs = (
-            getattr(fastening, name) for name in names
-        )
+    def to_assembly(self) -> Assembly:
+        """The :class:`~contactqp.applications.fastening.Assembly` of this input."""
         parts = [AssemblyPart(p.name, p.model, p.coordinates) for p in self.parts]
-        interfaces = [
-            InterfacePairs(i.first, i.second, i.nodes, i.normals) for i in self.interfaces
-        ]
-        fasteners = [
-            Fastener(f.pair, f.kind, f.force, f.stiffness, f.shear, f.label) for f in self.fasteners
-        ]
-        return Assembly(parts, interfaces, fasteners, mu=self.mu, facets=self.facets)
+        return Assembly(parts, self.interfaces, self.fasteners, mu=self.mu, facets=self.facets)
 
 
 def pair_points(parts, interfaces) -> np.ndarray:
@@ -162,8 +116,8 @@ def load_vector(parts, part: str, nodes, force) -> np.ndarray:
 
     A node with 3 freedoms takes ``(F_x, F_y, F_z)``, one with 2 ``(F_x, F_y)``, one with 1
     (a plate's deflection) ``F_z``; a force component a node has no freedom for is refused.
-    The same layout as :meth:`contactqp.applications.fastening.Assembly.load_vector`, which
-    replaces this function once it exists.
+    The same layout as :meth:`contactqp.applications.fastening.Assembly.load_vector` (the
+    file's load steps are read before the assembly is built).
     """
     offsets, start = {}, 0
     for item in parts:
