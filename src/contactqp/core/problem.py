@@ -57,6 +57,9 @@ def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
     """``(R M^T, M R M^T)`` for a sparse constraint matrix ``M``: the displacements under unit
     contact forces and the Delassus operator, symmetrised (its asymmetry is round-off)."""
     if model.given == "flexibility":
+        selection = _selection(matrix)
+        if selection is not None:
+            return _selected_delassus(model.flexibility, *selection)
         # only the freedoms the constraints touch enter R M^T
         used = np.unique(matrix.indices)
         # R is exactly symmetric (ReducedModel symmetrises it): R M^T = (M R)^T, one sparse
@@ -67,6 +70,33 @@ def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
         influence = model.displacements(matrix.T.toarray())
     W = np.asarray(matrix @ influence)
     return influence, 0.5 * (W + W.T)
+
+
+def _selection(matrix: scipy.sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(columns, scales)`` when every row of ``M`` holds one stored entry (each constraint acts
+    on one freedom: ``M = diag(scales) I[columns]``), else None."""
+    if matrix.shape[0] == 0 or not np.all(np.diff(matrix.indptr) == 1):
+        return None
+    return matrix.indices, matrix.data
+
+
+def _selected_delassus(R: np.ndarray, columns: np.ndarray, scales: np.ndarray):
+    """``(R M^T, M R M^T)`` for ``M = diag(scales) I[columns]`` by indexing ``R``: no product.
+
+    ``W_ij = R_{c_i c_j} (s_i s_j)`` is exactly symmetric, as ``R`` is. When ``M`` is the
+    identity (every freedom a constraint, in order, scale 1), both are read-only views of ``R``.
+    """
+    unit = bool(np.all(scales == 1.0))
+    if unit and columns.size == R.shape[0] and np.array_equal(columns, np.arange(columns.size)):
+        view = R.view()
+        view.flags.writeable = False
+        return view, view
+    rows = R[columns]  # M R up to the scales: contiguous rows of R (R = R^T)
+    W = rows[:, columns]
+    if not unit:
+        rows *= scales[:, None]
+        W *= np.multiply.outer(scales, scales)
+    return rows.T, W
 
 
 def _sparse_product(model: ReducedModel, loads: np.ndarray) -> np.ndarray:
@@ -135,7 +165,7 @@ class DualForm:
     def __init__(self, model: ReducedModel, constraints: Constraints, loads: np.ndarray):
         A = constraints.matrix
         self.influence, self.W = _delassus(model, A)
-        self.free_displacements = model.displacements(loads)
+        self.free_displacements = _sparse_product(model, loads)
         self.b = A @ self.free_displacements - constraints.gaps
 
     def displacements(self, forces: np.ndarray) -> np.ndarray:
