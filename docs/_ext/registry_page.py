@@ -127,10 +127,11 @@ class MethodRegistry(SphinxDirective):
 
 def command_help(name: str) -> str:
     """The ``--help`` text of ``contactqp NAME``, 88 columns wide."""
-    command = cli.commands[name]
     parent = click.Context(
         cli, info_name="contactqp", terminal_width=88, max_content_width=88, **cli.context_settings
     )
+    command = cli.get_command(parent, name)
+    assert command is not None, name
     with click.Context(command, info_name=name, parent=parent) as context:
         return command.get_help(context)
 
@@ -142,8 +143,9 @@ class CommandHelp(SphinxDirective):
 
     def run(self) -> list[nodes.Node]:
         name = self.arguments[0]
-        if name not in cli.commands:
-            raise self.error(f"no contactqp command {name!r}; commands: {', '.join(cli.commands)}")
+        names = cli.list_commands(click.Context(cli))
+        if name not in names:
+            raise self.error(f"no contactqp command {name!r}; commands: {', '.join(names)}")
         text = command_help(name)
         block = nodes.literal_block(text, text, language="text")
         return [block]

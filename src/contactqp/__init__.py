@@ -1,26 +1,93 @@
-"""contactqp: fast elastic contact with friction on reduced (compliance-matrix) models."""
+"""contactqp: fast elastic contact with friction on reduced (compliance-matrix) models.
 
-from .core.certificate import Certificate, FrictionCertificate, LocalCertificate
-from .core.contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
-from .core.fastened import FastenedProblem
-from .core.friction import FrictionLaw
-from .core.history import HistoryResult, linear_path
-from .core.local_problem import GlobalProblem, LocalProblem
-from .core.model import ReducedModel, unit_load_compliance
-from .core.problem import ContactProblem, FrictionalProblem
-from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
-from .core.status import STATUS_LABELS, ContactStatus
-from .errors import (
-    ContactError,
-    ContactWarning,
-    FileFormatError,
-    InvalidInputError,
-    MissingDependencyError,
-    NotPositiveDefiniteError,
-    SolverError,
-    UnsupportedProblemError,
+Importing the package does no work: each name below is imported from its module on first use
+(PEP 562), so that a command or a program pays only for the modules it uses.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .core.certificate import Certificate, FrictionCertificate, LocalCertificate
+    from .core.contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
+    from .core.fastened import FastenedProblem
+    from .core.friction import FrictionLaw
+    from .core.history import HistoryResult, linear_path
+    from .core.local_problem import GlobalProblem, LocalProblem
+    from .core.model import ReducedModel, unit_load_compliance
+    from .core.problem import ContactProblem, FrictionalProblem
+    from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
+    from .core.status import STATUS_LABELS, ContactStatus
+    from .errors import (
+        ContactError,
+        ContactWarning,
+        FileFormatError,
+        InvalidInputError,
+        MissingDependencyError,
+        NotPositiveDefiniteError,
+        SolverError,
+        UnsupportedProblemError,
+    )
+    from .methods import METHODS, default_method, is_installed, methods_for, solve, solve_history
+
+#: The public names and the modules they come from (relative to this package).
+_EXPORTS: dict[str, str] = {
+    "Certificate": ".core.certificate",
+    "FrictionCertificate": ".core.certificate",
+    "LocalCertificate": ".core.certificate",
+    "GapObstacle": ".core.contact",
+    "NodePairs": ".core.contact",
+    "PlaneObstacle": ".core.contact",
+    "ProfileObstacle": ".core.contact",
+    "FastenedProblem": ".core.fastened",
+    "FrictionLaw": ".core.friction",
+    "HistoryResult": ".core.history",
+    "linear_path": ".core.history",
+    "GlobalProblem": ".core.local_problem",
+    "LocalProblem": ".core.local_problem",
+    "ReducedModel": ".core.model",
+    "unit_load_compliance": ".core.model",
+    "ContactProblem": ".core.problem",
+    "FrictionalProblem": ".core.problem",
+    "ContactResult": ".core.result",
+    "FastenedResult": ".core.result",
+    "FrictionalResult": ".core.result",
+    "LocalResult": ".core.result",
+    "STATUS_LABELS": ".core.status",
+    "ContactStatus": ".core.status",
+    "ContactError": ".errors",
+    "ContactWarning": ".errors",
+    "FileFormatError": ".errors",
+    "InvalidInputError": ".errors",
+    "MissingDependencyError": ".errors",
+    "NotPositiveDefiniteError": ".errors",
+    "SolverError": ".errors",
+    "UnsupportedProblemError": ".errors",
+    "METHODS": ".methods",
+    "default_method": ".methods",
+    "is_installed": ".methods",
+    "methods_for": ".methods",
+    "solve": ".methods",
+    "solve_history": ".methods",
+}
+
+#: The subpackages and modules, imported on first use as attributes (``contactqp.methods``).
+_SUBMODULES = frozenset(
+    {
+        "applications",
+        "cli",
+        "compliance",
+        "core",
+        "errors",
+        "io",
+        "kernels",
+        "methods",
+        "optional",
+        "studies",
+    }
 )
-from .methods import METHODS, default_method, is_installed, methods_for, solve, solve_history
 
 __all__ = [
     "ReducedModel",
@@ -66,6 +133,22 @@ __all__ = [
 __version__ = "0.1.0"
 
 
+def __getattr__(name: str) -> Any:
+    """Import a public name (or a subpackage) on first use, and keep it."""
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS) | _SUBMODULES)
+
+
 def solve_gaps(
     flexibility,
     loads,
@@ -99,6 +182,11 @@ def solve_gaps(
     -------
     ContactResult
     """
+    from .core.contact import GapObstacle
+    from .core.model import ReducedModel
+    from .core.problem import ContactProblem
+    from .methods import solve
+
     model = ReducedModel(flexibility=flexibility, dofs_per_node=dofs_per_node)
     if nodes is None:
         nodes = range(model.n_nodes)

@@ -1,15 +1,8 @@
-"""The ``contactqp`` command line: one module per command, each registering on :data:`cli`."""
+"""The ``contactqp`` command line: one module per command, imported when that command runs.
 
-from . import (  # noqa: F401  (register the commands)
-    assembly,
-    fclib,
-    layers,
-    methods,
-    riveting,
-    rod,
-    solve,
-    springs,
-)
+The commands are listed in :data:`contactqp.cli.app.COMMANDS`.
+"""
+
 from .app import cli, main
 
 __all__ = ["cli", "main"]

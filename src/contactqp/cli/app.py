@@ -8,6 +8,7 @@ traceback (see :mod:`contactqp.errors` for which failure is which).
 
 from __future__ import annotations
 
+import importlib
 import sys
 import time
 import warnings
@@ -23,9 +24,55 @@ if TYPE_CHECKING:
     from rich.console import Console
     from rich.progress import Progress, TaskID
 
-__all__ = ["cli", "console", "fail", "float_list", "main", "progress", "warn"]
+__all__ = [
+    "COMMANDS",
+    "LazyGroup",
+    "cli",
+    "console",
+    "fail",
+    "float_list",
+    "main",
+    "progress",
+    "warn",
+]
 
 EXIT_OK, EXIT_NOT_SOLVED, EXIT_BAD_INPUT = 0, 1, 2
+
+#: Every command: the module of this package that defines it (as a function of the command's
+#: name) and its one-line help, which ``contactqp --help`` shows without importing the module (a
+#: test checks each line against the command's own help).
+COMMANDS: dict[str, tuple[str, str]] = {
+    "assembly": ("assembly", "Fasten the parts of an assembly file, then vary its gaps."),
+    "fclib": (
+        "fclib",
+        "Solve FCLIB problems (HDF5 or Siconos .dat), local or global, with Coulomb friction.",
+    ),
+    "layers": (
+        "layers",
+        "A 1 m soil layer on a 2 m one (10 m long, plane strain), pulled sideways under gravity.",
+    ),
+    "methods": (
+        "methods",
+        "List the methods: the problem kinds they solve, their role and options, "
+        "what is installed.",
+    ),
+    "riveting": (
+        "riveting",
+        "Two 200 x 100 x 2 mm aluminium plates riveted over a gap field (frictionless).",
+    ),
+    "rod": (
+        "rod",
+        "The published rod over an obstacle: reduced model (8 nodes) against full FE contact.",
+    ),
+    "solve": (
+        "solve",
+        "Solve the contact problem (with friction, or a load history) in a TOML file.",
+    ),
+    "springs": (
+        "springs",
+        "A chain of bodies linked by springs on a floor with friction, pulled at its end.",
+    ),
+}
 
 
 def fail(message: str) -> None:
@@ -114,7 +161,44 @@ def float_list(ctx: click.Context, param: click.Parameter, text: str) -> list[fl
     return values
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A command group that imports a command's module only when that command runs.
+
+    ``lazy`` maps a command's name to ``(module, one-line help)`` (see :data:`COMMANDS`): the
+    module, relative to this package, defines the command as the attribute of that name.
+    """
+
+    def __init__(self, *args, lazy: dict[str, tuple[str, str]], **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.lazy = dict(lazy)
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(set(super().list_commands(ctx)) | set(self.lazy))
+
+    def get_command(self, ctx: click.Context | None, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.commands and cmd_name in self.lazy:
+            module = importlib.import_module(f"{__package__}.{self.lazy[cmd_name][0]}")
+            self.add_command(getattr(module, cmd_name), cmd_name)
+        return self.commands.get(cmd_name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The commands and their one-line help, from the table (no command is imported)."""
+        names = self.list_commands(ctx)
+        if not names:
+            return
+        limit = formatter.width - 6 - max(len(name) for name in names)
+        rows = []
+        for name in names:
+            if name in self.lazy:
+                text = click.utils.make_default_short_help(self.lazy[name][1], limit)
+            else:
+                text = self.commands[name].get_short_help_str(limit)
+            rows.append((name, text))
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+@click.group(cls=LazyGroup, lazy=COMMANDS, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="contactqp")
 def cli() -> None:
     """Fast elastic contact with friction on reduced (compliance-matrix) models."""

@@ -9,13 +9,13 @@ from pathlib import Path
 
 import click
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
+from .app import EXIT_NOT_SOLVED, console, fail, progress
 
 #: Columns of the printed tables when stdout is not a terminal.
 WIDE = 160
 
 
-@cli.command()
+@click.command()
 @click.argument("assembly_file", metavar="ASSEMBLY.toml", type=click.Path(path_type=Path))
 @click.option(
     "--samples",

@@ -13,7 +13,7 @@ import click
 from ..core.result import LocalResult
 from ..core.status import status_counts
 from ..errors import ContactError, SolverError
-from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, cli, console, fail
+from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, console, fail
 
 STATUSES = tuple(status.label for status in LocalResult.STATUSES)
 COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "seconds", *STATUSES)
@@ -22,7 +22,7 @@ COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "secon
 SOLUTION_SUFFIX = ".solution.hdf5"
 
 
-@cli.command()
+@click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option(
     "--tol",

@@ -9,10 +9,10 @@ from pathlib import Path
 import click
 
 from ..core.history import MAX_STEPS
-from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
+from .app import EXIT_NOT_SOLVED, console, fail, progress
 
 
-@cli.command()
+@click.command()
 @click.option(
     "--mu",
     type=click.FloatRange(min=0, max=10, min_open=True),

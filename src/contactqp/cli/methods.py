@@ -6,7 +6,7 @@ import json
 
 import click
 
-from .app import cli, console
+from .app import console
 
 
 def _describe(method, installed: bool) -> dict:
@@ -26,7 +26,7 @@ def _describe(method, installed: bool) -> dict:
     }
 
 
-@cli.command()
+@click.command()
 @click.option("--json", "as_json", is_flag=True, help="One JSON object: methods and kinds.")
 def methods(as_json):
     """List the methods: the problem kinds they solve, their role and options, what is installed.

@@ -12,10 +12,10 @@ import numpy as np
 
 from ..core.status import ContactStatus
 from ..methods.registry import default_method, methods_for
-from .app import EXIT_NOT_SOLVED, cli, console, fail
+from .app import EXIT_NOT_SOLVED, console, fail
 
 
-@cli.command()
+@click.command()
 @click.option(
     "--samples",
     type=click.IntRange(min=1, max=10**7),  # batch.MAX_SAMPLES

@@ -10,10 +10,10 @@ from pathlib import Path
 import click
 
 from ..applications.rod import MAX_ELEMENTS
-from .app import EXIT_NOT_SOLVED, cli, console, fail
+from .app import EXIT_NOT_SOLVED, console, fail
 
 
-@cli.command()
+@click.command()
 @click.option(
     "--elements",
     type=click.IntRange(min=8, max=MAX_ELEMENTS),

@@ -17,13 +17,13 @@ import click
 import numpy as np
 
 from ..core.status import ContactStatus, status_counts
-from .app import EXIT_NOT_SOLVED, cli, console, fail, progress
+from .app import EXIT_NOT_SOLVED, console, fail, progress
 
 #: The status counts of a load history's table, in its column order.
 _HISTORY_STATUSES = (ContactStatus.STICK, ContactStatus.SLIP, ContactStatus.OPEN)
 
 
-@cli.command()
+@click.command()
 @click.argument("problem_file", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON line.")
 @click.option(

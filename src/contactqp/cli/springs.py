@@ -8,14 +8,14 @@ from pathlib import Path
 
 import click
 
-from .app import EXIT_NOT_SOLVED, cli, console, fail, float_list, progress
+from .app import EXIT_NOT_SOLVED, console, fail, float_list, progress
 
 #: Largest chain offered: solved in about a second per force (the output then holds 1e6 numbers
 #: per force).
 MAX_BODIES = 1_000_000
 
 
-@cli.command()
+@click.command()
 @click.option(
     "--n",
     "n",
