@@ -25,6 +25,8 @@ __all__ = [
     "unit_load_compliance",
     "check_spd_matrix",
     "checked_cholesky",
+    "checked_matrix",
+    "cholesky_factor",
     "finite_array",
     "warm_start",
     "real_array",
@@ -114,6 +116,10 @@ def iteration_cap(value: object, name: str = "max_iter") -> int:
     return int(value)
 
 
+#: Rows handled at a time by the O(n^2) checks of :func:`checked_matrix` (bounded temporaries).
+_CHECK_ROWS = 512
+
+
 def check_spd_matrix(
     matrix: ArrayLike, name: str, symmetry_rtol: float = SYMMETRY_RTOL
 ) -> np.ndarray:
@@ -129,6 +135,31 @@ def checked_cholesky(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Validate a symmetric positive definite matrix; return it and its lower Cholesky factor.
 
+    The checks of :func:`checked_matrix`, then :func:`cholesky_factor`.
+
+    Returns
+    -------
+    array : ndarray, shape (n, n)
+        Symmetric (the symmetric part of a matrix within ``symmetry_rtol``).
+    factor : ndarray, shape (n, n)
+        Lower triangular ``L`` with ``L L^T = array``.
+    """
+    array = checked_matrix(matrix, name, symmetry_rtol)[1]
+    return array, cholesky_factor(array, name)
+
+
+def checked_matrix(
+    matrix: ArrayLike, name: str, symmetry_rtol: float = SYMMETRY_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
+    """The checks of a symmetric positive definite matrix that cost ``O(n^2)``, no factorisation.
+
+    Shape, real finite entries, magnitude, symmetry, a positive diagonal and every 2 x 2
+    principal block definite (``|M_ij| < sqrt(M_ii M_jj)``). These are necessary, not
+    sufficient: definiteness itself is proven by a Cholesky factorisation
+    (:func:`cholesky_factor`), made where a factor is needed (a model given by its stiffness,
+    and the blocks of ``W`` a method factors), so that no check costs more than the work it
+    guards.
+
     Parameters
     ----------
     matrix : array_like, shape (n, n)
@@ -142,16 +173,17 @@ def checked_cholesky(
     ------
     InvalidInputError
         Wrong shape, complex values, NaN or inf, entries beyond :data:`MAX_MAGNITUDE` (or all
-        below its inverse), asymmetry beyond ``symmetry_rtol``, or a singular matrix.
+        below its inverse), asymmetry beyond ``symmetry_rtol``, or a 2 x 2 principal block
+        singular to working precision.
     NotPositiveDefiniteError
-        The Cholesky factorisation fails; the message gives the failed pivot and the smallest
-        eigenvalue.
+        A diagonal entry that is not positive, or an indefinite 2 x 2 principal block.
 
     Returns
     -------
-    array : ndarray, shape (n, n)
-    factor : ndarray, shape (n, n)
-        Lower triangular ``L`` with ``L L^T = array``.
+    given : ndarray, shape (n, n)
+        The matrix as given, as a float array.
+    symmetric : ndarray, shape (n, n)
+        ``given`` itself when it is exactly symmetric, else its symmetric part.
     """
     array = finite_array(matrix, name, 2, magnitude=MAX_MAGNITUDE)
     n, m = array.shape
@@ -169,25 +201,85 @@ def checked_cholesky(
             f"{name}'s largest entry is {scale:.3g}, below {1.0 / MAX_MAGNITUDE:g}: its products "
             f"with forces and displacements would underflow; rescale the units"
         )
-    asymmetry = np.max(np.abs(array - array.T)) / scale
+    asymmetry = (
+        max(float(np.max(np.abs(array[rows] - array[:, rows].T))) for rows in _row_blocks(n))
+        / scale
+    )
     if asymmetry > symmetry_rtol:
         raise InvalidInputError(
             f"{name} is not symmetric: max|M - M^T| / max|M| = {asymmetry:.3g} > {symmetry_rtol:g}"
         )
+    symmetric = array
     if asymmetry > 0.0:
         warnings.warn(
             f"{name} symmetrised: relative asymmetry {asymmetry:.3g} is within {symmetry_rtol:g}",
             SymmetrizedWarning,
             stacklevel=3,
         )
-        array = 0.5 * (array + array.T)
+        symmetric = 0.5 * (array + array.T)
+    _check_principal_pairs(symmetric, name)
+    return array, symmetric
+
+
+def _row_blocks(n: int) -> list[slice]:
+    return [slice(start, start + _CHECK_ROWS) for start in range(0, n, _CHECK_ROWS)]
+
+
+def _smallest_eigenvalue(array: np.ndarray) -> float:
+    """The smallest eigenvalue (for an error message: the matrix is refused already)."""
+    return float(scipy.linalg.eigvalsh(array, subset_by_index=[0, 0], check_finite=False)[0])
+
+
+def _check_principal_pairs(array: np.ndarray, name: str) -> None:
+    """Refuse a diagonal entry <= 0 or a 2 x 2 principal block that is not definite."""
+    diagonal = array.diagonal()
+    if np.any(diagonal <= 0.0):
+        i = int(np.argmin(diagonal))
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive definite: diagonal entry {i} is {diagonal[i]:.6g}; "
+            f"smallest eigenvalue {_smallest_eigenvalue(array):.6g}"
+        )
+    inverse_root = 1.0 / np.sqrt(diagonal)
+    worst, pair = 0.0, (0, 0)
+    for rows in _row_blocks(array.shape[0]):  # |M_ij| / sqrt(M_ii M_jj) off the diagonal
+        block = np.abs(array[rows]) * inverse_root[rows, None] * inverse_root[None, :]
+        local = np.arange(block.shape[0])
+        block[local, local + rows.start] = 0.0
+        k = int(np.argmax(block))
+        if block.flat[k] > worst:
+            worst = float(block.flat[k])
+            pair = (rows.start + k // block.shape[1], k % block.shape[1])
+    i, j = pair
+    if worst > 1.0:
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive definite: its 2x2 principal block on freedoms {i} and {j} "
+            f"has |M_ij| = {worst:.6g} sqrt(M_ii M_jj); "
+            f"smallest eigenvalue {_smallest_eigenvalue(array):.6g}"
+        )
+    if 1.0 - worst * worst <= 1e-14:
+        raise InvalidInputError(
+            f"{name} is singular to working precision: freedoms {i} and {j} have "
+            f"|M_ij| = sqrt(M_ii M_jj) (relative pivot {max(1.0 - worst * worst, 0.0):.3g})"
+        )
+
+
+def cholesky_factor(array: np.ndarray, name: str) -> np.ndarray:
+    """The lower Cholesky factor of a symmetric ``array``, with errors that name ``name``.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        The factorisation fails; the message gives the failed pivot and the smallest
+        eigenvalue.
+    InvalidInputError
+        A pivot at or below ``1e-14`` times the largest (singular to working precision).
+    """
     try:
         factor = scipy.linalg.cholesky(array, lower=True, check_finite=False)
     except np.linalg.LinAlgError as exc:
-        smallest = scipy.linalg.eigvalsh(array, subset_by_index=[0, 0], check_finite=False)[0]
         raise NotPositiveDefiniteError(
             f"{name} is not positive definite: Cholesky failed ({exc}); "
-            f"smallest eigenvalue {smallest:.6g}"
+            f"smallest eigenvalue {_smallest_eigenvalue(array):.6g}"
         ) from None
     pivots = np.diag(factor) ** 2
     if pivots.min() <= 1e-14 * pivots.max():
@@ -195,7 +287,7 @@ def checked_cholesky(
             f"{name} is singular to working precision: smallest Cholesky pivot {pivots.min():.3g}, "
             f"largest {pivots.max():.3g}"
         )
-    return array, factor
+    return factor
 
 
 @dataclass(frozen=True)
@@ -259,6 +351,12 @@ class ReducedModel:
     Give exactly one of ``flexibility`` (``U = R P``) or ``stiffness`` (``P = K U``); the other is
     computed only when an algorithm asks for it, by a Cholesky factorisation.
 
+    The matrix is checked at a cost of ``O(n^2)`` (:func:`checked_matrix`). A stiffness is also
+    factored at once (its factor gives ``U = K^-1 P`` and is kept); a flexibility's definiteness
+    is proven by the factorisations that use it (``K`` on first use, and the blocks of ``W`` a
+    method factors), each raising :class:`~contactqp.errors.NotPositiveDefiniteError` if the
+    matrix it meets is not definite.
+
     Parameters
     ----------
     flexibility, stiffness : array_like, shape (n, n)
@@ -269,7 +367,7 @@ class ReducedModel:
     coordinates : array_like, shape (n_nodes, d), optional
         Node coordinates in metres (needed by geometric obstacles).
     symmetry_rtol : float
-        See :func:`check_spd_matrix`.
+        See :func:`checked_matrix`.
     """
 
     def __init__(
@@ -286,17 +384,18 @@ class ReducedModel:
             name, given = "stiffness", stiffness
         else:
             raise InvalidInputError("give exactly one of flexibility or stiffness")
-        matrix, factor = checked_cholesky(given, name, symmetry_rtol)
-        given = finite_array(given, name, 2)  # validated above; kept when it was symmetrised
+        # O(n^2) checks only: a Cholesky factorisation proves definiteness where a factor is
+        # needed (below for a stiffness, whose U = K^-1 P needs it; for a flexibility, when K is
+        # asked for), and the methods' factorisations prove it on the blocks of W they use
+        given, matrix = checked_matrix(given, name, symmetry_rtol)
         #: The matrix exactly as given (``flexibility`` or ``stiffness``): the certificates'
         #: equilibrium is judged on it, not on the symmetric part the solvers use.
-        self.as_given = matrix if np.array_equal(given, matrix) else given
+        self.as_given = given
         self._flexibility = matrix if name == "flexibility" else None
         self._stiffness = matrix if name == "stiffness" else None
-        # a stiffness always needs its factor (U = K^-1 P): keep the validation's; a flexibility
-        # needs one only if K is asked for, so its (n x n) factor is not held meanwhile
+        # a flexibility's factor is made only if K is asked for, so no (n x n) factor is held
         self._factor: tuple[np.ndarray, bool] | None = (
-            (factor, True) if name == "stiffness" else None
+            (cholesky_factor(matrix, name), True) if name == "stiffness" else None
         )
         n = matrix.shape[0]
         counts = self._dof_counts(dofs_per_node, n)
@@ -354,8 +453,8 @@ class ReducedModel:
         return np.arange(self.offsets[node], self.offsets[node + 1])
 
     def _cholesky(self) -> tuple[np.ndarray, bool]:
-        if self._factor is None:  # built from a flexibility, whose factor was not kept
-            self._factor = scipy.linalg.cho_factor(self.flexibility, lower=True, check_finite=False)
+        if self._factor is None:  # built from a flexibility: factored on first need
+            self._factor = (cholesky_factor(self.flexibility, "flexibility"), True)
         return self._factor
 
     @property
@@ -371,7 +470,7 @@ class ReducedModel:
     def asymmetry(self) -> float:
         """Relative asymmetry ``max|M - M^T| / max|M|`` of the matrix as given (0 if symmetric)."""
         given = self.as_given
-        if given is (self._flexibility if self._flexibility is not None else self._stiffness):
+        if given is (self._flexibility if self.given == "flexibility" else self._stiffness):
             return 0.0
         return float(np.max(np.abs(given - given.T)) / np.max(np.abs(given)))
 
