@@ -190,7 +190,8 @@ class LazyGroup(click.Group):
         rows = []
         for name in names:
             if name in self.lazy:
-                text = click.utils.make_default_short_help(self.lazy[name][1], limit)
+                # shortened as click shortens a command's own help
+                text = click.Command(name, help=self.lazy[name][1]).get_short_help_str(limit)
             else:
                 text = self.commands[name].get_short_help_str(limit)
             rows.append((name, text))
