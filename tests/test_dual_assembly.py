@@ -128,11 +128,11 @@ def test_a_stiffness_is_factored_at_once():
         cq.ReducedModel(stiffness=indefinite_with_definite_pairs())
 
 
-def test_the_row_blocks_of_the_checks_cover_a_large_matrix(monkeypatch):
-    # a symmetry defect and a bad pair in the last block of rows are found
+def test_the_tiles_of_the_checks_cover_a_large_matrix(monkeypatch):
+    # a symmetry defect and a bad pair in the last tiles are found
     from contactqp.core import model as model_module
 
-    monkeypatch.setattr(model_module, "_CHECK_ROWS", 7)
+    monkeypatch.setattr(model_module, "_TILE", 7)
     R = spd(20, seed=1)
     bad = R.copy()
     bad[19, 3] += 1.0

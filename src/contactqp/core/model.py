@@ -116,8 +116,8 @@ def iteration_cap(value: object, name: str = "max_iter") -> int:
     return int(value)
 
 
-#: Rows handled at a time by the O(n^2) checks of :func:`checked_matrix` (bounded temporaries).
-_CHECK_ROWS = 512
+#: Side of the square tiles that the O(n^2) checks of :func:`checked_matrix` read at a time.
+_TILE = 256
 
 
 def check_spd_matrix(
@@ -185,13 +185,23 @@ def checked_matrix(
     symmetric : ndarray, shape (n, n)
         ``given`` itself when it is exactly symmetric, else its symmetric part.
     """
-    array = finite_array(matrix, name, 2, magnitude=MAX_MAGNITUDE)
+    array = real_array(matrix, name)
+    if array.ndim != 2:
+        raise InvalidInputError(f"{name} must be 2-D, got shape {array.shape}")
     n, m = array.shape
     if n != m or n == 0:
         raise InvalidInputError(
             f"{name} must be a non-empty square matrix, got shape {array.shape}"
         )
-    scale = np.max(np.abs(array))
+    low, high = float(np.min(array)), float(np.max(array))  # NaN and inf show in either
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise InvalidInputError(f"{name} contains NaN or inf (shape {array.shape})")
+    scale = max(-low, high)
+    if scale > MAX_MAGNITUDE:
+        raise InvalidInputError(
+            f"{name} has an entry of magnitude {scale:.3g}, beyond {MAX_MAGNITUDE:g}: "
+            f"its products with forces and displacements would overflow; rescale the units"
+        )
     if scale == 0.0:
         raise InvalidInputError(
             f"{name} is singular: all its entries are zero (shape {array.shape})"
@@ -201,10 +211,11 @@ def checked_matrix(
             f"{name}'s largest entry is {scale:.3g}, below {1.0 / MAX_MAGNITUDE:g}: its products "
             f"with forces and displacements would underflow; rescale the units"
         )
-    asymmetry = (
-        max(float(np.max(np.abs(array[rows] - array[:, rows].T))) for rows in _row_blocks(n))
-        / scale
-    )
+    diagonal = array.diagonal()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse_root = np.where(diagonal > 0.0, 1.0 / np.sqrt(diagonal), 0.0)
+    asymmetry, correlation, (i, j) = _tile_checks(array, inverse_root)
+    asymmetry /= scale
     if asymmetry > symmetry_rtol:
         raise InvalidInputError(
             f"{name} is not symmetric: max|M - M^T| / max|M| = {asymmetry:.3g} > {symmetry_rtol:g}"
@@ -217,50 +228,59 @@ def checked_matrix(
             stacklevel=3,
         )
         symmetric = 0.5 * (array + array.T)
-    _check_principal_pairs(symmetric, name)
+    if np.any(diagonal <= 0.0):
+        k = int(np.argmin(diagonal))
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive definite: diagonal entry {k} is {diagonal[k]:.6g}; "
+            f"smallest eigenvalue {_smallest_eigenvalue(symmetric):.6g}"
+        )
+    if correlation > 1.0:
+        raise NotPositiveDefiniteError(
+            f"{name} is not positive definite: its 2x2 principal block on freedoms {i} and {j} "
+            f"has |M_ij| = {correlation:.6g} sqrt(M_ii M_jj); "
+            f"smallest eigenvalue {_smallest_eigenvalue(symmetric):.6g}"
+        )
+    if 1.0 - correlation * correlation <= 1e-14:
+        raise InvalidInputError(
+            f"{name} is singular to working precision: freedoms {i} and {j} have "
+            f"|M_ij| = sqrt(M_ii M_jj) (relative pivot {max(1.0 - correlation**2, 0.0):.3g})"
+        )
     return array, symmetric
 
 
-def _row_blocks(n: int) -> list[slice]:
-    return [slice(start, start + _CHECK_ROWS) for start in range(0, n, _CHECK_ROWS)]
+def _tile_checks(
+    array: np.ndarray, inverse_root: np.ndarray
+) -> tuple[float, float, tuple[int, int]]:
+    """``(max|M - M^T|, max |S_ij|, (i, j))`` with ``S = (M + M^T) / 2`` scaled by
+    ``inverse_root`` on both sides, off its diagonal: one pass over the upper triangle's
+    tiles, each read with its mirror (no full-size temporary, cache-sized reads)."""
+    n = array.shape[0]
+    asymmetry, worst, pair = 0.0, 0.0, (0, 0)
+    for i in range(0, n, _TILE):
+        rows = slice(i, i + _TILE)
+        for j in range(i, n, _TILE):
+            cols = slice(j, j + _TILE)
+            upper, lower = array[rows, cols], array[cols, rows].T
+            if np.array_equal(upper, lower):
+                tile = np.abs(upper)
+            else:
+                asymmetry = max(asymmetry, float(np.max(np.abs(upper - lower))))
+                tile = np.abs(upper + lower)
+                tile *= 0.5
+            tile *= inverse_root[None, cols]
+            if i == j:
+                np.fill_diagonal(tile, 0.0)
+            scaled = tile.max(axis=1) * inverse_root[rows]  # row r: max_c |S_rc|
+            r = int(np.argmax(scaled))
+            if scaled[r] > worst:
+                worst = float(scaled[r])
+                pair = (i + r, j + int(np.argmax(tile[r])))
+    return asymmetry, worst, pair
 
 
 def _smallest_eigenvalue(array: np.ndarray) -> float:
     """The smallest eigenvalue (for an error message: the matrix is refused already)."""
     return float(scipy.linalg.eigvalsh(array, subset_by_index=[0, 0], check_finite=False)[0])
-
-
-def _check_principal_pairs(array: np.ndarray, name: str) -> None:
-    """Refuse a diagonal entry <= 0 or a 2 x 2 principal block that is not definite."""
-    diagonal = array.diagonal()
-    if np.any(diagonal <= 0.0):
-        i = int(np.argmin(diagonal))
-        raise NotPositiveDefiniteError(
-            f"{name} is not positive definite: diagonal entry {i} is {diagonal[i]:.6g}; "
-            f"smallest eigenvalue {_smallest_eigenvalue(array):.6g}"
-        )
-    inverse_root = 1.0 / np.sqrt(diagonal)
-    worst, pair = 0.0, (0, 0)
-    for rows in _row_blocks(array.shape[0]):  # |M_ij| / sqrt(M_ii M_jj) off the diagonal
-        block = np.abs(array[rows]) * inverse_root[rows, None] * inverse_root[None, :]
-        local = np.arange(block.shape[0])
-        block[local, local + rows.start] = 0.0
-        k = int(np.argmax(block))
-        if block.flat[k] > worst:
-            worst = float(block.flat[k])
-            pair = (rows.start + k // block.shape[1], k % block.shape[1])
-    i, j = pair
-    if worst > 1.0:
-        raise NotPositiveDefiniteError(
-            f"{name} is not positive definite: its 2x2 principal block on freedoms {i} and {j} "
-            f"has |M_ij| = {worst:.6g} sqrt(M_ii M_jj); "
-            f"smallest eigenvalue {_smallest_eigenvalue(array):.6g}"
-        )
-    if 1.0 - worst * worst <= 1e-14:
-        raise InvalidInputError(
-            f"{name} is singular to working precision: freedoms {i} and {j} have "
-            f"|M_ij| = sqrt(M_ii M_jj) (relative pivot {max(1.0 - worst * worst, 0.0):.3g})"
-        )
 
 
 def cholesky_factor(array: np.ndarray, name: str) -> np.ndarray:
