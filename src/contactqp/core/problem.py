@@ -153,7 +153,8 @@ class DualForm:
     Attributes
     ----------
     W : ndarray, shape (m, m)
-        Delassus operator ``A R A^T`` (m/N).
+        Delassus operator ``A R A^T`` (m/N), exactly symmetric; read-only (a view of ``R``) when
+        ``A`` is the identity.
     b : ndarray, shape (m,)
         ``A R P - Delta``: the interpenetration the free deformation would cause (m).
     free_displacements : ndarray, shape (n,)

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core.fastened import FastenedProblem
 from ..core.model import iteration_cap, positive_tolerance, warm_start
-from ..core.operators import as_operator
+from ..core.operators import SymmetricDenseOperator, as_operator
 from .box_qp import solve_box_qp
 from .fastened import solve_fastened_box_qp
 
@@ -30,6 +30,21 @@ def cold_start(W, b):
         rows = slice(start, start + _ROW_CHUNK)
         row_sums[rows] = np.abs(W.block(rows, None)).sum(axis=1)
     return np.maximum(b, 0.0) / row_sums
+
+
+def _operator(W):
+    """``W`` as an operator; a dense C-ordered ``float64`` one as a symmetric operator (the dual's
+    ``W`` is exactly symmetric, :class:`~contactqp.core.problem.DualForm`): its vector products
+    read one triangle."""
+    if (
+        isinstance(W, np.ndarray)
+        and W.dtype == np.float64
+        and W.flags.c_contiguous
+        and W.ndim == 2
+        and W.shape[0] == W.shape[1]
+    ):
+        return SymmetricDenseOperator(W)
+    return as_operator(W)
 
 
 def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 500):
@@ -66,7 +81,7 @@ def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 50
         r0 = warm_start(r0, problem.n_constraints)
     start = time.perf_counter()
     dual = problem.dual()
-    W = as_operator(dual.W)
+    W = _operator(dual.W)
     if r0 is None:
         r0 = cold_start(W, dual.b)
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite x
