@@ -2,7 +2,7 @@
 
 The flexibility of a regular grid of equal cells on an elastic half-space is a convolution: the
 displacement of cell ``i`` under a force on cell ``j`` depends on their offset only. The
-operators here hold the kernel's transform and apply ``W`` with real FFTs (``scipy.fft``), in
+operators here hold the kernel's transform and apply ``W`` with real FFTs (see "Which FFT"), in
 ``O(n log n)`` time and ``O(n)`` memory, where the dense matrix of
 :func:`~contactqp.compliance.normal_influence` takes ``O(n^2)`` of both.
 
@@ -17,16 +17,16 @@ Non-periodic (a finite grid on an infinite half-space)
 
 Periodic (the grid is one period of the surface, as for rough surfaces)
     The periodic sum of the cell kernel diverges (it decays as ``1 / r``). The operator uses
-    the spectral (Westergaard) kernel instead, as Stanley & Kato and Tamaas do: a traction mode
-    of wave vector ``q`` displaces the surface by the half-space's surface Green's function at
-    ``q`` (below), the tractions being the forces of the cells divided by the cell area and the
-    displacements collocated at the cell centres. A mode of the grid (``p0 cos(q x)``
-    sampled at the centres) is then displaced by exactly Westergaard's
-    ``2 p0 cos(q x) / (E* |q|)``. The mean (``q = 0``) mode of the displacement is
-    undetermined (a periodic half-space under a net force sinks without limit): it is set to 0,
-    so ``W`` is positive semidefinite with the constant vector in its null space, and a
-    periodic contact problem is posed with a fixed load, the mean approach being the unknown
-    that balances it. With ``G = E / (2 (1 + nu))``, ``E* = E / (1 - nu^2)``:
+    the spectral (Westergaard) kernel instead, as Stanley & Kato [Stanley1997]_ and Tamaas
+    do: a traction mode of wave vector ``q`` displaces the surface by the half-space's surface
+    Green's function at ``q`` (below), the tractions being the forces of the cells divided by
+    the cell area and the displacements collocated at the cell centres. A mode of the grid
+    (``p0 cos(q x)`` sampled at the centres) is then displaced by exactly Westergaard's
+    ``2 p0 cos(q x) / (E* |q|)`` [Westergaard1939]_. The mean (``q = 0``) mode of the
+    displacement is undetermined (a periodic half-space under a net force sinks without
+    limit): it is set to 0, so ``W`` is positive semidefinite with the constant vector in its
+    null space, and a periodic contact problem is posed with a fixed load, the mean approach
+    being the unknown that balances it. With ``G = E / (2 (1 + nu))``, ``E* = E / (1 - nu^2)``:
 
     .. math::
 
@@ -37,7 +37,7 @@ Periodic (the grid is one period of the surface, as for rough surfaces)
         \\hat u_z \\mathrel{+}= \\frac{i (1 - 2\\nu)}{2 G |q|^2} (q_x \\hat p_x + q_y \\hat p_y)
 
     (``u_y`` by exchanging ``x`` and ``y``): the transforms of Cerruti's and Boussinesq's
-    point-force solutions (``z`` the outward normal, the convention of
+    point-force solutions [Johnson1985b]_ (``z`` the outward normal, the convention of
     :func:`~contactqp.compliance.influence_matrix`). The odd terms vanish on a grid's Nyquist
     frequencies, where ``q`` and ``-q`` are the same mode, which keeps ``W`` real and symmetric.
 
