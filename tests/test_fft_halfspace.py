@@ -53,6 +53,7 @@ def test_normal_products_equal_the_dense_love_matrix(nx, ny, dx, dy, fft):
     F = rng.standard_normal((nx * ny, 3))
     assert relative(W @ f, R @ f) < PRODUCT_RTOL
     assert (W @ F).shape == F.shape
+    assert (W @ np.empty((nx * ny, 0))).shape == (nx * ny, 0)
     assert relative(W @ F, R @ F) < PRODUCT_RTOL
     assert relative(W @ np.abs(f), R @ np.abs(f)) < PRODUCT_RTOL  # one-signed, like pressures
 

@@ -213,6 +213,8 @@ class _LatticeOperator(Operator):
         if np.iscomplexobj(x):
             raise InvalidInputError("the operator takes real vectors, got complex ones")
         columns = x.shape[1:]
+        if x.size == 0:  # no columns
+            return np.zeros(x.shape)
         engine = self._engine
         c = self._components
         if c == 1:
