@@ -135,7 +135,7 @@ def _workers(value) -> int | None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value == 0:
         raise InvalidInputError(
-            f"workers must be None or a nonzero integer (threads of scipy.fft), got {value!r}"
+            f"workers must be None or a nonzero integer (threads of the FFTs), got {value!r}"
         )
     return int(value)
 
@@ -367,6 +367,17 @@ class HalfSpaceOperator(_LatticeOperator):
         the module notes; :mod:`scipy.fft` if pyFFTW, the ``fft`` extra, is not installed).
         The attribute ``fft`` says which.
 
+    Attributes
+    ----------
+    components : str
+        ``"normal"`` or ``"full"``.
+    periodic : bool
+        Whether the grid is one period.
+    grid_shape, cell : tuple
+        ``(nx, ny)`` and ``(dx, dy)``.
+    fft : str
+        The FFT library of the products, ``"scipy"`` or ``"pyfftw"``.
+
     Raises
     ------
     InvalidInputError
@@ -573,8 +584,12 @@ def composite_modulus(young1: float, poisson1: float, young2: float, poisson2: f
 
     Examples
     --------
-    >>> composite_modulus(210e9, 0.3, float("inf"), 0.0) == 210e9 / (1 - 0.3**2)
-    True
+    A steel ball on a rigid flat, and on an aluminium one (GPa):
+
+    >>> round(composite_modulus(210e9, 0.3, float("inf"), 0.0) / 1e9, 2)
+    230.77
+    >>> round(composite_modulus(210e9, 0.3, 70e9, 0.33) / 1e9, 2)
+    58.61
     """
     compliance = 0.0
     for young, poisson, which in ((young1, poisson1, "1"), (young2, poisson2, "2")):
