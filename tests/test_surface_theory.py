@@ -179,3 +179,9 @@ def test_wavy_surface_in_partial_contact_is_johnsons():
     # the square-root edge is cell-averaged: 0.8 % of p* near the edge (0.4 % at 1024 cells)
     assert np.max(np.abs(pressure - johnson)[inner]) < 2e-3 * P_STAR
     assert np.max(np.abs(pressure - johnson)) < 2e-2 * P_STAR
+
+
+def test_a_periodic_surface_takes_a_load_not_an_approach():
+    W = HalfSpaceOperator(8, 8, 1e-5, 1e-5, E, NU, periodic=True)
+    with pytest.raises(cq.InvalidInputError, match="periodic compliance .* give the load"):
+        cq.SurfaceProblem(W, np.zeros(64), approach=1e-7)

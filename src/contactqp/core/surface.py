@@ -92,7 +92,8 @@ class SurfaceProblem:
     ------
     InvalidInputError
         Not exactly one of ``load`` and ``approach``; a load that is not a positive finite
-        number, an approach that is not finite; a separation that is not a finite 1-D array
+        number, an approach that is not finite or given with a periodic compliance (whose
+        mean displacement is free: give the load); a separation that is not a finite 1-D array
         of the compliance's size; a compliance that is not a square matrix or operator.
     """
 
@@ -128,6 +129,11 @@ class SurfaceProblem:
                 raise InvalidInputError(f"load must be a positive finite force in N, got {load!r}")
         if approach is not None:
             approach = _finite_number(approach, "approach", "a finite length in m")
+            if getattr(operator, "periodic", False):
+                raise InvalidInputError(
+                    "approach: a periodic compliance has no stiffness against a uniform "
+                    "approach (its mean displacement is free); give the load instead"
+                )
         self.compliance: Operator = operator
         self.separation: np.ndarray = s
         self.load: float | None = load

@@ -74,7 +74,7 @@ def solve_constrained_cg(
     problem: SurfaceProblem, *, r0=None, tol: float = 1e-10, max_iter: int = MAX_ITER
 ) -> SurfaceResult:
     """Solve a :class:`~contactqp.core.surface.SurfaceProblem` by constrained conjugate
-    gradients [PK1999]_, at its fixed load or fixed approach.
+    gradients (Polonsky and Keer, 1999), at its fixed load or fixed approach.
 
     Parameters
     ----------
