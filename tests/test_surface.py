@@ -77,6 +77,7 @@ def test_fixed_approach_equals_the_active_set_solve_of_the_same_model(n, rough):
     np.testing.assert_allclose(result.displacements, W @ result.forces, rtol=1e-12)
     # the start, one per step, a fresh one after a projection, the certificate's
     assert result.iterations + 2 <= operator.products <= 2 * result.iterations + 3
+    assert result.info["products"] == operator.products - 1  # all but the certificate's
 
 
 @pytest.mark.parametrize("n, rough", [(12, 0.0), (18, 3e-7)])
@@ -232,3 +233,31 @@ def test_a_surface_method_does_not_take_other_problems_nor_they_it():
         cq.solve_gaps(W, np.zeros(s.size), s, method="constrained-cg")
     with pytest.raises(cq.InvalidInputError, match="does not solve surface problems"):
         cq.solve(cq.SurfaceProblem(W, s, load=1.0), "active-set")
+
+
+@pytest.mark.parametrize("fraction", [0.02, 0.2])
+def test_the_two_methods_agree_on_a_rough_periodic_surface(fraction):
+    from contactqp.compliance.fft_halfspace import HalfSpaceOperator
+
+    n, dx = 32, 1e-5
+    x, y = grid(n, n, dx, dx)
+    rng = np.random.default_rng(1)
+    h = np.zeros(n * n)
+    for k in range(1, 5):  # a few random Fourier modes: many contact patches
+        for m in range(-4, 5):
+            phase = rng.uniform(0, 2 * np.pi)
+            h += (
+                rng.standard_normal()
+                / (k * k + m * m)
+                * np.cos(2 * np.pi * (k * x + m * y) / (n * dx) + phase)
+            )
+    h *= 1e-7 / h.std()
+    W = HalfSpaceOperator(n, n, dx, dx, E, NU, periodic=True)
+    load = fraction * np.pi * E / (1 - NU**2) * 1e-7 * n * dx  # a fraction of full contact's
+    problem = cq.SurfaceProblem(W, h.max() - h, load=load)
+    cg = cq.solve(problem, tol=1e-12)
+    active = cq.solve(problem, "surface-active-set", tol=1e-12)
+    assert cg.success and active.success, (cg.message, active.message)
+    assert 0 < cg.contact_fraction < 0.5 and cg.contact_fraction == active.contact_fraction
+    np.testing.assert_allclose(cg.forces, active.forces, rtol=0, atol=1e-9 * active.forces.max())
+    assert cg.approach == pytest.approx(active.approach, rel=1e-10)

@@ -107,6 +107,7 @@ def solve_constrained_cg(
     load, fixed_load = problem.load, problem.load is not None
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite r
         r, u = _start(problem, r0)
+        products = 1 if np.any(r) else 0  # the start's (none when nothing touches)
         fresh = True  # u is the product W r (not updated from the previous step's)
         direction = np.zeros_like(r)
         previous, conjugate = 1.0, False
@@ -126,6 +127,7 @@ def solve_constrained_cg(
             if residual <= tol:
                 if not fresh:  # judge the forces by their own product, not the updated one
                     u, fresh = W @ r, True
+                    products += 1
                     continue
                 converged = True
                 message = f"converged in {iterations} iterations (residual {residual:.1e})"
@@ -143,6 +145,7 @@ def solve_constrained_cg(
                 direction = gc
             previous = G
             q = W @ direction
+            products += 1
             projected = q - np.mean(q[contact]) if fixed_load else q
             curvature = float(np.where(contact, projected, 0.0) @ direction)
             if not curvature > 0.0:
@@ -166,6 +169,7 @@ def solve_constrained_cg(
                 r *= scale
             if moved:
                 u, fresh = W @ r, True
+                products += 1
             else:  # r stayed on the line: so did its product (one product this step)
                 u, fresh = scale * (u - step * q), False
     return problem.make_result(
@@ -176,5 +180,5 @@ def solve_constrained_cg(
         message=message,
         iterations=iterations,
         seconds=time.perf_counter() - start,
-        info={"residual": residual},
+        info={"residual": residual, "products": products},  # the certificate's not counted
     )

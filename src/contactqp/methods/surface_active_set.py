@@ -8,6 +8,9 @@ on the load ``L(delta) = sum r(delta)``: increasing, and linear while the contac
 the same, with slope ``1^T W_CC^{-1} 1`` on the contact ``C``; the root is bracketed by the
 approach at which no point touches, ``min s``, and ``min s + max diag(W) P``, at which one
 point alone would carry the load (``|W_ij| <= max diag(W)`` for a positive definite ``W``).
+A periodic compliance (an operator whose ``periodic`` is True) displaces the surface with zero
+mean, so the contact is full at ``delta = mean(s)``, where its block is singular: the bracket
+stops there, and a load that needs full contact is beyond this method.
 
 It factors blocks of ``W`` (:meth:`~contactqp.core.operators.Operator.block`): a cross-check for
 problems of a few thousand points, independent of the conjugate gradients of
@@ -89,6 +92,9 @@ def solve_surface_active_set(
     low = float(np.min(s))
     high = low + float(np.max(W.diagonal())) * load
     approach = high
+    if getattr(W, "periodic", False):  # displacements of zero mean: full contact at mean(s),
+        high = min(high, float(np.mean(s)))  # where W's block is singular (never tried)
+        approach = 0.5 * (low + high)
     if r is not None and np.any(r > 0):  # the warm start's mean gap on its support
         guess = float(np.mean((s + W @ r)[r > 0]))
         approach = guess if low < guess < high else high
