@@ -45,6 +45,7 @@ __all__ = ["solve_constrained_cg", "MAX_ITER"]
 
 #: Default budget of iterations.
 MAX_ITER = 5000
+_TINY = np.finfo(float).tiny
 
 
 def _start(problem: SurfaceProblem, r0) -> tuple[np.ndarray, np.ndarray]:
@@ -116,14 +117,15 @@ def solve_constrained_cg(
         converged, iterations, residual = False, 0, np.inf
         message = f"reached max_iter = {max_iter} iterations"
         while True:
-            contact = r > 0.0
+            on = (r > 0.0).astype(float)  # 1 on the contact, 0 off it
+            count = float(np.sum(on))
             g = s + u
             if fixed_load:
-                approach = float(np.mean(g[contact]))
+                approach = float(g @ on) / count
             g -= approach
-            length = max(float(np.max(np.abs(u))), abs(approach - lowest), np.finfo(float).tiny)
-            gc = np.where(contact, g, 0.0)
-            residual = max(float(np.max(np.abs(gc))), float(np.max(-g, initial=0.0))) / length
+            length = max(float(np.max(u)), -float(np.min(u)), abs(approach - lowest), _TINY)
+            gc = g * on
+            residual = max(float(np.max(gc)), -float(np.min(gc)), -float(np.min(g))) / length
             if residual <= tol:
                 if not fresh:  # judge the forces by their own product, not the updated one
                     u, fresh = W @ r, True
@@ -140,14 +142,17 @@ def solve_constrained_cg(
             iterations += 1
             G = float(gc @ gc)
             if conjugate:  # t = g + (G / G_old) t_old on the contact, 0 off it
-                direction = np.where(contact, gc + (G / previous) * direction, 0.0)
+                direction *= G / previous
+                direction += gc
+                direction *= on
             else:
-                direction = gc
+                direction = gc.copy()
             previous = G
             q = W @ direction
             products += 1
-            projected = q - np.mean(q[contact]) if fixed_load else q
-            curvature = float(np.where(contact, projected, 0.0) @ direction)
+            curvature = float(q @ direction)  # the direction is 0 off the contact
+            if fixed_load:  # q less its mean on the contact
+                curvature -= float(q @ on) / count * float(np.sum(direction))
             if not curvature > 0.0:
                 message = (
                     f"stopped after {iterations} iterations: no descent along the search "
@@ -155,23 +160,25 @@ def solve_constrained_cg(
                 )
                 break
             step = float(gc @ direction) / curvature
-            r = r - step * direction
+            r -= step * direction
+            moved = float(np.min(r)) < 0.0
             joining = (r <= 0.0) & (g < 0.0)  # penetrating points without force
             conjugate = not np.any(joining)
-            moved = not conjugate or bool(np.any(r < 0.0))
-            if moved:  # the projection takes r off the line, and its product with it
-                r = np.maximum(r, 0.0)
+            if moved or not conjugate:  # the projection takes r off the line, and W r with it
+                np.maximum(r, 0.0, out=r)
                 r[joining] -= step * g[joining]
             scale = 1.0
             if fixed_load:
                 assert load is not None
                 scale = load / float(np.sum(r))
                 r *= scale
-            if moved:
+            if moved or not conjugate:
                 u, fresh = W @ r, True
                 products += 1
             else:  # r stayed on the line: so did its product (one product this step)
-                u, fresh = scale * (u - step * q), False
+                u -= step * q
+                u *= scale
+                fresh = False
     return problem.make_result(
         r,
         approach,
