@@ -109,7 +109,7 @@ def test_flat_punch_against_boussinesq():
         np.testing.assert_array_equal(result.contact, face)  # the face, nothing else
         error = result.load / force - 1
         # the uniform pressure of the edge cells misses part of the singular edge load: a
-        # first-order error, -0.23 dx / a here; a quarter of a cell per radius bounds it
+        # first-order error, -0.12 dx / a here; a quarter of a cell per radius bounds it
         assert abs(error) < 0.25 * dx / radius
         errors.append(error)
         # the centre: p(0) = F / (2 pi a^2), the same first-order error
