@@ -8,8 +8,10 @@ transform and one real inverse transform, cropped. Timed three ways on the same 
   included, ``irfftn``, crop and copy);
 * ``pyfftw``: ``W @ f`` with ``fft="pyfftw"`` (the library's default when pyFFTW is
   installed: ``FFTW_ESTIMATE`` plans on aligned buffers, made with the operator);
-* ``measure``: bare pyFFTW ``FFTW`` objects planned with ``FFTW_MEASURE`` (about 1 s of
-  planning per size), the best case for FFTW.
+* ``measure``: bare 2-D pyFFTW ``FFTW`` objects planned with ``FFTW_MEASURE`` (about 1 s of
+  planning per size; not pruned), for comparison.
+
+Then the same for the periodic operator of the same number of points (no padding).
 
 CPU time (``time.process_time``), runs alternated between the contenders, median of the
 repetitions. Run from the repository root::
@@ -57,46 +59,55 @@ def _pyfftw_product(padded_shape):
     return product
 
 
+def _row(label, contenders, reference, repeat):
+    for name, run in contenders.items():  # the same answer, and warm
+        answer = np.asarray(run()).reshape(reference.shape)
+        error = np.max(np.abs(answer - reference)) / np.max(np.abs(reference))
+        assert error < 1e-12, (name, error)
+    times: dict[str, list[float]] = {name: [] for name in contenders}
+    for _ in range(repeat):
+        for name, run in contenders.items():
+            start = time.process_time()
+            run()
+            times[name].append(time.process_time() - start)
+    median = {name: statistics.median(values) * 1e3 for name, values in times.items()}
+    cells = [f"{median[name]:>8.2f}ms" if name in median else f"{'-':>10}" for name in
+             ("scipy", "pyfftw", "measure")]  # fmt: skip
+    ratio = f"{median['pyfftw'] / median['scipy']:>13.2f}" if "pyfftw" in median else ""
+    print(f"{label:>16} {' '.join(cells)} {ratio}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--sizes", default="256,512,1024", help="padded grid sides")
+    parser.add_argument("--sizes", default="256,512,1024", help="transformed grid sides")
     parser.add_argument("--repeat", type=int, default=0, help="repetitions (0: by size)")
     args = parser.parse_args()
     print(f"scipy {scipy.__version__}, numpy {np.__version__}, ", end="")
     print(f"pyfftw {pyfftw.__version__}" if pyfftw else "pyfftw not installed")
-    print(f"{'padded':>8} {'scipy':>10} {'pyfftw':>10} {'measure':>10} {'pyfftw/scipy':>13}")
-    for side in (int(s) for s in args.sizes.split(",")):
+    print(f"{'grid':>16} {'scipy':>10} {'pyfftw':>10} {'measure':>10} {'pyfftw/scipy':>13}")
+    sides = [int(s) for s in args.sizes.split(",")]
+    for side in sides:
         n = side // 2  # grid n x n pads to 2n - 1, whose fast real length is 2n for these
         W = HalfSpaceOperator(n, n, 1e-5, 1e-5, 210e9, 0.3, fft="scipy")
-        padded_shape = W._fft_shape
-        kernel = W._spectra[0]
         f = np.random.default_rng(0).random((n, n))
-        reference = (W @ f.ravel()).reshape(n, n)
         contenders = {"scipy": lambda f=f, W=W: W @ f.ravel()}
         if pyfftw is not None:
             V = HalfSpaceOperator(n, n, 1e-5, 1e-5, 210e9, 0.3, fft="pyfftw")
-            product = _pyfftw_product(padded_shape)
+            product = _pyfftw_product(W._fft_shape)
             contenders["pyfftw"] = lambda f=f, V=V: V @ f.ravel()
-            contenders["measure"] = lambda f=f, k=kernel, n=n, product=product: product(f, k, n)
-        for name, run in contenders.items():  # the same answer, and warm
-            answer = np.asarray(run()).reshape(n, n)
-            error = np.max(np.abs(answer - reference)) / np.max(np.abs(reference))
-            assert error < 1e-12, (name, error)
+            contenders["measure"] = lambda f=f, k=W._spectra[0], n=n, p=product: p(f, k, n)
         repeat = args.repeat or max(5, int(2e7 / side**2))
-        times: dict[str, list[float]] = {name: [] for name in contenders}
-        for _ in range(repeat):
-            for name, run in contenders.items():
-                start = time.process_time()
-                run()
-                times[name].append(time.process_time() - start)
-        median = {name: statistics.median(values) * 1e3 for name, values in times.items()}
-        if pyfftw is None:
-            print(f"{padded_shape[0]:>5}^2 {median['scipy']:>8.2f}ms {'-':>10} {'-':>10}")
-            continue
-        print(
-            f"{padded_shape[0]:>5}^2 {median['scipy']:>8.2f}ms {median['pyfftw']:>8.2f}ms "
-            f"{median['measure']:>8.2f}ms {median['pyfftw'] / median['scipy']:>13.2f}"
-        )
+        label = f"padded {W._fft_shape[0]}^2"
+        _row(label, contenders, (W @ f.ravel()).reshape(n, n), repeat)
+    for side in sides:
+        W = HalfSpaceOperator(side, side, 1e-5, 1e-5, 210e9, 0.3, periodic=True, fft="scipy")
+        f = np.random.default_rng(0).random(side * side)
+        contenders = {"scipy": lambda f=f, W=W: W @ f}
+        if pyfftw is not None:
+            V = HalfSpaceOperator(side, side, 1e-5, 1e-5, 210e9, 0.3, periodic=True, fft="pyfftw")
+            contenders["pyfftw"] = lambda f=f, V=V: V @ f
+        repeat = args.repeat or max(5, int(2e7 / side**2))
+        _row(f"periodic {side}^2", contenders, W @ f, repeat)
 
 
 if __name__ == "__main__":

@@ -56,25 +56,31 @@ Two bodies in contact
     terms cancel).
 
 Which FFT
-    Measured for one product of the normal non-periodic operator (one forward and one inverse
-    real transform of the padded grid, the multiplication, padding and crop), one thread,
-    median CPU time of alternating runs, on the project's 2-core machine under load
-    (``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_fft.py --sizes 256,512,1024,2048``,
-    scipy 1.17.1, pyFFTW 0.15.1):
+    Measured for one product of the normal operator, one thread, median CPU time of
+    alternating runs, on the project's 2-core machine under load (load average 8-10; two runs,
+    ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_fft.py --sizes
+    256,512,1024,2048``, scipy 1.17.1, pyFFTW 0.15.1, ``FFTW_ESTIMATE`` plans). Non-periodic
+    grids are zero padded, transformed along x on their rows only (both libraries):
 
-    ============  =============  ==============================  ========================
-    padded grid   scipy.fft      pyFFTW, ``FFTW_ESTIMATE``       pyFFTW, ``FFTW_MEASURE``
-    ============  =============  ==============================  ========================
-    256 x 256     2.9 ms         1.4 ms (0.49)                   1.1 ms
-    512 x 512     11.3 ms        5.7 ms (0.50)                   5.3 ms
-    1024 x 1024   47.7 ms        31.0 ms (0.65)                  26.6 ms
-    2048 x 2048   205 ms         139 ms (0.68)                   127 ms
-    ============  =============  ==============================  ========================
+    ==================  ===============  ===============  ==============
+    transformed grid    scipy.fft        pyFFTW           pyFFTW / scipy
+    ==================  ===============  ===============  ==============
+    padded 256 x 256    0.75 / 1.01 ms   0.59 / 0.86 ms   0.78 / 0.85
+    padded 512 x 512    3.54 / 4.12 ms   3.08 / 3.31 ms   0.87 / 0.80
+    padded 1024 x 1024  17.4 / 21.5 ms   18.4 / 22.2 ms   1.06 / 1.03
+    padded 2048 x 2048  71.4 / 93.2 ms   83.2 / 94.4 ms   1.17 / 1.01
+    periodic 256 x 256  0.67 / 0.80 ms   0.45 / 0.56 ms   0.68 / 0.69
+    periodic 512 x 512  3.40 / 4.19 ms   2.67 / 3.23 ms   0.78 / 0.77
+    periodic 1024^2     19.7 / 19.8 ms   15.4 / 17.7 ms   0.78 / 0.89
+    periodic 2048^2     118 / 131 ms     73.9 / 93.9 ms   0.62 / 0.72
+    ==================  ===============  ===============  ==============
 
-    pyFFTW is faster, so the operators use it when it is installed (the ``fft`` extra), with
-    ``FFTW_ESTIMATE`` plans: they take milliseconds, where ``FFTW_MEASURE`` takes about 1 s
-    per size for the last 5-15 %. Without pyFFTW (or with ``fft="scipy"``) the products use
-    ``scipy.fft``; the two agree to rounding.
+    pyFFTW is faster on periodic grids and on small padded ones, not on padded grids from
+    1024 x 1024 (pyFFTW's ``FFTW_MEASURE`` plans, about 1 s of planning per size, were no
+    faster than scipy.fft there either). So by default (``fft=None``) the operators use
+    pyFFTW when it is installed (the ``fft`` extra), except on padded grids of 1024 x 1024
+    points or more, which use :mod:`scipy.fft`; ``fft="scipy"`` or ``"pyfftw"`` chooses. The
+    two agree to rounding.
 
 References
 ----------
@@ -129,7 +135,7 @@ def _workers(value) -> int | None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value == 0:
         raise InvalidInputError(
-            f"workers must be None or a nonzero integer (threads of scipy.fft), got {value!r}"
+            f"workers must be None or a nonzero integer (threads of the FFTs), got {value!r}"
         )
     return int(value)
 
@@ -213,6 +219,8 @@ class _LatticeOperator(Operator):
         if np.iscomplexobj(x):
             raise InvalidInputError("the operator takes real vectors, got complex ones")
         columns = x.shape[1:]
+        if x.size == 0:  # no columns
+            return np.zeros(x.shape)
         engine = self._engine
         c = self._components
         if c == 1:
@@ -355,8 +363,20 @@ class HalfSpaceOperator(_LatticeOperator):
         Threads of the FFTs (None: one; negative: counted back from the CPU count, as
         :mod:`scipy.fft` does).
     fft : {None, "scipy", "pyfftw"}
-        The FFT library of the products; None: pyFFTW if it is installed (the ``fft`` extra,
-        measured faster), else :mod:`scipy.fft`. The attribute :attr:`fft` says which.
+        The FFT library of the products; None: the one measured faster for this grid (see
+        the module notes; :mod:`scipy.fft` if pyFFTW, the ``fft`` extra, is not installed).
+        The attribute ``fft`` says which.
+
+    Attributes
+    ----------
+    components : str
+        ``"normal"`` or ``"full"``.
+    periodic : bool
+        Whether the grid is one period.
+    grid_shape, cell : tuple
+        ``(nx, ny)`` and ``(dx, dy)``.
+    fft : str
+        The FFT library of the products, ``"scipy"`` or ``"pyfftw"``.
 
     Raises
     ------
@@ -564,8 +584,12 @@ def composite_modulus(young1: float, poisson1: float, young2: float, poisson2: f
 
     Examples
     --------
-    >>> composite_modulus(210e9, 0.3, float("inf"), 0.0) == 210e9 / (1 - 0.3**2)
-    True
+    A steel ball on a rigid flat, and on an aluminium one (GPa):
+
+    >>> round(composite_modulus(210e9, 0.3, float("inf"), 0.0) / 1e9, 2)
+    230.77
+    >>> round(composite_modulus(210e9, 0.3, 70e9, 0.33) / 1e9, 2)
+    58.61
     """
     compliance = 0.0
     for young, poisson, which in ((young1, poisson1, "1"), (young2, poisson2, "2")):
