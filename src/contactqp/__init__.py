@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from .core.problem import ContactProblem, FrictionalProblem
     from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
     from .core.status import STATUS_LABELS, ContactStatus
+    from .core.surface import SurfaceProblem, SurfaceResult
     from .errors import (
         ContactError,
         ContactWarning,
@@ -57,6 +58,8 @@ _EXPORTS: dict[str, str] = {
     "LocalResult": ".core.result",
     "STATUS_LABELS": ".core.status",
     "ContactStatus": ".core.status",
+    "SurfaceProblem": ".core.surface",
+    "SurfaceResult": ".core.surface",
     "ContactError": ".errors",
     "ContactWarning": ".errors",
     "FileFormatError": ".errors",
@@ -107,6 +110,8 @@ __all__ = [
     "GlobalProblem",
     "FastenedProblem",
     "FastenedResult",
+    "SurfaceProblem",
+    "SurfaceResult",
     "solve_history",
     "linear_path",
     "HistoryResult",
