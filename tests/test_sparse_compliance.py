@@ -16,6 +16,7 @@ import pytest
 import scipy.sparse as sp
 
 import contactqp as cq
+from contactqp.compliance import grid, normal_influence
 from contactqp.compliance.sparse_compliance import (
     SparseComplianceOperator,
     SparseDelassusOperator,
@@ -223,3 +224,21 @@ def test_the_dual_active_set_out_of_cg_steps_says_so():
     assert not result.success and "did not converge in 2 steps" in result.message
     with pytest.raises(InvalidInputError, match="max_cg must be an integer >= 1"):
         cq.solve(cq.SurfaceProblem(W, s, approach=approach), "dual-active-set", max_cg=0)
+
+
+@pytest.mark.parametrize("given", ["approach", "load"])
+def test_the_dual_active_set_on_a_rough_half_space_equals_the_dense_active_set(given):
+    # several contact patches on a dense half-space W (a W that is not an M-matrix)
+    n, cell = 16, 1e-5
+    x, y = grid(n, n, cell, cell)
+    x, y = x - x.mean(), y - y.mean()
+    W = normal_influence(x, y, cell, cell, 210e9, 0.3)
+    s = (x**2 + y**2) / (2 * 5e-3) + 2e-7 * np.random.default_rng(3).uniform(0, 1, x.size)
+    value = {"approach": 6e-7} if given == "approach" else {"load": 2.0}
+    problem = cq.SurfaceProblem(W, s, **value)
+    result = cq.solve(problem, "dual-active-set", tol=1e-12)
+    reference = cq.solve(problem, "surface-active-set", tol=1e-12)
+    assert result.success and reference.success, (result.message, reference.message)
+    scale = reference.forces.max()
+    np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-8 * scale)
+    assert result.approach == pytest.approx(reference.approach, rel=1e-9)
