@@ -5,7 +5,7 @@ linear tetrahedra (scikit-fem ``ElementTetP1``, assembled on one quadrature poin
 linear elements), clamped on its bottom face: ``3 (c+1)^2 6`` free freedoms and ``(c+1)^2``
 top nodes, all of them contact nodes (their vertical freedoms). A rigid paraboloid pressed at a
 fixed approach of 5 um, which would touch the undeformed face out to 0.3 m from its centre
-(radius 9 km: a third of the nodes touch).
+(radius 9 km: a fifth to a quarter of the nodes touch).
 
 For each size the script times, in one process:
 
