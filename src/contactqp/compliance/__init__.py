@@ -10,6 +10,9 @@ fft_halfspace
     FFT, non-periodic (zero padding) or periodic (Westergaard); the composite modulus.
 condensation
     Flexibility of chosen freedoms of a sparse stiffness matrix by static condensation.
+sparse_compliance
+    The same flexibility (and the Delassus operator ``A K^-1 A^T``) as an operator applied
+    through one sparse factorisation, never formed.
 importers
     ANSYS ``.full``, NASTRAN OP4/DMIG, MatrixMarket and unit-load CSV files to reduced models
     (the ``importers`` extra for ANSYS and NASTRAN).

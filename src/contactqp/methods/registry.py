@@ -37,6 +37,7 @@ from .local_global import solve_frictionless
 from .polygonal import solve_polygonal
 from .qp import DEFAULT_BACKEND, solve_qp
 from .surface_active_set import solve_surface_active_set
+from .surface_dual_active_set import MAX_CG, solve_dual_active_set
 from .tresca import solve_tresca_fixed_point
 
 __all__ = [
@@ -305,6 +306,24 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 "cross-check",
                 "the box QP's active set at each approach (Newton on it at a fixed load); "
                 "factors blocks of W",
+            ),
+            Method(
+                "dual-active-set",
+                ("surface",),
+                solve_dual_active_set,
+                (
+                    Option(
+                        "r0", np.ndarray, None, "warm start: forces of a nearby problem (N), (m,)"
+                    ),
+                    Option(
+                        "tol", float, 1e-10, "gap on the contact, penetration off it (relative)"
+                    ),
+                    Option("max_iter", int, 100, "largest number of active sets"),
+                    Option("max_cg", int, MAX_CG, "largest number of CG steps of each set"),
+                ),
+                None,
+                "cross-check",
+                "primal-dual active set, each set's equations by CG through W's products only",
             ),
             Method(
                 "nnls",
