@@ -7,7 +7,13 @@ the shapes those document; numpy arrays are what its callers pass).
 
 import numpy as np
 
-__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
+__all__ = [
+    "project_rows",
+    "natural_map_rows",
+    "alart_curnier_rows",
+    "sparse_newton_matrix",
+    "planar_gauss_seidel",
+]
 
 def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None: ...
 def natural_map_rows(
@@ -36,3 +42,17 @@ def sparse_newton_matrix(
     new_indices: np.ndarray,
     new_indptr: np.ndarray,
 ) -> int: ...
+def planar_gauss_seidel(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    r: np.ndarray,
+    u: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    every: int,
+    project: bool,
+) -> tuple[int, float]: ...
