@@ -25,6 +25,8 @@ __all__ = [
     "alart_curnier_rows",
     "sparse_newton_matrix",
     "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
     "IMPLEMENTATION",
     "FORCE_PURE_NUMPY",
     "pure_numpy_forced",
@@ -46,8 +48,10 @@ if pure_numpy_forced():
     from .pure_numpy import (
         alart_curnier_rows,
         natural_map_rows,
+        planar_blocks,
         planar_gauss_seidel,
         project_rows,
+        row_products,
         sparse_newton_matrix,
     )
 
@@ -57,8 +61,10 @@ else:
         from .compiled import (
             alart_curnier_rows,
             natural_map_rows,
+            planar_blocks,
             planar_gauss_seidel,
             project_rows,
+            row_products,
             sparse_newton_matrix,
         )
 
@@ -67,8 +73,10 @@ else:
         from .pure_numpy import (
             alart_curnier_rows,
             natural_map_rows,
+            planar_blocks,
             planar_gauss_seidel,
             project_rows,
+            row_products,
             sparse_newton_matrix,
         )
 

@@ -13,6 +13,8 @@ __all__ = [
     "alart_curnier_rows",
     "sparse_newton_matrix",
     "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
 ]
 
 def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None: ...
@@ -56,3 +58,15 @@ def planar_gauss_seidel(
     every: int,
     project: bool,
 ) -> tuple[int, float]: ...
+def planar_blocks(
+    W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, blocks: np.ndarray
+) -> None: ...
+def row_products(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    x: np.ndarray,
+    product: np.ndarray,
+    magnitude: np.ndarray,
+) -> None: ...

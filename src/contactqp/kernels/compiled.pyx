@@ -25,6 +25,8 @@ __all__ = [
     "alart_curnier_rows",
     "sparse_newton_matrix",
     "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
 ]
 
 
@@ -330,3 +332,47 @@ def planar_gauss_seidel(const double[:, :] W, const int64_t[:] indptr,
         before = last
         last = error
     return sweep, error
+
+
+def planar_blocks(const double[:, :] W, const int64_t[:] indptr, const int64_t[:] indices,
+                  const double[:] data, double[:, :] blocks):
+    """``blocks[i] = (a00, a01, a10, a11)``, contact ``i``'s diagonal 2x2 block of ``W``.
+
+    ``W`` dense, or (no rows) its CSR arrays, as :func:`planar_gauss_seidel`; entries not
+    stored are 0.
+    """
+    cdef Py_ssize_t i, k, p, j, nc = blocks.shape[0]
+    for i in range(nc):
+        for k in range(2):
+            if W.shape[0] > 0:
+                blocks[i, 2 * k] = W[2 * i + k, 2 * i]
+                blocks[i, 2 * k + 1] = W[2 * i + k, 2 * i + 1]
+            else:
+                blocks[i, 2 * k] = 0.0
+                blocks[i, 2 * k + 1] = 0.0
+                for p in range(indptr[2 * i + k], indptr[2 * i + k + 1]):
+                    j = indices[p]
+                    if j == 2 * i or j == 2 * i + 1:
+                        blocks[i, 2 * k + j - 2 * i] = data[p]
+
+
+def row_products(const double[:, :] W, const int64_t[:] indptr, const int64_t[:] indices,
+                 const double[:] data, const double[:] x, double[:] product,
+                 double[:] magnitude):
+    """``product = W x`` and ``magnitude = |W| |x|``, ``W`` dense or (no rows) its CSR arrays."""
+    cdef Py_ssize_t i, j, p, m = x.shape[0]
+    cdef double s, a, v
+    for i in range(product.shape[0]):
+        s = a = 0.0
+        if W.shape[0] > 0:
+            for j in range(m):
+                v = W[i, j] * x[j]
+                s += v
+                a += v if v >= 0.0 else -v
+        else:
+            for p in range(indptr[i], indptr[i + 1]):
+                v = data[p] * x[indices[p]]
+                s += v
+                a += v if v >= 0.0 else -v
+        product[i] = s
+        magnitude[i] = a

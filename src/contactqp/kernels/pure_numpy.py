@@ -18,6 +18,8 @@ __all__ = [
     "alart_curnier_rows",
     "sparse_newton_matrix",
     "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
 ]
 
 
@@ -243,3 +245,42 @@ def planar_gauss_seidel(
                 break
         before, last = last, error
     return sweep, error
+
+
+def _matrix(W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, n: int):
+    """A dense ``W``, or (no rows) the (n, n) CSR matrix of the arrays."""
+    if W.shape[0]:
+        return np.asarray(W)
+    import scipy.sparse as sp
+
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+def planar_blocks(
+    W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, blocks: np.ndarray
+) -> None:
+    """``blocks[i] = (a00, a01, a10, a11)``, contact ``i``'s diagonal 2x2 block of ``W``.
+
+    ``W`` dense, or (no rows) its CSR arrays, as :func:`planar_gauss_seidel`; entries not
+    stored are 0.
+    """
+    matrix = _matrix(W, indptr, indices, data, 2 * blocks.shape[0])
+    blocks[:, 0] = matrix.diagonal()[::2]
+    blocks[:, 1] = matrix.diagonal(1)[::2]
+    blocks[:, 2] = matrix.diagonal(-1)[::2]
+    blocks[:, 3] = matrix.diagonal()[1::2]
+
+
+def row_products(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    x: np.ndarray,
+    product: np.ndarray,
+    magnitude: np.ndarray,
+) -> None:
+    """``product = W x`` and ``magnitude = |W| |x|``, ``W`` dense or (no rows) its CSR arrays."""
+    matrix = _matrix(W, indptr, indices, data, x.shape[0])
+    product[...] = np.asarray(matrix @ x).ravel()
+    magnitude[...] = np.asarray(abs(matrix) @ np.abs(x)).ravel()

@@ -40,8 +40,8 @@ def resolve(
     under ``options``. With ``mu = 0`` on every contact, the kind's default method (asked for
     by name or by None) is replaced by the frictionless route
     (:data:`~contactqp.methods.registry.FRICTIONLESS_ROUTE`), which receives the options it
-    takes; with 2-D contacts (``dim == 2``) the default of a local or global problem is
-    replaced by the planar route (:data:`~contactqp.methods.registry.PLANAR_ROUTE`), which
+    takes; with 2-D contacts (``dim == 2``) a local or global problem with no method named
+    takes the planar route (:data:`~contactqp.methods.registry.PLANAR_ROUTE`), which
     takes the same options and hands the default a problem on which it stalls.
 
     Raises
@@ -57,7 +57,7 @@ def resolve(
     if entry.name == spec.default and _is_frictionless(problem, kind):
         entry = METHODS[FRICTIONLESS_ROUTE]
         options = {name: value for name, value in options.items() if name in entry.option_names}
-    elif entry.name == spec.default and kind in ("local", "global") and problem.dim == 2:
+    elif method is None and kind in ("local", "global") and problem.dim == 2:
         entry = METHODS[PLANAR_ROUTE]  # takes the default's options, hands it a stall
     defaults = {name: value for name, value in spec.defaults.items() if name in entry.option_names}
     return kind, entry, {**defaults, **options}

@@ -35,8 +35,8 @@ import scipy.sparse as sp
 
 from .. import kernels
 from ..core.local_problem import LocalProblem, natural_map_residual
-from ..core.operators import PSD_SHIFT
 from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
 from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .coulomb import MAX_ITER, solve_coulomb
@@ -66,29 +66,29 @@ def _kernel_arrays(W) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     )
 
 
-def check_contact_blocks(W) -> None:
+def check_contact_blocks(blocks: np.ndarray) -> None:
     """Raise unless each contact's 2x2 diagonal block of ``W`` has a semidefinite symmetric part.
 
-    What the local solver needs of ``W`` and a necessary condition for ``W`` to be positive
-    semidefinite, at the cost of reading ``W``'s three central diagonals: with the Jacobi
-    scaling and the shift of :func:`~contactqp.core.local_problem.check_positive_semidefinite`,
-    block ``[[a, b], [c, d]]`` passes when ``a, d >= 0``, a zero diagonal entry has a zero row
-    in the block, and ``((b + c) / 2)^2 <= (1 + PSD_SHIFT)^2 a d``.
+    ``blocks[i] = (a, b, c, d)``, contact ``i``'s block ``[[a, b], [c, d]]``
+    (:func:`~contactqp.kernels.planar_blocks`). What the local solver needs of ``W``, and a
+    necessary condition for ``W`` to be positive semidefinite: with the Jacobi scaling and the
+    shift of :func:`~contactqp.core.local_problem.check_positive_semidefinite`, a block passes
+    when ``a, d >= 0`` and ``((b + c) / 2)^2 <= (1 + PSD_SHIFT)^2 a d`` (so a zero diagonal
+    entry has a zero symmetric coupling).
 
     Raises
     ------
     NotPositiveDefiniteError
         Naming the first contact whose block fails.
     """
-    a, d = W.diagonal()[::2], W.diagonal()[1::2]
-    coupling = 0.5 * (W.diagonal(1)[::2] + W.diagonal(-1)[::2])
+    a, b, c, d = blocks.T
+    coupling = 0.5 * (b + c)
     bad = (a < 0) | (d < 0) | (coupling * coupling > (1.0 + PSD_SHIFT) ** 2 * a * d)
     if np.any(bad):
         i = int(np.argmax(bad))
         raise NotPositiveDefiniteError(
             f"W is not positive semidefinite: the symmetric part of contact {i}'s diagonal "
-            f"block [[{a[i]:.3g}, {W[2 * i, 2 * i + 1]:.3g}], [{W[2 * i + 1, 2 * i]:.3g}, "
-            f"{d[i]:.3g}]] is not"
+            f"block [[{a[i]:.3g}, {b[i]:.3g}], [{c[i]:.3g}, {d[i]:.3g}]] is not"
         )
 
 
@@ -176,8 +176,11 @@ def solve_planar(
     iteration_cap(max_iter)
     m = problem.q.shape[0]
     given = np.zeros(m) if r0 is None else warm_start(r0, m)
+    arrays = _kernel_arrays(problem.W)
     if check_psd:
-        check_contact_blocks(problem.W)
+        blocks = np.empty((problem.n_contacts, 4))
+        kernels.planar_blocks(*arrays, blocks)
+        check_contact_blocks(blocks)
     W, shift = problem.W, problem.apex_shift
     q = problem.q - np.asarray(W @ shift).ravel() if np.any(shift) else problem.q
 
@@ -185,13 +188,22 @@ def solve_planar(
         return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
 
     r = given + shift
-    sweeps, converged = _sweeps(
-        _kernel_arrays(W), q, problem.mu, r, tol, min(SWEEPS, max_iter), measure
-    )
+    sweeps, converged = _sweeps(arrays, q, problem.mu, r, tol, min(SWEEPS, max_iter), measure)
     if converged or sweeps >= max_iter:
         detail = f"gauss-seidel {sweeps} sweeps" + ("" if converged else " (budget spent)")
+        reactions = r - shift
+        product, magnitude = np.empty(m), np.empty(m)  # W r and |W| |r|, read once
+        kernels.row_products(*arrays, reactions, product, magnitude)
         return finish(
-            problem, r - shift, tol, sweeps, start, detail, method="planar", per_contact=per_contact
+            problem,
+            reactions,
+            tol,
+            sweeps,
+            start,
+            detail,
+            method="planar",
+            per_contact=per_contact,
+            products=(product, magnitude),
         )
     newton = solve_coulomb(
         problem,
