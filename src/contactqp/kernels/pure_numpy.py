@@ -10,6 +10,8 @@ looped over where that keeps the compiled loop's order of operations.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = [
@@ -212,12 +214,7 @@ def planar_gauss_seidel(
     place, ``u`` holds ``W r + q`` of the last evaluation.
     """
     m = q.shape[0]
-    if W.shape[0]:
-        matrix = np.asarray(W)
-    else:
-        import scipy.sparse as sp
-
-        matrix = sp.csr_matrix((data, indices, indptr), shape=(m, m))
+    matrix = _matrix(W, indptr, indices, data, m)
     dense = matrix if isinstance(matrix, np.ndarray) else matrix.toarray()
     blocks = [dense[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] for i in range(m // 2)]
     sweep, checks, error = 0, 0, np.inf
@@ -247,7 +244,9 @@ def planar_gauss_seidel(
     return sweep, error
 
 
-def _matrix(W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, n: int):
+def _matrix(
+    W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, n: int
+) -> Any:
     """A dense ``W``, or (no rows) the (n, n) CSR matrix of the arrays."""
     if W.shape[0]:
         return np.asarray(W)

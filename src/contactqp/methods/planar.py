@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -52,10 +53,10 @@ _NO_INDEX = np.empty(0, dtype=np.int64)
 _NO_DATA = np.empty(0)
 
 
-def _kernel_arrays(W) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _kernel_arrays(W: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(dense, indptr, indices, data)`` as :func:`~contactqp.kernels.planar_gauss_seidel`
     takes them: a dense ``W`` itself, or the CSR arrays of a sparse one (int64 indices)."""
-    if not sp.issparse(W):
+    if isinstance(W, np.ndarray):
         return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
     csr = sp.csr_matrix(W)
     return (
@@ -92,7 +93,9 @@ def check_contact_blocks(blocks: np.ndarray) -> None:
         )
 
 
-def _sweeps(arrays, q, mu, r, tol, budget, measure):
+def _sweeps(
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], q, mu, r, tol, budget, measure
+):
     """Sweep from ``r`` (in place) until ``measure`` meets ``tol``, a stall or ``budget``.
 
     ``measure(r, u)`` is ``(residual, error)``, the method's convergence test; the kernel's own
