@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from .frictional import solve_frictional
+from .global_route import condense
 from .local_global import certify_global
 from .registry import (
     FRICTIONLESS_ROUTE,
@@ -108,9 +109,14 @@ def solve(problem, method: str | None = None, **options):
         return solve_frictional(problem, entry, options)
     if kind == "global":
         start = time.perf_counter()
-        local = entry.function(problem.condense(), **options)
+        condensed = condense(problem)  # M factored once, by its structure
+        if condensed.factor.positive_definite and "check_psd" in entry.option_names:
+            options = {**options, "check_psd": False}  # W = H^T M^-1 H, M checked SPD
+        local = entry.function(condensed.local, **options)
         tol = options.get("tol", _default(entry, "tol"))
-        return certify_global(problem, local, tol, start)
+        return certify_global(
+            problem, local, tol, start, factor=condensed.factor, condensed=condensed.local
+        )
     return entry.function(problem, **options)
 
 
