@@ -36,11 +36,12 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from ..core.local_problem import GlobalProblem, LocalProblem, better_dense
+from ..core.local_problem import DENSE_FILL, DENSE_SIZE, GlobalProblem, LocalProblem, better_dense
 from ..errors import NotPositiveDefiniteError
 
 __all__ = [
     "BLOCK_MAX",
+    "DENSE_ENTRIES",
     "DENSE_FREEDOMS",
     "BlockDiagonalMass",
     "Condensed",
@@ -53,6 +54,7 @@ __all__ = [
 
 BLOCK_MAX = 12  #: largest diagonal block of a block-diagonal ``M`` inverted block by block
 DENSE_FREEDOMS = 400  #: a general ``M`` of at most this many freedoms is factored dense
+DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries are read dense
 _EPS = float(np.finfo(float).eps)
 
 
@@ -281,13 +283,29 @@ def block_size(M) -> int | None:
     return None
 
 
+def _is_diagonal(M) -> bool:
+    """Whether a CSR ``M`` stores nothing off its diagonal (read from its index arrays)."""
+    rows = np.repeat(np.arange(M.shape[0]), np.diff(M.indptr))
+    return bool(np.array_equal(rows, M.indices))
+
+
 def factor_mass(problem: GlobalProblem) -> MassFactor:
-    """The factorisation :func:`condense` uses for ``problem.M`` (see the module notes)."""
-    M = problem.M
-    size = block_size(M) if M.shape[0] else None
+    """The factorisation :func:`condense` uses for ``problem.M`` (see the module notes).
+
+    A sparse ``M`` of at most :data:`DENSE_ENTRIES` entries is read dense (numpy's cost per
+    call is a microsecond, scipy.sparse's some tens).
+    """
+    M: Any = problem.M
+    ndof = M.shape[0]
+    if not isinstance(M, np.ndarray):
+        if _is_diagonal(M):
+            return BlockDiagonalMass(M, 1)
+        if ndof * ndof <= DENSE_ENTRIES:
+            M = M.toarray()
+    size = block_size(M)
     if size is not None:
         return BlockDiagonalMass(M, size)
-    if M.shape[0] <= DENSE_FREEDOMS:
+    if ndof <= DENSE_FREEDOMS:
         return DenseMass(M)
     return _ProblemFactor(problem)
 
@@ -324,16 +342,24 @@ def condense(problem: GlobalProblem) -> Condensed:
     if isinstance(factor, _ProblemFactor):
         return Condensed(problem.condense(), factor)
     W: Any
-    if isinstance(factor, BlockDiagonalMass) and sp.issparse(H):
+    ndof, m = H.shape
+    f = problem.f
+    if isinstance(H, np.ndarray) or ndof * m <= DENSE_ENTRIES:
+        Hd = H if isinstance(H, np.ndarray) else H.toarray()
+        W = Hd.T @ factor.solve(Hd)
+        q = Hd.T @ factor.solve(f) + problem.w
+        if not isinstance(H, np.ndarray) and not (
+            m <= DENSE_SIZE or np.count_nonzero(W) >= DENSE_FILL * m * m
+        ):  # CSR where the problem's condensation gives CSR that the local methods keep
+            W = sp.csr_matrix(W)
+    else:  # a block-diagonal M (a general one was condensed by the problem)
+        assert isinstance(factor, BlockDiagonalMass)
         Hc: Any = sp.csr_matrix(H)
         W = sp.csr_matrix(Hc.T @ (factor.matrix() @ Hc))
         W.eliminate_zeros()
         if better_dense(W):
             W = W.toarray()
-    else:
-        Hd = H.toarray() if sp.issparse(H) else np.asarray(H)
-        W = Hd.T @ factor.solve(Hd)
-    q = np.asarray(H.T @ factor.solve(problem.f)).ravel() + problem.w
+        q = np.asarray(Hc.T @ factor.solve(f)).ravel() + problem.w
     if not (
         np.all(np.isfinite(W if isinstance(W, np.ndarray) else W.data)) and np.all(np.isfinite(q))
     ):
