@@ -10,15 +10,19 @@ carries to the next):
 * ``first``: the first solve of the file in this process;
 * ``best`` and ``median``: of ``--repeats`` more solves. The files are solved in turn, round
   after round (file 1, file 2, ..., file 1, ...), so that a change of load on the machine falls
-  on every file alike.
+  on every file alike;
+* ``cpu``: the best CPU time (``time.process_time``) of those solves: on a machine whose cores
+  other jobs share, wall time also counts the time the process waits for a core, CPU time
+  only the time it runs.
 
 Beside them stand the Siconos numerics 4.5 times of ``shared/data/fclib/PEER-TIMES.md`` (measured
 on this machine, best of 3, solve only, from ``r = 0``): its Alart-Curnier Newton (2-D: Lemke),
 its Gauss-Seidel (NSGS), and for global files its own global Newton on ``M, H``. ``ratio`` is
 contactqp's best time over the faster Siconos local solver that converged (``-`` when none
-did); ``g.ratio`` over Siconos' global Newton. The summary counts the files where contactqp
-converged and was at least as fast as that solver (a file where no Siconos solver converged
-counts when contactqp converged). The peer figures vary by up to 2x with the machine's load:
+did), ``c.ratio`` the same of the best CPU time; ``g.ratio`` the best time over Siconos' global
+Newton. The summary counts the files where contactqp converged and was at least as fast as that
+solver, in wall and in CPU time (a file where no Siconos solver converged counts when contactqp
+converged). The peer figures vary by up to 2x with the machine's load:
 compare ratios, and time the peer's files again when a ratio is near 1.
 
 ``--perturbed N`` also solves each file from N starts perturbed by ``1e-10 max|r|`` and says
@@ -100,10 +104,11 @@ def fresh(given):
 
 
 def _solve(given, tol, r0=None):
+    """``(result, wall seconds, CPU seconds)`` of one solve of a fresh copy of ``given``."""
     problem = fresh(given)
-    start = time.perf_counter()
+    cpu, start = time.process_time(), time.perf_counter()
     result = cq.solve(problem, tol=tol) if r0 is None else cq.solve(problem, tol=tol, r0=r0)
-    return result, time.perf_counter() - start
+    return result, time.perf_counter() - start, time.process_time() - cpu
 
 
 def time_files(paths, tol: float, repeats: int, perturbed: int = 0) -> list[dict]:
@@ -111,7 +116,7 @@ def time_files(paths, tol: float, repeats: int, perturbed: int = 0) -> list[dict
     problems = {path.name: read_any(path) for path in paths}
     rows = {}
     for name, given in problems.items():
-        result, seconds = _solve(given, tol)
+        result, seconds, cpu = _solve(given, tol)
         error = (
             given.certify(result.forces).error
             if isinstance(given, GlobalProblem)
@@ -127,12 +132,16 @@ def time_files(paths, tol: float, repeats: int, perturbed: int = 0) -> list[dict
             "error": error,
             "converged": bool(result.success and error <= tol),
             "first": seconds,
+            "first_cpu": cpu,
             "times": [],
+            "cpu": [],
             "perturbed": (0, perturbed),
         }
     for _ in range(repeats):
         for name, given in problems.items():
-            rows[name]["times"].append(_solve(given, tol)[1])
+            _, seconds, cpu = _solve(given, tol)
+            rows[name]["times"].append(seconds)
+            rows[name]["cpu"].append(cpu)
     for name, given in problems.items():
         row = rows[name]
         size = 1e-10 * np.abs(_solve(given, tol)[0].forces).max(initial=0.0)
@@ -158,12 +167,14 @@ def _table(rows, peers: PeerTimes, tol: float) -> str:
     header = (
         f"{'file':44s} {'d':>1s} {'nc':>4s} {'kind':>6s} {'method':>8s} {'it':>4s} "
         f"{'error':>8s} {'first s':>8s} {'best s':>8s} {'median s':>8s} {'NSN s':>12s} "
-        f"{'NSGS s':>12s} {'glob. s':>8s} {'ratio':>6s} {'g.ratio':>7s}"
+        f"{'NSGS s':>12s} {'glob. s':>8s} {'cpu s':>8s} {'ratio':>6s} {'c.ratio':>7s} "
+        f"{'g.ratio':>7s}"
     )
     lines = [header, "-" * len(header)]
-    wins = 0
+    wins = cpu_wins = 0
     for r in rows:
         best = min(r["times"], default=r["first"])
+        cpu = min(r["cpu"], default=r["first_cpu"])
         median = statistics.median(r["times"]) if r["times"] else r["first"]
         peer = peers.get(r["file"], {})
         cells = []
@@ -173,12 +184,15 @@ def _table(rows, peers: PeerTimes, tol: float) -> str:
         fastest = peers.fastest(r["file"])
         if r["converged"] and (fastest is None or best <= fastest):
             wins += 1
+        if r["converged"] and (fastest is None or cpu <= fastest):
+            cpu_wins += 1
         mark = "" if r["converged"] else " (not converged)"
         lines.append(
             f"{r['file']:44s} {r['dim']:1d} {r['contacts']:4d} "
             f"{'global' if r['global'] else 'local':>6s} {r['method']:>8s} {r['iterations']:4d} "
             f"{r['error']:8.1e} {r['first']:8.2e} {best:8.2e} {median:8.2e} {cells[0]:>12s} "
-            f"{cells[1]:>12s} {_seconds(peer.get('global')):>8s} {_ratio(best, fastest):>6s} "
+            f"{cells[1]:>12s} {_seconds(peer.get('global')):>8s} {cpu:8.2e} "
+            f"{_ratio(best, fastest):>6s} {_ratio(cpu, fastest):>7s} "
             f"{_ratio(best, peer.get('global')):>7s}{mark}"
         )
     lines.append("-" * len(header))
@@ -187,8 +201,9 @@ def _table(rows, peers: PeerTimes, tol: float) -> str:
     lines.append(
         f"{solved}/{len(rows)} solved to natural-map error <= {tol:g} ({first:.3f} s of first "
         f"calls in all); at least as fast as the faster converged Siconos solver on "
-        f"{wins}/{len(rows)} (ratio = contactqp best / that solver's time, < 1: faster; "
-        f"g.ratio = over Siconos' global Newton)"
+        f"{wins}/{len(rows)} in wall time, {cpu_wins}/{len(rows)} in CPU time (ratio, c.ratio = "
+        f"contactqp best wall, CPU time / that solver's time, < 1: faster; g.ratio = best wall "
+        f"time / Siconos' global Newton)"
     )
     fragile = [
         f"{r['file']} {r['perturbed'][0]}/{r['perturbed'][1]}"
