@@ -82,7 +82,12 @@ def solve(problem, method: str | None = None, **options):
     ``mu = 0`` on every contact of a frictional, local or global problem: the default method
     (None or its name) is replaced by the frictionless route ``normal-qp`` (the box QP on the
     normal block); the result keeps its kind's shape and certificate. A cross-check named
-    explicitly runs as asked. The methods, their kinds and options: :mod:`the registry
+    explicitly runs as asked. A local or global problem of 2-D contacts with no method named
+    takes the planar route ``planar`` (:mod:`~contactqp.methods.planar`), which hands a stall
+    to ``coulomb``. A global problem is condensed by the structure of its ``M``
+    (:func:`~contactqp.methods.global_route.condense`: block-diagonal ``M`` inverted exactly,
+    small ones factored dense), and the answer certified on the global equations with the same
+    factorisation. The methods, their kinds and options: :mod:`the registry
     <contactqp.methods.registry>`, or ``contactqp methods``.
 
     Parameters
