@@ -13,7 +13,8 @@ Truths used:
 * the pure-numpy kernels (:mod:`contactqp.kernels.pure_numpy`) are the oracle of the compiled
   ones: the same sweeps agree to 1e-10 relative (sums in another order);
 * the shared FCLIB 2-D files: converged to 1e-8 as Siconos' NSGS does; the large granular file,
-  on which the sweeps stall, is handed to Newton from the cold start and gets Newton's answer.
+  on which the sweeps stall, is handed to Newton from the cold start and gets Newton's answer
+  (and the default route sends it to Newton directly, with Newton's iterations).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.io.fclib import read_any
 from contactqp.kernels import pure_numpy
 from contactqp.methods.coulomb import solve_coulomb
-from contactqp.methods.planar import SWEEPS, _kernel_arrays, solve_planar
+from contactqp.methods.planar import ROUTE_MAX_CONTACTS, SWEEPS, _kernel_arrays, solve_planar
 
 FCLIB = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
 
@@ -168,9 +169,19 @@ def test_shared_2d_files_converge_by_sweeps(name):
 def test_a_stall_is_handed_to_newton_from_the_cold_start():
     """The rounded rigid granular file: the sweeps' rate would need thousands of sweeps."""
     problem = read_any(FCLIB / "fc2d_granularflowonwall_02020_00213.dat")
-    result = cq.solve(problem)
+    result = solve_planar(problem)
     newton = solve_coulomb(problem)
     assert result.success and result.method == "coulomb" and "stalled" in result.message
     sweeps = result.iterations - newton.iterations
     assert 0 < sweeps <= 50
     np.testing.assert_array_equal(result.forces, newton.forces)
+
+
+def test_large_2d_problems_go_to_newton_directly():
+    """More contacts than ROUTE_MAX_CONTACTS: the default is coulomb, with its iterations."""
+    problem = read_any(FCLIB / "fc2d_granularflowonwall_02020_00213.dat")
+    assert problem.n_contacts > ROUTE_MAX_CONTACTS
+    result = cq.solve(problem)
+    newton = solve_coulomb(problem)
+    assert result.method == "coulomb" and result.success
+    assert result.iterations == newton.iterations
