@@ -61,7 +61,7 @@ def test_one_contact_is_solved_exactly_by_one_sweep(seed):
     problem = LocalProblem(W, q, [rng.uniform(0.0, 1.5)], 2)
     r, u = np.zeros(2), np.empty(2)
     (compiled or pure_numpy).planar_gauss_seidel(
-        *_kernel_arrays(W), q, problem.mu, r, u, 0.0, 1, 1, False
+        *_kernel_arrays(W), W.reshape(1, 4), q, problem.mu, r, u, 0.0, 1, 1, False
     )
     assert natural_map_error(problem, r) <= 1e-13
 
@@ -75,11 +75,22 @@ def test_compiled_and_pure_numpy_sweeps_agree(sparse, seed):
     arrays = _kernel_arrays(problem.W)
     runs = []
     for kernels in (compiled, pure_numpy):
+        blocks = np.empty((9, 4))
+        kernels.planar_blocks(*arrays, blocks)
+        x = np.random.default_rng(seed).standard_normal(18)
+        product, magnitude = np.empty(18), np.empty(18)
+        kernels.row_products(*arrays, x, product, magnitude)
         r, u = np.zeros(problem.q.size), np.empty(problem.q.size)
         sweeps, error = kernels.planar_gauss_seidel(
-            *arrays, problem.q, problem.mu, r, u, 0.0, 7, 1, False
+            *arrays, blocks, problem.q, problem.mu, r, u, 0.0, 7, 1, False
         )
-        runs.append((sweeps, error, r))
+        runs.append((sweeps, error, r, blocks, product, magnitude))
+    W = problem.W.toarray() if sparse else problem.W
+    np.testing.assert_array_equal(runs[0][3], runs[1][3])
+    np.testing.assert_array_equal(runs[0][3][:, 1], np.diagonal(W, 1)[::2])
+    for k in (4, 5):  # W x and |W| |x|, to rounding
+        np.testing.assert_allclose(runs[0][k], runs[1][k], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(runs[0][4], W @ x, rtol=1e-12, atol=1e-14)
     assert runs[0][0] == runs[1][0] == 7
     np.testing.assert_allclose(runs[0][2], runs[1][2], rtol=1e-10, atol=1e-12)
     assert runs[0][1] == pytest.approx(runs[1][1], rel=1e-8)

@@ -49,6 +49,7 @@ def planar_gauss_seidel(
     indptr: np.ndarray,
     indices: np.ndarray,
     data: np.ndarray,
+    blocks: np.ndarray,
     q: np.ndarray,
     mu: np.ndarray,
     r: np.ndarray,

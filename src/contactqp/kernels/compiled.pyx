@@ -249,13 +249,15 @@ cdef inline double _planar_residual(double rn, double rt, double un, double ut,
 
 
 def planar_gauss_seidel(const double[:, :] W, const int64_t[:] indptr,
-                        const int64_t[:] indices, const double[:] data, const double[:] q,
-                        const double[:] mu, double[:] r, double[:] u, double tol,
-                        Py_ssize_t max_sweeps, Py_ssize_t every, bint project):
+                        const int64_t[:] indices, const double[:] data,
+                        const double[:, :] blocks, const double[:] q, const double[:] mu,
+                        double[:] r, double[:] u, double tol, Py_ssize_t max_sweeps,
+                        Py_ssize_t every, bint project):
     """Gauss-Seidel sweeps with the exact 2-D local solver; returns ``(sweeps, error)``.
 
     ``W`` is a dense (m, m) array, or, when it has no rows, the CSR arrays
-    ``(indptr, indices, data)`` of ``W`` are used. Each sweep updates the contacts in order,
+    ``(indptr, indices, data)`` of ``W`` are used; ``blocks`` holds its diagonal blocks
+    (:func:`planar_blocks`). Each sweep updates the contacts in order,
     ``r_i`` the exact solution of contact ``i``'s problem with the others held. Every ``every``
     sweeps ``u = W r + q`` and the natural-map error
     ``||r - P_K(r - u - mu |u_T| e_N)|| / max(||q||, ||r||, ||u||)`` are computed; the sweeps
@@ -275,28 +277,16 @@ def planar_gauss_seidel(const double[:, :] W, const int64_t[:] indptr,
         for i in range(nc):
             bn = q[2 * i]
             bt = q[2 * i + 1]
-            a00 = a01 = a10 = a11 = 0.0
+            a00, a01, a10, a11 = blocks[i, 0], blocks[i, 1], blocks[i, 2], blocks[i, 3]
             if dense:
                 for j in range(m):
                     bn += W[2 * i, j] * r[j]
                     bt += W[2 * i + 1, j] * r[j]
-                a00, a01 = W[2 * i, 2 * i], W[2 * i, 2 * i + 1]
-                a10, a11 = W[2 * i + 1, 2 * i], W[2 * i + 1, 2 * i + 1]
             else:
                 for p in range(indptr[2 * i], indptr[2 * i + 1]):
-                    j = indices[p]
-                    bn += data[p] * r[j]
-                    if j == 2 * i:
-                        a00 = data[p]
-                    elif j == 2 * i + 1:
-                        a01 = data[p]
+                    bn += data[p] * r[indices[p]]
                 for p in range(indptr[2 * i + 1], indptr[2 * i + 2]):
-                    j = indices[p]
-                    bt += data[p] * r[j]
-                    if j == 2 * i:
-                        a10 = data[p]
-                    elif j == 2 * i + 1:
-                        a11 = data[p]
+                    bt += data[p] * r[indices[p]]
             bn -= a00 * r[2 * i] + a01 * r[2 * i + 1]
             bt -= a10 * r[2 * i] + a11 * r[2 * i + 1]
             _planar_local(a00, a01, a10, a11, bn, bt, mu[i], r[2 * i], r[2 * i + 1], out)

@@ -192,6 +192,7 @@ def planar_gauss_seidel(
     indptr: np.ndarray,
     indices: np.ndarray,
     data: np.ndarray,
+    blocks: np.ndarray,
     q: np.ndarray,
     mu: np.ndarray,
     r: np.ndarray,
@@ -204,7 +205,8 @@ def planar_gauss_seidel(
     """Gauss-Seidel sweeps with the exact 2-D local solver; returns ``(sweeps, error)``.
 
     ``W`` is a dense (m, m) array, or, when it has no rows, the CSR arrays
-    ``(indptr, indices, data)`` of ``W`` are used. Each sweep updates the contacts in order,
+    ``(indptr, indices, data)`` of ``W`` are used; ``blocks`` holds its diagonal blocks
+    (:func:`planar_blocks`). Each sweep updates the contacts in order,
     ``r_i`` the exact solution of contact ``i``'s problem with the others held. Every ``every``
     sweeps ``u = W r + q`` and the natural-map error
     ``||r - P_K(r - u - mu |u_T| e_N)|| / max(||q||, ||r||, ||u||)`` are computed; the sweeps
@@ -216,12 +218,12 @@ def planar_gauss_seidel(
     m = q.shape[0]
     matrix = _matrix(W, indptr, indices, data, m)
     dense = matrix if isinstance(matrix, np.ndarray) else matrix.toarray()
-    blocks = [dense[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] for i in range(m // 2)]
+    own_blocks = np.asarray(blocks).reshape(-1, 2, 2)
     sweep, checks, error = 0, 0, np.inf
     before = last = np.inf
     scale_q = float(q @ q)
     while sweep < max_sweeps:
-        for i, A in enumerate(blocks):
+        for i, A in enumerate(own_blocks):
             own = r[2 * i : 2 * i + 2].copy()
             b = q[2 * i : 2 * i + 2] + dense[2 * i : 2 * i + 2] @ r - A @ own
             r[2 * i], r[2 * i + 1] = planar_local(A, b, float(mu[i]), own)

@@ -107,7 +107,13 @@ def check_contact_blocks(blocks: np.ndarray) -> None:
 
 
 def _sweeps(
-    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], q, mu, r, tol, budget, measure
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    q,
+    mu,
+    r,
+    tol,
+    budget,
+    measure,
 ):
     """Sweep from ``r`` (in place) until ``measure`` meets ``tol``, a stall or ``budget``.
 
@@ -195,9 +201,9 @@ def solve_planar(
     m = problem.q.shape[0]
     given = np.zeros(m) if r0 is None else warm_start(r0, m)
     arrays = _kernel_arrays(problem.W)
+    blocks = np.empty((problem.n_contacts, 4))
+    kernels.planar_blocks(*arrays, blocks)
     if check_psd:
-        blocks = np.empty((problem.n_contacts, 4))
-        kernels.planar_blocks(*arrays, blocks)
         check_contact_blocks(blocks)
     W, shift = problem.W, problem.apex_shift
     shifted = bool(np.any(shift))
@@ -208,7 +214,7 @@ def solve_planar(
 
     r = given + shift
     sweeps, converged = _sweeps(
-        arrays,
+        (*arrays, blocks),
         q,
         problem.mu,
         r,

@@ -396,11 +396,12 @@ def get_method(name: str | None, kind: str | None = None) -> Method:
             raise InvalidInputError("name a method (or a problem kind for its default)")
         name = default_method(kind)
     where = f" for {kind} problems" if kind else ""
-    listing = _listing(kind) if kind else ", ".join(METHODS)
     if not isinstance(name, str) or name not in METHODS:
+        listing = _listing(kind) if kind else ", ".join(METHODS)
         raise InvalidInputError(f"unknown method {name!r}{where}; choose one of {listing}")
     method = METHODS[name]
     if kind is not None and kind not in method.kinds:
+        listing = _listing(kind)
         raise InvalidInputError(
             f"method {name!r} does not solve {kind} problems (it solves "
             f"{', '.join(method.kinds)}); methods for {kind} problems: {listing}"
