@@ -1,153 +1,211 @@
-"""Coulomb friction on the shared FCLIB problems: time per file beside the published figures.
+"""Coulomb friction on the shared FCLIB problems: contactqp beside Siconos, file by file.
 
 Every problem file in ``shared/data/fclib`` (or the files given) is read once, outside the timing,
-then solved by :func:`contactqp.methods.coulomb.solve_coulomb` from a cold start (``r = 0``) to the
-natural-map error ``--tol`` (default 1e-8, the README's measure). A global problem is condensed as
-given (outside the timing) and its error is that of the global equations as written
-(:meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``M v = H r + f``, ``u = H^T v + w``).
-The time is the best of repeated solves (runs shorter than 0.5 s are repeated, up to 7 times, 2 s in
-all), each including the positive-semidefiniteness check of ``W``.
+and solved by :func:`contactqp.solve` (the default route: a global problem on its ``M``, ``H``,
+``f``, ``w``, certified on the global equations as written) from a cold start (``r = 0``) to the
+natural-map error ``--tol`` (default 1e-8, the README's measure). Each timed solve gets a fresh
+problem object made from the arrays read (nothing one solve computed, such as a check of ``W``,
+carries to the next):
 
-Beside it stands the published mean time of the fastest solver of the file's test family
-(Acary, Bremond and Huber 2018, as quoted in ``shared/data/fclib/README.md``) and the ratio
-``own / published`` (< 1: faster). The published figure is a mean over the whole family, measured
-on other hardware with a compiled code, sometimes at another accuracy (shown): the ratio is an
-order of magnitude, not a race. Files of families without a quoted figure show ``-``.
+* ``first``: the first solve of the file in this process;
+* ``best`` and ``median``: of ``--repeats`` more solves. The files are solved in turn, round
+  after round (file 1, file 2, ..., file 1, ...), so that a change of load on the machine falls
+  on every file alike;
+* ``cpu``: the best CPU time (``time.process_time``) of those solves: on a machine whose cores
+  other jobs share, wall time also counts the time the process waits for a core, CPU time
+  only the time it runs.
+
+Beside them stand the Siconos numerics 4.5 times of ``shared/data/fclib/PEER-TIMES.md`` (measured
+on this machine, best of 3, solve only, from ``r = 0``): its Alart-Curnier Newton (2-D: Lemke),
+its Gauss-Seidel (NSGS), and for global files its own global Newton on ``M, H``. ``ratio`` is
+contactqp's best time over the faster Siconos local solver that converged (``-`` when none
+did), ``c.ratio`` the same of the best CPU time; ``g.ratio`` and ``c.g.ratio`` the best wall
+and CPU times over Siconos' global Newton. The summary counts the files where contactqp
+converged and was at least as fast as that solver, in wall and in CPU time (a file where no
+Siconos solver converged counts when contactqp converged). The peer figures vary by up to 2x
+with the machine's load:
+compare ratios, and time the peer's files again when a ratio is near 1.
 
 ``--perturbed N`` also solves each file from N starts perturbed by ``1e-10 max|r|`` and says
-which files do not always converge: the semismooth Newton path on the rigid, rounded (6-digit)
-granular problem depends on rounding.
+which files do not always converge.
 
-Run ``python benchmarks/bench_fclib.py --help`` for the options.
+Run ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_fclib.py --help`` for the options.
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 import platform
+import re
+import statistics
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from contactqp.core.local_problem import GlobalProblem, natural_map_error
+import contactqp as cq
+from contactqp.core.local_problem import GlobalProblem, LocalProblem, natural_map_error
 from contactqp.io.fclib import read_any
-from contactqp.methods.coulomb import solve_coulomb
 
-__all__ = ["PUBLISHED", "family", "time_file", "main"]
+__all__ = ["PeerTimes", "fresh", "peer_times", "time_files", "main"]
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
-SHORT_RUN = 0.5  # s: runs shorter than this are repeated and the best time kept
-MAX_REPEATS = 7
-REPEAT_BUDGET = 2.0  # s spent on repetitions of one file at most
+PEERS = DATA / "PEER-TIMES.md"
 
-#: family -> (accuracy asked for, mean time in s of the fastest solver), from the data README
-PUBLISHED = {
-    "Capsules": (1e-8, 1.46e-2),
-    "Chain": (1e-8, 6.2e-4),
-    "100_PR_PerioBox": (1e-4, 0.064),
-    "BoxesStack": (1e-8, 3.4e-2),
-    "Cubes_H8": (1e-8, 1.73),
-    "LowWall_FEM": (1e-8, 13.1),
-}
-
-#: file-name prefix -> family of PUBLISHED
-_PREFIXES = {
-    "Capsules": "Capsules",
-    "Chain": "Chain",
-    "LMGC_100_PR_PerioBox": "100_PR_PerioBox",
-    "Box_Stacks": "BoxesStack",
-    "CubeH8": "Cubes_H8",
-    "LowWall_FEM": "LowWall_FEM",
-}
+_TIME = re.compile(r"([0-9.]+(?:e[+-]?[0-9]+)?) s, ([0-9]+) it, ([yn])")
 
 
-def family(name: str) -> str | None:
-    """The published test family of a file name, or None."""
-    for prefix, fam in _PREFIXES.items():
-        if name.startswith(prefix):
-            return fam
-    return None
+class PeerTimes(dict):
+    """``{file name: {"newton": (s, converged) | None, "nsgs": ..., "global": s | None}}``."""
+
+    def fastest(self, name: str) -> float | None:
+        """The time of the faster Siconos local solver that converged on ``name``, or None."""
+        row = self.get(name, {})
+        times = [t for key in ("newton", "nsgs") if row.get(key) for t, ok in [row[key]] if ok]
+        return min(times) if times else None
 
 
-def time_file(path: Path, tol: float, perturbed: int = 0) -> dict:
-    """Solve one file (best time of the repetitions); the error is recomputed independently.
+def peer_times(path: Path = PEERS) -> PeerTimes:
+    """The Siconos times of ``PEER-TIMES.md``: its table, and its paragraph of global Newton
+    times (named by file-name prefixes)."""
+    peers = PeerTimes()
+    if not path.exists():
+        return peers
+    text = path.read_text(encoding="utf-8")
+    for line in text.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) != 5 or not cells[0].endswith((".dat", ".hdf5")):
+            continue
+        row = {}
+        for key, cell in zip(("newton", "nsgs"), cells[3:], strict=True):
+            found = _TIME.search(cell)
+            row[key] = (float(found[1]), found[3] == "y") if found else None
+        row["global"] = None
+        peers[cells[0]] = row
+    paragraph = text[text.find("own global Newton") :]
+    for prefix, seconds in re.findall(
+        r"([A-Za-z][\w-]+)\s+([0-9.]+(?:e[+-]?[0-9]+)?) s", paragraph
+    ):
+        for name, row in peers.items():
+            if name.startswith(prefix):
+                row["global"] = float(seconds)
+    return peers
 
-    With ``perturbed > 0`` the file is also solved from that many starts
-    ``r0 = 1e-10 max|r| |z|`` (``z`` standard normal, seeds 0, 1, ...) near the cold start; the
-    count of those that converge measures how much the result depends on rounding.
-    """
-    given = read_any(path)
-    problem = given.condense() if isinstance(given, GlobalProblem) else given
-    best = math.inf
-    spent = 0.0
-    for _ in range(MAX_REPEATS):
-        start = time.perf_counter()
-        solution = solve_coulomb(problem, tol=tol)
-        elapsed = time.perf_counter() - start
-        best = min(best, elapsed)
-        spent += elapsed
-        if elapsed >= SHORT_RUN or spent >= REPEAT_BUDGET:
-            break
-    size = 1e-10 * np.abs(solution.forces).max(initial=0.0)
-    robust = sum(
-        solve_coulomb(
-            problem,
-            r0=size * np.abs(np.random.default_rng(seed).standard_normal(problem.q.size)),
-            tol=tol,
-        ).success
-        for seed in range(perturbed)
+
+def fresh(given):
+    """A new problem object of the arrays read (no cached checks or factorisations)."""
+    if isinstance(given, GlobalProblem):
+        return GlobalProblem(
+            given.M, given.H, given.f, given.w, given.mu, given.dim, given.title, given.digits
+        )
+    return LocalProblem(
+        given.W, given.q, given.mu, given.dim, given.title, given.cohesion, given.digits
     )
-    error = (
-        given.certify(solution.forces).error
-        if isinstance(given, GlobalProblem)
-        else natural_map_error(problem, solution.forces)
-    )
-    return {
-        "file": path.name,
-        "dim": problem.dim,
-        "contacts": problem.n_contacts,
-        "error": error,
-        "converged": solution.success and error <= tol,
-        "iterations": solution.iterations,
-        "seconds": best,
-        "gauss_seidel": "gauss-seidel" in solution.message,
-        "perturbed": (robust, perturbed),
-    }
 
 
-def _table(rows, tol):
+def _solve(given, tol, r0=None):
+    """``(result, wall seconds, CPU seconds)`` of one solve of a fresh copy of ``given``."""
+    problem = fresh(given)
+    cpu, start = time.process_time(), time.perf_counter()
+    result = cq.solve(problem, tol=tol) if r0 is None else cq.solve(problem, tol=tol, r0=r0)
+    return result, time.perf_counter() - start, time.process_time() - cpu
+
+
+def time_files(paths, tol: float, repeats: int, perturbed: int = 0) -> list[dict]:
+    """Solve each file once (``first``), then ``repeats`` rounds over all the files."""
+    problems = {path.name: read_any(path) for path in paths}
+    rows = {}
+    for name, given in problems.items():
+        result, seconds, cpu = _solve(given, tol)
+        error = (
+            given.certify(result.forces).error
+            if isinstance(given, GlobalProblem)
+            else natural_map_error(given, result.forces)
+        )  # recomputed by the problem as read, independently of the route
+        rows[name] = {
+            "file": name,
+            "dim": given.dim,
+            "contacts": given.n_contacts,
+            "global": isinstance(given, GlobalProblem),
+            "method": result.method,
+            "iterations": result.iterations,
+            "error": error,
+            "converged": bool(result.success and error <= tol),
+            "first": seconds,
+            "first_cpu": cpu,
+            "times": [],
+            "cpu": [],
+            "perturbed": (0, perturbed),
+        }
+    for _ in range(repeats):
+        for name, given in problems.items():
+            _, seconds, cpu = _solve(given, tol)
+            rows[name]["times"].append(seconds)
+            rows[name]["cpu"].append(cpu)
+    for name, given in problems.items():
+        row = rows[name]
+        size = 1e-10 * np.abs(_solve(given, tol)[0].forces).max(initial=0.0)
+        robust = 0
+        for seed in range(perturbed):
+            start = size * np.abs(
+                np.random.default_rng(seed).standard_normal(row["contacts"] * row["dim"])
+            )
+            robust += _solve(given, tol, r0=start)[0].success
+        row["perturbed"] = (robust, perturbed)
+    return list(rows.values())
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2e}"
+
+
+def _ratio(own: float, peer: float | None) -> str:
+    return "-" if peer is None else f"{own / peer:.3g}"
+
+
+def _table(rows, peers: PeerTimes, tol: float) -> str:
     header = (
-        f"{'file':44s} {'d':>1s} {'nc':>5s} {'error':>8s} {'it':>4s} {'own s':>9s} "
-        f"{'family':>15s} {'acc.':>6s} {'publ. s':>8s} {'ratio':>7s}"
+        f"{'file':44s} {'d':>1s} {'nc':>4s} {'kind':>6s} {'method':>8s} {'it':>4s} "
+        f"{'error':>8s} {'first s':>8s} {'best s':>8s} {'median s':>8s} {'NSN s':>12s} "
+        f"{'NSGS s':>12s} {'glob. s':>8s} {'cpu s':>8s} {'ratio':>6s} {'c.ratio':>7s} "
+        f"{'g.ratio':>7s} {'c.g.ratio':>9s}"
     )
     lines = [header, "-" * len(header)]
+    wins = cpu_wins = 0
     for r in rows:
-        fam = family(r["file"])
-        published = PUBLISHED.get(fam)
-        acc, ref, ratio = (
-            (f"{published[0]:.0e}", f"{published[1]:.2e}", f"{r['seconds'] / published[1]:.3g}")
-            if published
-            else ("-", "-", "-")
-        )
+        best = min(r["times"], default=r["first"])
+        cpu = min(r["cpu"], default=r["first_cpu"])
+        median = statistics.median(r["times"]) if r["times"] else r["first"]
+        peer = peers.get(r["file"], {})
+        cells = []
+        for key in ("newton", "nsgs"):
+            entry = peer.get(key)
+            cells.append("-" if entry is None else f"{entry[0]:.2e} {'y' if entry[1] else 'n'}")
+        fastest = peers.fastest(r["file"])
+        if r["converged"] and (fastest is None or best <= fastest):
+            wins += 1
+        if r["converged"] and (fastest is None or cpu <= fastest):
+            cpu_wins += 1
         mark = "" if r["converged"] else " (not converged)"
         lines.append(
-            f"{r['file']:44s} {r['dim']:1d} {r['contacts']:5d} {r['error']:8.1e} "
-            f"{r['iterations']:4d} {r['seconds']:9.2e} {fam or '-':>15s} "
-            f"{acc:>6s} {ref:>8s} {ratio:>7s}{mark}"
+            f"{r['file']:44s} {r['dim']:1d} {r['contacts']:4d} "
+            f"{'global' if r['global'] else 'local':>6s} {r['method']:>8s} {r['iterations']:4d} "
+            f"{r['error']:8.1e} {r['first']:8.2e} {best:8.2e} {median:8.2e} {cells[0]:>12s} "
+            f"{cells[1]:>12s} {_seconds(peer.get('global')):>8s} {cpu:8.2e} "
+            f"{_ratio(best, fastest):>6s} {_ratio(cpu, fastest):>7s} "
+            f"{_ratio(best, peer.get('global')):>7s} {_ratio(cpu, peer.get('global')):>9s}{mark}"
         )
-    solved = sum(r["converged"] for r in rows)
-    total = sum(r["seconds"] for r in rows)
     lines.append("-" * len(header))
+    solved = sum(r["converged"] for r in rows)
+    first = sum(r["first"] for r in rows)
     lines.append(
-        f"{solved}/{len(rows)} solved to natural-map error <= {tol:g} in {total:.3f} s "
-        f"in all; ratio = own / published (< 1: faster)"
+        f"{solved}/{len(rows)} solved to natural-map error <= {tol:g} ({first:.3f} s of first "
+        f"calls in all); at least as fast as the faster converged Siconos solver on "
+        f"{wins}/{len(rows)} in wall time, {cpu_wins}/{len(rows)} in CPU time (ratio, c.ratio = "
+        f"contactqp best wall, CPU time / that solver's time, < 1: faster; g.ratio, c.g.ratio = "
+        f"best wall, CPU time / Siconos' global Newton)"
     )
-    helped = [r["file"] for r in rows if r["gauss_seidel"]]
-    if helped:
-        lines.append("needed Gauss-Seidel sweeps: " + ", ".join(helped))
     fragile = [
         f"{r['file']} {r['perturbed'][0]}/{r['perturbed'][1]}"
         for r in rows
@@ -168,6 +226,9 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--tol", type=float, default=1e-8, help="natural-map error (1e-8)")
     parser.add_argument(
+        "--repeats", type=int, default=5, help="rounds of timed solves after the first (5)"
+    )
+    parser.add_argument(
         "--perturbed",
         type=int,
         default=0,
@@ -178,10 +239,12 @@ def main(argv=None) -> int:
     files = args.files or sorted(p for p in DATA.iterdir() if p.suffix in (".dat", ".hdf5"))
     print(
         f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, "
-        f"{platform.system()}"
+        f"{platform.system()}, contactqp kernels: {cq.kernels.IMPLEMENTATION}"
+        if hasattr(cq, "kernels")
+        else f"python {platform.python_version()}, numpy {np.__version__}"
     )
-    rows = [time_file(path, args.tol, args.perturbed) for path in files]
-    print(_table(rows, args.tol))
+    rows = time_files(files, args.tol, max(0, args.repeats), args.perturbed)
+    print(_table(rows, peer_times(), args.tol))
     return 0 if all(r["converged"] for r in rows) else 1
 
 

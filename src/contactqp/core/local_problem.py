@@ -667,8 +667,13 @@ class GlobalProblem:
         """Return the local problem, see :func:`condense_global` (computed once)."""
         return self._condensed
 
-    def certify(self, r) -> GlobalCertificate:
+    def certify(self, r, *, factor=None, local: LocalProblem | None = None) -> GlobalCertificate:
         """Judge reactions ``r`` (shape (m,)) on the equations as written.
+
+        ``factor`` (an exact factorisation of ``M``: ``solve(rhs)``, its Jacobi scaling ``s``
+        and the ``condition`` of the scaled ``M``, as
+        :class:`contactqp.methods.global_route.MassFactor`) and ``local`` (the condensed
+        problem it gave) replace the LU factorisation and the condensation made here.
 
         ``v`` solves ``M v = H r + f`` with ``M`` as given, ``u = H^T v + w``; the error is the
         natural-map error of ``(r, u)``, the equilibrium the relative residual of the first
@@ -682,7 +687,7 @@ class GlobalProblem:
         NotPositiveDefiniteError
             If ``M`` is singular.
         """
-        local = self.condense()
+        local = self.condense() if local is None else local
         m = self.dim * self.n_contacts
         rv = finite_array(r, "r", 1)
         if rv.shape != (m,):
@@ -694,7 +699,7 @@ class GlobalProblem:
         if M.shape[0] == 0:
             v, equilibrium, s, condition = np.zeros(0), 0.0, np.zeros(0), 1.0
         else:
-            factor = self._factor
+            factor = self._factor if factor is None else factor
             s, condition = factor.s, factor.condition
             v = factor.solve(Hr + f)
             Mv = np.asarray(M @ v).ravel()
@@ -711,7 +716,7 @@ class GlobalProblem:
         size_y = float(np.linalg.norm(v / s)) if v.size else 0.0
         transported = float(np.linalg.norm(_abs_product(H.T, v))) + float(np.linalg.norm(w))
         rounding = (condition * _EPS * size_h * size_y + _EPS * transported) / scale
-        data = self._data_limit(rv, v) / scale
+        data = self._data_limit(rv, v, factor) / scale
         return GlobalCertificate(
             v=v,
             u=u,
@@ -722,7 +727,7 @@ class GlobalProblem:
             ),
         )
 
-    def _data_limit(self, r, v) -> float:
+    def _data_limit(self, r, v, factor=None) -> float:
         """Size of the change of ``u`` when the written values move by their rounding."""
         rel = {name: relative_rounding(self.digits.get(name)) for name in ("M", "H", "f", "w")}
         if not any(rel.values()):
@@ -733,7 +738,8 @@ class GlobalProblem:
             + rel["H"] * _abs_product(self.H, r)
             + rel["f"] * np.abs(self.f)
         )
-        moved = self._factor.solve(forcing) if self.M.shape[0] else forcing
+        factor = self._factor if factor is None else factor
+        moved = factor.solve(forcing) if self.M.shape[0] else forcing
         return float(
             np.linalg.norm(np.asarray(self.H.T @ moved).ravel())
             + rel["H"] * np.linalg.norm(_abs_product(self.H.T, v))

@@ -7,7 +7,8 @@ This module offers the first that loads: the compiled one unless it is absent, i
 one :class:`~contactqp.errors.PureNumpyKernelsWarning` says so when the package is imported, or
 unless the environment variable ``CONTACTQP_PURE_NUMPY`` is set to anything but ``""`` or
 ``"0"`` (then silently: the choice was the user's). :data:`IMPLEMENTATION` names the one in
-use. Callers: :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb`.
+use. Callers: :mod:`contactqp.core.local_problem`, :mod:`contactqp.methods.coulomb` and
+:mod:`contactqp.methods.planar`.
 """
 
 from __future__ import annotations
@@ -23,6 +24,9 @@ __all__ = [
     "natural_map_rows",
     "alart_curnier_rows",
     "sparse_newton_matrix",
+    "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
     "IMPLEMENTATION",
     "FORCE_PURE_NUMPY",
     "pure_numpy_forced",
@@ -41,7 +45,15 @@ def pure_numpy_forced(environ: Mapping[str, str] = os.environ) -> bool:
 IMPLEMENTATION: str
 
 if pure_numpy_forced():
-    from .pure_numpy import alart_curnier_rows, natural_map_rows, project_rows, sparse_newton_matrix
+    from .pure_numpy import (
+        alart_curnier_rows,
+        natural_map_rows,
+        planar_blocks,
+        planar_gauss_seidel,
+        project_rows,
+        row_products,
+        sparse_newton_matrix,
+    )
 
     IMPLEMENTATION = "pure_numpy"
 else:
@@ -49,7 +61,10 @@ else:
         from .compiled import (
             alart_curnier_rows,
             natural_map_rows,
+            planar_blocks,
+            planar_gauss_seidel,
             project_rows,
+            row_products,
             sparse_newton_matrix,
         )
 
@@ -58,7 +73,10 @@ else:
         from .pure_numpy import (
             alart_curnier_rows,
             natural_map_rows,
+            planar_blocks,
+            planar_gauss_seidel,
             project_rows,
+            row_products,
             sparse_newton_matrix,
         )
 

@@ -7,7 +7,15 @@ the shapes those document; numpy arrays are what its callers pass).
 
 import numpy as np
 
-__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
+__all__ = [
+    "project_rows",
+    "natural_map_rows",
+    "alart_curnier_rows",
+    "sparse_newton_matrix",
+    "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
+]
 
 def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None: ...
 def natural_map_rows(
@@ -36,3 +44,30 @@ def sparse_newton_matrix(
     new_indices: np.ndarray,
     new_indptr: np.ndarray,
 ) -> int: ...
+def planar_gauss_seidel(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    blocks: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    r: np.ndarray,
+    u: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    every: int,
+    project: bool,
+) -> tuple[int, float]: ...
+def planar_blocks(
+    W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, blocks: np.ndarray
+) -> None: ...
+def row_products(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    x: np.ndarray,
+    product: np.ndarray,
+    magnitude: np.ndarray,
+) -> None: ...

@@ -10,9 +10,19 @@ looped over where that keeps the compiled loop's order of operations.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-__all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
+__all__ = [
+    "project_rows",
+    "natural_map_rows",
+    "alart_curnier_rows",
+    "sparse_newton_matrix",
+    "planar_gauss_seidel",
+    "planar_blocks",
+    "row_products",
+]
 
 
 def _check_dimension(d: int) -> None:
@@ -140,3 +150,138 @@ def sparse_newton_matrix(
     new_indptr[0] = 0
     new_indptr[1:] = np.cumsum(per_column[renumber[:n_columns] >= 0])
     return count
+
+
+def planar_local(A: np.ndarray, b: np.ndarray, mu: float, r0: np.ndarray) -> tuple[float, float]:
+    """Exact solution ``(r_N, r_T)`` of one 2-D contact's problem ``u = A r + b``.
+
+    The four cases of the 2-D Coulomb law in turn: open (``r = 0``, ``b_N >= 0``), stick
+    (``u = 0``, ``r`` inside the cone), slip along either edge (``r = r_N (1, -s mu)``,
+    ``u_N = 0``, ``s u_T >= 0``); the first that holds. If none does (a block that is not
+    positive definite), one projected step from ``r0``.
+    """
+    (a00, a01), (a10, a11) = A
+    bn, bt = b
+    if bn >= 0.0:
+        return 0.0, 0.0
+    if mu == 0.0:
+        if a00 > 0.0:
+            return -bn / a00, 0.0
+    else:
+        det = a00 * a11 - a01 * a10
+        if det != 0.0:
+            rn = (-a11 * bn + a01 * bt) / det
+            rt = (a10 * bn - a00 * bt) / det
+            if rn > 0.0 and abs(rt) <= mu * rn:
+                return rn, rt
+        for s in (1.0, -1.0):
+            denominator = a00 - s * mu * a01
+            if denominator > 0.0:
+                rn = -bn / denominator
+                if s * ((a10 - s * mu * a11) * rn + bt) >= 0.0:
+                    return rn, -s * mu * rn
+    largest = max(a00, a11)
+    step = 1.0 / largest if largest > 0.0 else 1.0
+    x = np.asarray(r0, dtype=float) - step * (A @ r0 + b)
+    projected = _projected(x[None, :], np.array([mu]))[0]
+    return float(projected[0]), float(projected[1])
+
+
+def planar_gauss_seidel(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    blocks: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    r: np.ndarray,
+    u: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    every: int,
+    project: bool,
+) -> tuple[int, float]:
+    """Gauss-Seidel sweeps with the exact 2-D local solver; returns ``(sweeps, error)``.
+
+    ``W`` is a dense (m, m) array, or, when it has no rows, the CSR arrays
+    ``(indptr, indices, data)`` of ``W`` are used; ``blocks`` holds its diagonal blocks
+    (:func:`planar_blocks`). Each sweep updates the contacts in order,
+    ``r_i`` the exact solution of contact ``i``'s problem with the others held. Every ``every``
+    sweeps ``u = W r + q`` and the natural-map error
+    ``||r - P_K(r - u - mu |u_T| e_N)|| / max(||q||, ||r||, ||u||)`` are computed; the sweeps
+    stop when it is at most ``tol``, after ``max_sweeps``, or, with ``project``, from the third
+    evaluation on, when the rate of the last two (``(e_k / e_{k-2})^(1/2)`` per ``every``
+    sweeps) would not reach ``tol`` within ``max_sweeps`` (a stall). ``r`` is updated in
+    place, ``u`` holds ``W r + q`` of the last evaluation.
+    """
+    m = q.shape[0]
+    matrix = _matrix(W, indptr, indices, data, m)
+    dense = matrix if isinstance(matrix, np.ndarray) else matrix.toarray()
+    own_blocks = np.asarray(blocks).reshape(-1, 2, 2)
+    sweep, checks, error = 0, 0, np.inf
+    before = last = np.inf
+    scale_q = float(q @ q)
+    while sweep < max_sweeps:
+        for i, A in enumerate(own_blocks):
+            own = r[2 * i : 2 * i + 2].copy()
+            b = q[2 * i : 2 * i + 2] + dense[2 * i : 2 * i + 2] @ r - A @ own
+            r[2 * i], r[2 * i + 1] = planar_local(A, b, float(mu[i]), own)
+        sweep += 1
+        if sweep % every and sweep < max_sweeps:
+            continue
+        u[...] = dense @ r + q
+        squares = np.empty(m // 2)
+        residual = natural_map_rows(r.reshape(-1, 2), u.reshape(-1, 2), mu, squares)
+        scale = np.sqrt(max(scale_q, float(r @ r), float(u @ u)))
+        error = float(np.sqrt(residual) / (scale if scale > 0.0 else 1.0))
+        if error <= tol:
+            break
+        checks += 1
+        if project and checks >= 3:
+            rate = np.sqrt(error / before)
+            if rate >= 1.0 or sweep + every * np.log(tol / error) / np.log(rate) > max_sweeps:
+                break
+        before, last = last, error
+    return sweep, error
+
+
+def _matrix(
+    W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, n: int
+) -> Any:
+    """A dense ``W``, or (no rows) the (n, n) CSR matrix of the arrays."""
+    if W.shape[0]:
+        return np.asarray(W)
+    import scipy.sparse as sp
+
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+def planar_blocks(
+    W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, blocks: np.ndarray
+) -> None:
+    """``blocks[i] = (a00, a01, a10, a11)``, contact ``i``'s diagonal 2x2 block of ``W``.
+
+    ``W`` dense, or (no rows) its CSR arrays, as :func:`planar_gauss_seidel`; entries not
+    stored are 0.
+    """
+    matrix = _matrix(W, indptr, indices, data, 2 * blocks.shape[0])
+    blocks[:, 0] = matrix.diagonal()[::2]
+    blocks[:, 1] = matrix.diagonal(1)[::2]
+    blocks[:, 2] = matrix.diagonal(-1)[::2]
+    blocks[:, 3] = matrix.diagonal()[1::2]
+
+
+def row_products(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    x: np.ndarray,
+    product: np.ndarray,
+    magnitude: np.ndarray,
+) -> None:
+    """``product = W x`` and ``magnitude = |W| |x|``, ``W`` dense or (no rows) its CSR arrays."""
+    matrix = _matrix(W, indptr, indices, data, x.shape[0])
+    product[...] = np.asarray(matrix @ x).ravel()
+    magnitude[...] = np.asarray(abs(matrix) @ np.abs(x)).ravel()

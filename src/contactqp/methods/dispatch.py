@@ -7,10 +7,13 @@ import time
 import numpy as np
 
 from .frictional import solve_frictional
+from .global_route import condense
 from .local_global import certify_global
+from .planar import ROUTE_MAX_CONTACTS
 from .registry import (
     FRICTIONLESS_ROUTE,
     METHODS,
+    PLANAR_ROUTE,
     Method,
     check_options,
     get_kind,
@@ -39,7 +42,10 @@ def resolve(
     under ``options``. With ``mu = 0`` on every contact, the kind's default method (asked for
     by name or by None) is replaced by the frictionless route
     (:data:`~contactqp.methods.registry.FRICTIONLESS_ROUTE`), which receives the options it
-    takes.
+    takes; with 2-D contacts (``dim == 2``) a local or global problem of at most
+    :data:`~contactqp.methods.planar.ROUTE_MAX_CONTACTS` contacts with no method named takes
+    the planar route (:data:`~contactqp.methods.registry.PLANAR_ROUTE`), which
+    takes the same options and hands the default a problem on which it stalls.
 
     Raises
     ------
@@ -54,6 +60,13 @@ def resolve(
     if entry.name == spec.default and _is_frictionless(problem, kind):
         entry = METHODS[FRICTIONLESS_ROUTE]
         options = {name: value for name, value in options.items() if name in entry.option_names}
+    elif (
+        method is None
+        and kind in ("local", "global")
+        and problem.dim == 2
+        and problem.n_contacts <= ROUTE_MAX_CONTACTS
+    ):
+        entry = METHODS[PLANAR_ROUTE]  # takes the default's options, hands it a stall
     defaults = {name: value for name, value in spec.defaults.items() if name in entry.option_names}
     return kind, entry, {**defaults, **options}
 
@@ -77,7 +90,13 @@ def solve(problem, method: str | None = None, **options):
     ``mu = 0`` on every contact of a frictional, local or global problem: the default method
     (None or its name) is replaced by the frictionless route ``normal-qp`` (the box QP on the
     normal block); the result keeps its kind's shape and certificate. A cross-check named
-    explicitly runs as asked. The methods, their kinds and options: :mod:`the registry
+    explicitly runs as asked. A local or global problem of 2-D contacts (at most
+    :data:`~contactqp.methods.planar.ROUTE_MAX_CONTACTS`) with no method named takes the planar
+    route ``planar`` (:mod:`~contactqp.methods.planar`), which hands a stall
+    to ``coulomb``. A global problem is condensed by the structure of its ``M``
+    (:func:`~contactqp.methods.global_route.condense`: block-diagonal ``M`` inverted exactly,
+    small ones factored dense), and the answer certified on the global equations with the same
+    factorisation. The methods, their kinds and options: :mod:`the registry
     <contactqp.methods.registry>`, or ``contactqp methods``.
 
     Parameters
@@ -104,9 +123,14 @@ def solve(problem, method: str | None = None, **options):
         return solve_frictional(problem, entry, options)
     if kind == "global":
         start = time.perf_counter()
-        local = entry.function(problem.condense(), **options)
+        condensed = condense(problem)  # M factored once, by its structure
+        if condensed.factor.positive_definite and "check_psd" in entry.option_names:
+            options = {**options, "check_psd": False}  # W = H^T M^-1 H, M checked SPD
+        local = entry.function(condensed.local, **options)
         tol = options.get("tol", _default(entry, "tol"))
-        return certify_global(problem, local, tol, start)
+        return certify_global(
+            problem, local, tol, start, factor=condensed.factor, condensed=condensed.local
+        )
     return entry.function(problem, **options)
 
 

@@ -371,7 +371,13 @@ def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
 
 
 def certify_global(
-    problem: GlobalProblem, local: LocalResult, tol: float, start: float
+    problem: GlobalProblem,
+    local: LocalResult,
+    tol: float,
+    start: float,
+    *,
+    factor=None,
+    condensed: LocalProblem | None = None,
 ) -> LocalResult:
     """The solution ``local`` of ``problem.condense()`` judged on the global equations as written.
 
@@ -381,9 +387,11 @@ def certify_global(
     the relative equilibrium residual are both at most ``tol``. Its ``limits`` give the attainable
     error set by the conditioning of ``M`` and the limit set by the data's digits, and the
     message names any above ``tol``. ``start`` is the ``time.perf_counter()`` of the solve.
+    ``factor`` and ``condensed``: the factorisation of ``M`` and the local problem it gave, when
+    the caller made them (:func:`contactqp.methods.global_route.condense`).
     """
     r = local.forces
-    certificate = problem.certify(r)
+    certificate = problem.certify(r, factor=factor, local=condensed)
     error, equilibrium = certificate.error, certificate.equilibrium
     converged = bool(error <= tol and equilibrium <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
@@ -392,7 +400,7 @@ def certify_global(
         f"equilibrium residual {equilibrium:.1e} (condensed problem: {local.message})"
     )
     return local_result(
-        problem.condense(),
+        problem.condense() if condensed is None else condensed,
         r,
         certificate.u,
         converged=converged,

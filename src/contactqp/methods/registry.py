@@ -34,6 +34,7 @@ from .constrained_cg import solve_constrained_cg
 from .coulomb import MAX_ITER, solve_coulomb
 from .fastened import solve_lawson_hanson, solve_nnls
 from .local_global import solve_frictionless
+from .planar import SWEEPS, solve_planar
 from .polygonal import solve_polygonal
 from .qp import DEFAULT_BACKEND, solve_qp
 from .surface_active_set import solve_surface_active_set
@@ -56,11 +57,16 @@ __all__ = [
     "method_options",
     "check_options",
     "FRICTIONLESS_ROUTE",
+    "PLANAR_ROUTE",
 ]
 
 #: The method :func:`~contactqp.solve` takes instead of a kind's default when ``mu = 0`` on
 #: every contact.
 FRICTIONLESS_ROUTE = "normal-qp"
+
+#: The method :func:`~contactqp.solve` takes instead of a local or global problem's default
+#: when its contacts are 2-D (``dim == 2``); it hands a stalled problem to the default.
+PLANAR_ROUTE = "planar"
 
 
 @dataclass(frozen=True)
@@ -208,6 +214,33 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 None,
                 "exact",
                 "semismooth Newton on Alart-Curnier, Gauss-Seidel fallback",
+            ),
+            Method(
+                "planar",
+                ("local", "global"),
+                solve_planar,
+                (
+                    _R0_LOCAL,
+                    _local_tol(1e-8),
+                    Option(
+                        "max_iter",
+                        int,
+                        MAX_ITER,
+                        f"budget of Gauss-Seidel sweeps (at most {SWEEPS}) and, after a "
+                        f"stall, of the coulomb method",
+                    ),
+                    Option(
+                        "check_psd",
+                        bool,
+                        True,
+                        "check W's contact blocks (all of W when coulomb takes over)",
+                    ),
+                    _PER_CONTACT,
+                ),
+                None,
+                "exact",
+                "2-D contacts: Gauss-Seidel with the exact planar local solver, then coulomb "
+                "(taken for the default)",
             ),
             Method(
                 "tresca",
@@ -420,11 +453,12 @@ def get_method(name: str | None, kind: str | None = None) -> Method:
             raise InvalidInputError("name a method (or a problem kind for its default)")
         name = default_method(kind)
     where = f" for {kind} problems" if kind else ""
-    listing = _listing(kind) if kind else ", ".join(METHODS)
     if not isinstance(name, str) or name not in METHODS:
+        listing = _listing(kind) if kind else ", ".join(METHODS)
         raise InvalidInputError(f"unknown method {name!r}{where}; choose one of {listing}")
     method = METHODS[name]
     if kind is not None and kind not in method.kinds:
+        listing = _listing(kind)
         raise InvalidInputError(
             f"method {name!r} does not solve {kind} problems (it solves "
             f"{', '.join(method.kinds)}); methods for {kind} problems: {listing}"

@@ -1,0 +1,369 @@
+r"""Global problems ``M v = H r + f, u = H^T v + w`` condensed exactly, without dense solves.
+
+:meth:`~contactqp.core.local_problem.GlobalProblem.condense` forms ``W = H^T M^{-1} H`` by a
+sparse LU factorisation of ``M`` and one solve per column of ``H`` into a dense array: ``ndof``
+by ``m`` numbers, however sparse ``M^{-1} H`` is. That is what a general ``M`` needs, and it is
+the cost of the global files of rigid bodies (``ndof`` 12,000 on Spheres-i099), whose ``M`` is
+diagonal: there ``M^{-1}`` is known exactly and ``W`` is a sparse product.
+
+:func:`condense` factors ``M`` once, by its structure (:func:`factor_mass`):
+
+* block diagonal with blocks of at most :data:`BLOCK_MAX` freedoms (diagonal: blocks of 1; a
+  rigid body's mass and inertia: 6): each block inverted exactly (LAPACK, per block), ``M^{-1}``
+  a sparse block-diagonal matrix, ``W = H^T M^{-1} H`` and ``q = H^T M^{-1} f + w`` sparse
+  products (:class:`BlockDiagonalMass`);
+* otherwise, at most :data:`DENSE_FREEDOMS` freedoms: a dense LU factorisation of the
+  Jacobi-scaled ``M`` and dense solves (:class:`DenseMass`: LAPACK beats SuperLU's per-call
+  costs on the small finite-element files);
+* otherwise the problem's own sparse LU factorisation and condensation.
+
+Each factor records the Jacobi scaling ``s = |diag M|^{-1/2}`` and the exact 1-norm condition of
+the scaled ``M``, and refuses a singular ``M`` (a singular block, or an LU pivot below
+``ndof * eps`` of the largest) with :class:`~contactqp.errors.NotPositiveDefiniteError`, as
+the sparse factorisation does. The answer is certified on the global equations as written, with
+the same factor (:meth:`~contactqp.core.local_problem.GlobalProblem.certify`): ``v`` solves
+``M v = H r + f``, ``u = H^T v + w``, and the natural-map error and the equilibrium residual
+must both meet ``tol``.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+from ..core.local_problem import DENSE_FILL, DENSE_SIZE, GlobalProblem, LocalProblem, better_dense
+from ..errors import NotPositiveDefiniteError
+
+__all__ = [
+    "BLOCK_MAX",
+    "DENSE_ENTRIES",
+    "DENSE_FREEDOMS",
+    "BlockDiagonalMass",
+    "Condensed",
+    "DenseMass",
+    "MassFactor",
+    "block_size",
+    "condense",
+    "factor_mass",
+]
+
+BLOCK_MAX = 12  #: largest diagonal block of a block-diagonal ``M`` inverted block by block
+DENSE_FREEDOMS = 400  #: a general ``M`` of at most this many freedoms is factored dense
+DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries are read dense
+_EPS = float(np.finfo(float).eps)
+
+
+class MassFactor:
+    """An exact factorisation of ``M``: what condensation and the certificate need.
+
+    Attributes
+    ----------
+    s : numpy.ndarray, shape (ndof,)
+        Jacobi scaling ``|diag M|^{-1/2}`` (1 where the diagonal is 0).
+    condition : float
+        1-norm condition number of the scaled ``S M S``.
+    """
+
+    s: np.ndarray
+    condition: float
+    #: True when ``M`` was found symmetric positive definite (then ``W = H^T M^-1 H`` is
+    #: positive semidefinite by construction, and no factorisation of ``W`` need check it)
+    positive_definite: bool = False
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """``M^{-1} rhs`` for ``rhs`` of shape (ndof,) or (ndof, k)."""
+        raise NotImplementedError
+
+
+def _scaling(diagonal: np.ndarray) -> np.ndarray:
+    size = np.abs(diagonal)
+    s = np.ones(diagonal.shape[0])
+    s[size > 0] = 1.0 / np.sqrt(size[size > 0])
+    return s
+
+
+def _singular(ndof: int, detail: str) -> NotPositiveDefiniteError:
+    return NotPositiveDefiniteError(f"M ({ndof}x{ndof}) is {detail}")
+
+
+class BlockDiagonalMass(MassFactor):
+    """``M`` block diagonal with equal blocks of ``size`` freedoms, each inverted exactly.
+
+    Parameters
+    ----------
+    M : scipy.sparse matrix or numpy.ndarray, shape (ndof, ndof)
+        Nonzero only in its diagonal blocks (:func:`block_size`).
+    size : int
+        The blocks' size; ``ndof`` is a multiple of it.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        A block is singular, exactly or numerically (the scaled block's condition number
+        above ``1 / (ndof eps)``).
+    """
+
+    def __init__(self, M, size: int):
+        ndof = M.shape[0]
+        self.size = size
+        n_blocks = ndof // size
+        if size == 1:
+            diagonal = np.asarray(M.diagonal(), dtype=float)
+            if np.any(diagonal == 0):
+                raise _singular(
+                    ndof, f"singular: diagonal entry {int(np.argmin(diagonal != 0))} is 0"
+                )
+            self.s = _scaling(diagonal)
+            self.inverse = (1.0 / diagonal).reshape(n_blocks, 1, 1)
+            self.condition = 1.0  # S M S = diag(sign M_ii)
+            self.positive_definite = bool(np.all(diagonal > 0))
+            return
+        blocks = _diagonal_blocks(M, size)
+        self.s = _scaling(np.einsum("bii->bi", blocks).reshape(-1))
+        s = self.s.reshape(n_blocks, size)
+        scaled = s[:, :, None] * blocks * s[:, None, :]
+        try:
+            inverse_scaled = np.linalg.inv(scaled)
+        except np.linalg.LinAlgError:
+            raise _singular(ndof, "singular: a diagonal block is singular") from None
+        norm = float(np.abs(scaled).sum(axis=1).max())
+        inverse_norm = float(np.abs(inverse_scaled).sum(axis=1).max())
+        self.condition = norm * inverse_norm
+        if not np.isfinite(self.condition) or self.condition * ndof * _EPS >= 1.0:
+            raise _singular(
+                ndof,
+                f"numerically singular: a scaled diagonal block has condition {self.condition:.3g}",
+            )
+        self.inverse = s[:, :, None] * inverse_scaled * s[:, None, :]
+        self.positive_definite = _positive_definite(blocks, scaled)
+
+    def matrix(self) -> sp.csr_matrix:
+        """``M^{-1}``, sparse (block diagonal)."""
+        n_blocks, size = self.inverse.shape[0], self.size
+        if size == 1:
+            return sp.csr_matrix(sp.diags(self.inverse.reshape(-1)))
+        return sp.bsr_matrix(
+            (self.inverse, np.arange(n_blocks), np.arange(n_blocks + 1)),
+            shape=(n_blocks * size, n_blocks * size),
+        ).tocsr()
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """``M^{-1} rhs``, block by block."""
+        n_blocks, size = self.inverse.shape[0], self.size
+        if size == 1:
+            inverse = self.inverse.reshape(-1)
+            return inverse * rhs if rhs.ndim == 1 else inverse[:, None] * rhs
+        shaped = rhs.reshape(n_blocks, size, -1)
+        return np.matmul(self.inverse, shaped).reshape(rhs.shape)
+
+
+def _positive_definite(blocks: np.ndarray, scaled: np.ndarray) -> bool:
+    """Whether every matrix of the stack ``blocks`` (k, n, n) is exactly symmetric and its
+    Jacobi-scaled twin in ``scaled`` has a Cholesky factorisation."""
+    if not np.array_equal(blocks, np.swapaxes(blocks, 1, 2)):
+        return False
+    try:
+        np.linalg.cholesky(scaled)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def _diagonal_blocks(M, size: int) -> np.ndarray:
+    """The diagonal blocks of ``M``, shape (ndof / size, size, size)."""
+    ndof = M.shape[0]
+    n_blocks = ndof // size
+    if isinstance(M, np.ndarray):
+        shaped = M.reshape(n_blocks, size, n_blocks, size)
+        index = np.arange(n_blocks)
+        return np.array(shaped[index, :, index, :])
+    bsr = sp.bsr_matrix(M, blocksize=(size, size))
+    bsr.sort_indices()
+    blocks = np.zeros((n_blocks, size, size))
+    rows = np.repeat(np.arange(n_blocks), np.diff(bsr.indptr))
+    blocks[rows[bsr.indices == rows]] = bsr.data[bsr.indices == rows]
+    return blocks
+
+
+class DenseMass(MassFactor):
+    """Cholesky (exactly symmetric ``M``) or else LU factorisation (LAPACK) of the
+    Jacobi-scaled dense ``S M S``.
+
+    The singularity test and the scaling are those of the problem's sparse factorisation (a
+    pivot below ``ndof * eps`` times the largest: for Cholesky, the squares of the factor's
+    diagonal); the condition number is LAPACK's estimate from the factor (``pocon`` /
+    ``gecon``), the 1-norm one of the sparse factorisation's ``onenormest``.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        ``M`` singular, numerically or exactly.
+    """
+
+    def __init__(self, M: Any):
+        ndof = M.shape[0]
+        dense = np.array(M if isinstance(M, np.ndarray) else M.toarray(), dtype=np.float64)
+        self.s = _scaling(np.diagonal(dense).copy())
+        scaled = self.s[:, None] * dense * self.s[None, :]
+        self._norm = float(np.abs(scaled).sum(axis=0).max())
+        self.cholesky = None
+        if np.array_equal(dense, dense.T):
+            try:
+                self.cholesky = scipy.linalg.cho_factor(scaled, check_finite=False)
+            except np.linalg.LinAlgError:
+                pass
+        if self.cholesky is not None:
+            pivots = np.diagonal(self.cholesky[0]) ** 2
+            self.positive_definite = True
+        else:
+            self.lu = scipy.linalg.lu_factor(scaled, check_finite=False)
+            pivots = np.abs(np.diagonal(self.lu[0]))
+        if not np.all(np.isfinite(pivots)) or pivots.min() <= ndof * _EPS * pivots.max():
+            raise _singular(
+                ndof,
+                "numerically singular: smallest/largest pivot of the scaled matrix = "
+                f"{pivots.min() / pivots.max():.3g}",
+            )
+
+    @functools.cached_property
+    def condition(self) -> float:  # type: ignore[override]
+        """1-norm condition number of ``S M S``, estimated by LAPACK from the factor."""
+        if self.cholesky is not None:
+            rcond, _ = scipy.linalg.lapack.dpocon(self.cholesky[0], self._norm)
+        else:
+            rcond, _ = scipy.linalg.lapack.dgecon(self.lu[0], self._norm, norm="1")
+        return 1.0 / rcond if rcond > 0 else float("inf")
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """``M^{-1} rhs = S (S M S)^{-1} S rhs``."""
+        sc = self.s[:, None] if rhs.ndim == 2 else self.s
+        if self.cholesky is not None:
+            return sc * scipy.linalg.cho_solve(self.cholesky, sc * rhs, check_finite=False)
+        return sc * scipy.linalg.lu_solve(self.lu, sc * rhs, check_finite=False)
+
+
+class _ProblemFactor(MassFactor):
+    """The problem's own sparse LU factorisation (a general, large ``M``)."""
+
+    def __init__(self, problem: GlobalProblem):
+        self._factor = problem._factor
+        self.s = self._factor.s
+
+    @functools.cached_property
+    def condition(self) -> float:  # type: ignore[override]
+        """As the problem's factorisation computes it (estimated above 100 freedoms)."""
+        return self._factor.condition
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        return self._factor.solve(rhs)
+
+
+def block_size(M) -> int | None:
+    """The smallest ``k <=`` :data:`BLOCK_MAX` dividing ``ndof`` such that ``M`` is nonzero only
+    in its diagonal ``k x k`` blocks (1: diagonal), or None."""
+    ndof = M.shape[0]
+    if isinstance(M, np.ndarray):
+        rows, cols = np.nonzero(M)
+    else:
+        csr: Any = sp.csr_matrix(M)
+        keep = csr.data != 0
+        rows = np.repeat(np.arange(ndof), np.diff(csr.indptr))[keep]
+        cols = csr.indices[keep]
+    if np.array_equal(rows, cols):
+        return 1
+    spread = int(np.abs(rows - cols).max(initial=0))
+    for k in range(max(2, spread + 1), BLOCK_MAX + 1):
+        if ndof % k == 0 and np.array_equal(rows // k, cols // k):
+            return k
+    return None
+
+
+def _is_diagonal(M) -> bool:
+    """Whether a CSR ``M`` stores nothing off its diagonal (read from its index arrays)."""
+    rows = np.repeat(np.arange(M.shape[0]), np.diff(M.indptr))
+    return bool(np.array_equal(rows, M.indices))
+
+
+def factor_mass(problem: GlobalProblem) -> MassFactor:
+    """The factorisation :func:`condense` uses for ``problem.M`` (see the module notes).
+
+    A sparse ``M`` of at most :data:`DENSE_ENTRIES` entries is read dense (numpy's cost per
+    call is a microsecond, scipy.sparse's some tens).
+    """
+    M: Any = problem.M
+    ndof = M.shape[0]
+    if not isinstance(M, np.ndarray):
+        if _is_diagonal(M):
+            return BlockDiagonalMass(M, 1)
+        if ndof * ndof <= DENSE_ENTRIES:
+            M = M.toarray()
+    size = block_size(M)
+    if size is not None:
+        return BlockDiagonalMass(M, size)
+    if ndof <= DENSE_FREEDOMS:
+        return DenseMass(M)
+    return _ProblemFactor(problem)
+
+
+@dataclass(frozen=True)
+class Condensed:
+    """A global problem's local form and the factorisation of ``M`` that gave it.
+
+    Attributes
+    ----------
+    local : LocalProblem
+        ``W = H^T M^{-1} H`` (dense where :func:`~contactqp.core.local_problem.better_dense`
+        prefers it or ``H`` is dense, else CSR), ``q = H^T M^{-1} f + w``.
+    factor : MassFactor
+    """
+
+    local: LocalProblem
+    factor: MassFactor
+
+
+def condense(problem: GlobalProblem) -> Condensed:
+    """``problem``'s local form through :func:`factor_mass`; ``M^{-1}`` is never formed dense
+    for a block-diagonal ``M``.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        If ``M`` is singular.
+    """
+    M, H = problem.M, problem.H
+    if M.shape[0] == 0:
+        return Condensed(problem.condense(), _ProblemFactor(problem))
+    factor = factor_mass(problem)
+    if isinstance(factor, _ProblemFactor):
+        return Condensed(problem.condense(), factor)
+    W: Any
+    ndof, m = H.shape
+    f = problem.f
+    if isinstance(H, np.ndarray) or ndof * m <= DENSE_ENTRIES:
+        Hd = H if isinstance(H, np.ndarray) else H.toarray()
+        W = Hd.T @ factor.solve(Hd)
+        q = Hd.T @ factor.solve(f) + problem.w
+        if not isinstance(H, np.ndarray) and not (
+            m <= DENSE_SIZE or np.count_nonzero(W) >= DENSE_FILL * m * m
+        ):  # CSR where the problem's condensation gives CSR that the local methods keep
+            W = sp.csr_matrix(W)
+    else:  # a block-diagonal M (a general one was condensed by the problem)
+        assert isinstance(factor, BlockDiagonalMass)
+        Hc: Any = sp.csr_matrix(H)
+        W = sp.csr_matrix(Hc.T @ (factor.matrix() @ Hc))
+        W.eliminate_zeros()
+        if better_dense(W):
+            W = W.toarray()
+        q = np.asarray(Hc.T @ factor.solve(f)).ravel() + problem.w
+    if not (
+        np.all(np.isfinite(W if isinstance(W, np.ndarray) else W.data)) and np.all(np.isfinite(q))
+    ):
+        raise NotPositiveDefiniteError(
+            f"M ({M.shape[0]}x{M.shape[0]}) is singular: the solve is not finite"
+        )
+    return Condensed(LocalProblem(W, q, problem.mu, problem.dim, problem.title), factor)

@@ -1,0 +1,254 @@
+r"""2-D Coulomb friction on the local form ``u = W r + q``: Gauss-Seidel with an exact local solver.
+
+In the plane a Coulomb cone ``{|r_T| <= mu r_N}`` is two half-planes, and one contact's problem
+``u_i = W_ii r_i + b_i`` (``b_i = q_i + sum_{j != i} W_ij r_j``, the others held) has a closed-form
+solution: exactly one of four cases holds for a positive definite ``W_ii``,
+
+* open: ``r_i = 0`` when ``b_iN >= 0``;
+* stick: ``u_i = 0``, ``r_i = -W_ii^{-1} b_i`` when it lies inside the cone;
+* slip along either edge ``s = +1, -1``: ``r_i = r_N (1, -s mu_i)``, ``u_iN = 0`` (one linear
+  equation for ``r_N >= 0``) and ``s u_iT >= 0``.
+
+The first case that holds is taken (:func:`~contactqp.kernels.planar_gauss_seidel`, compiled).
+Sweeps over the contacts in order are the nonsmooth block Gauss-Seidel method (Siconos'
+``fc2d_nsgs`` with its exact local solver); on the files of small and medium 2-D problems it
+reaches 1e-8 in tens of sweeps, each sweep one pass over ``W``'s stored entries.
+
+Gauss-Seidel converges linearly, and slowly on the singular ``W`` of large rigid granular
+problems. The natural-map error (the convergence test) is computed after each of the first
+:data:`FIRST` sweeps, then every :data:`EVERY`; from the third of these on, the sweeps stop
+when the rate of the last two would not reach ``tol`` within :data:`SWEEPS` sweeps (a stall).
+The semismooth Newton method of :mod:`contactqp.methods.coulomb` then solves the problem from
+the caller's start (not from the sweeps' point: on the rounded granular file that start makes
+Newton stall), so that a stall costs a few dozen sweeps. Convergence is judged, as for
+every local method, by the natural-map error of the final ``r`` computed from ``W`` as given
+(:func:`~contactqp.methods.local_global.finish`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import kernels
+from ..core.local_problem import LocalProblem, natural_map_residual
+from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.operators import PSD_SHIFT
+from ..core.result import LocalResult
+from ..errors import InvalidInputError, NotPositiveDefiniteError
+from .coulomb import MAX_ITER, solve_coulomb
+from .local_global import finish
+
+__all__ = [
+    "solve_planar",
+    "check_contact_blocks",
+    "SWEEPS",
+    "EVERY",
+    "FIRST",
+    "ROUTE_MAX_CONTACTS",
+]
+
+SWEEPS = 200  #: largest number of Gauss-Seidel sweeps before Newton takes over
+EVERY = 10  #: sweeps between two evaluations of the natural-map error (the first few: each)
+FIRST = 4  #: sweeps after each of which the error is evaluated (small problems converge there)
+#: Most contacts of a 2-D problem that :func:`contactqp.solve` sends to the planar route when no
+#: method is named; larger ones go to the coulomb method directly. Gauss-Seidel's rate falls
+#: with the size of a rigid granular assembly: on the shared 2,020-contact granular file its
+#: sweeps would need thousands of iterations (Siconos' NSGS does not converge in 10,000), and
+#: the stall test there costs 34 sweeps (a few per cent of Newton's time) before Newton solves it.
+ROUTE_MAX_CONTACTS = 1000
+_NO_ROWS = np.empty((0, 0))
+_NO_INDEX = np.empty(0, dtype=np.int64)
+_NO_DATA = np.empty(0)
+
+
+def _kernel_arrays(W: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(dense, indptr, indices, data)`` as :func:`~contactqp.kernels.planar_gauss_seidel`
+    takes them: a dense ``W`` itself, or the CSR arrays of a sparse one (int64 indices)."""
+    if isinstance(W, np.ndarray):
+        return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
+    csr = sp.csr_matrix(W)
+    return (
+        _NO_ROWS,
+        csr.indptr.astype(np.int64, copy=False),
+        csr.indices.astype(np.int64, copy=False),
+        np.ascontiguousarray(csr.data, dtype=float),
+    )
+
+
+def check_contact_blocks(blocks: np.ndarray) -> None:
+    """Raise unless each contact's 2x2 diagonal block of ``W`` has a semidefinite symmetric part.
+
+    ``blocks[i] = (a, b, c, d)``, contact ``i``'s block ``[[a, b], [c, d]]``
+    (:func:`~contactqp.kernels.planar_blocks`). What the local solver needs of ``W``, and a
+    necessary condition for ``W`` to be positive semidefinite: with the Jacobi scaling and the
+    shift of :func:`~contactqp.core.local_problem.check_positive_semidefinite`, a block passes
+    when ``a, d >= 0`` and ``((b + c) / 2)^2 <= (1 + PSD_SHIFT)^2 a d`` (so a zero diagonal
+    entry has a zero symmetric coupling).
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        Naming the first contact whose block fails.
+    """
+    a, b, c, d = blocks.T
+    coupling = 0.5 * (b + c)
+    bad = (a < 0) | (d < 0) | (coupling * coupling > (1.0 + PSD_SHIFT) ** 2 * a * d)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise NotPositiveDefiniteError(
+            f"W is not positive semidefinite: the symmetric part of contact {i}'s diagonal "
+            f"block [[{a[i]:.3g}, {b[i]:.3g}], [{c[i]:.3g}, {d[i]:.3g}]] is not"
+        )
+
+
+def _sweeps(
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    q,
+    mu,
+    r,
+    tol,
+    budget,
+    measure,
+):
+    """Sweep from ``r`` (in place) until ``measure`` meets ``tol``, a stall or ``budget``.
+
+    The kernel's own test is the FCLIB error of ``r``; ``measure(r, u)``, when given, is
+    ``(residual, error)`` of the method's test where that differs (``per_contact``, or
+    cohesion: ``r`` is then measured from the apex), and the kernel's is tightened
+    tenfold (up to twice) when it is met but ``measure`` is not. Returns
+    ``(sweeps, converged)``.
+    """
+    u = np.empty_like(q)
+    done, target = 0, tol
+    for first in (True, False, False, False):
+        if done >= budget:
+            break
+        count, every = (min(FIRST, budget - done), 1) if first else (budget - done, EVERY)
+        sweeps, error = kernels.planar_gauss_seidel(
+            *arrays, q, mu, r, u, target, count, every, not first
+        )
+        done += sweeps
+        if error <= target:
+            if measure is None or measure(r, u)[1] <= tol:
+                return done, True
+            if not first:
+                target *= 0.1
+        elif not first:  # stalled or out of sweeps
+            return done, False
+    return done, False
+
+
+def solve_planar(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = MAX_ITER,
+    check_psd: bool = True,
+    per_contact: bool = False,
+) -> LocalResult:
+    """Solve a 2-D local Coulomb (Mohr-Coulomb) problem to natural-map error ``tol``.
+
+    Gauss-Seidel sweeps with the exact 2-D local solver (see the module notes); when they
+    stall, :func:`~contactqp.methods.coulomb.solve_coulomb` from ``r0``.
+
+    Parameters
+    ----------
+    problem : LocalProblem
+        ``dim == 2``.
+    r0 : array_like, shape (m,), optional
+        Warm start (reactions); zero when not given.
+    tol : float
+        Target of :func:`~contactqp.core.local_problem.natural_map_error`.
+    max_iter : int
+        Budget of Gauss-Seidel sweeps (at most :data:`SWEEPS` of them) and, after a stall,
+        Newton iterations and sweeps of :func:`~contactqp.methods.coulomb.solve_coulomb`.
+    check_psd : bool
+        Check that each contact's diagonal block of ``W`` is positive semidefinite
+        (:func:`check_contact_blocks`, what the sweeps rely on: a read of three diagonals);
+        when Newton takes over, it checks all of ``W`` (one factorisation). A full
+        factorisation would cost several times the sweeps on the files of small 2-D problems;
+        the answer is judged by its natural-map error on ``W`` as given either way.
+    per_contact : bool
+        Converge to ``tol`` on every contact's own scale too.
+
+    Returns
+    -------
+    LocalResult
+        ``method`` is ``"planar"`` when the sweeps converged, else ``"coulomb"`` (the message
+        then says how many sweeps ran first); ``iterations`` counts sweeps plus the Newton
+        route's iterations.
+
+    Raises
+    ------
+    InvalidInputError
+        A problem of dimension 3, or a bad ``tol``, ``max_iter`` or ``r0``.
+    NotPositiveDefiniteError
+        If ``W`` is not positive semidefinite.
+    """
+    start = time.perf_counter()
+    if not isinstance(problem, LocalProblem):
+        raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
+    if problem.dim != 2:
+        raise InvalidInputError(f"the planar method solves 2-D problems, got dim {problem.dim}")
+    positive_tolerance(tol)
+    iteration_cap(max_iter)
+    m = problem.q.shape[0]
+    given = np.zeros(m) if r0 is None else warm_start(r0, m)
+    arrays = _kernel_arrays(problem.W)
+    blocks = np.empty((problem.n_contacts, 4))
+    kernels.planar_blocks(*arrays, blocks)
+    if check_psd:
+        check_contact_blocks(blocks)
+    W, shift = problem.W, problem.apex_shift
+    shifted = bool(np.any(shift))
+    q = problem.q - np.asarray(W @ shift).ravel() if shifted else problem.q
+
+    def measure(r_apex, u):
+        return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
+
+    r = given + shift
+    sweeps, converged = _sweeps(
+        (*arrays, blocks),
+        q,
+        problem.mu,
+        r,
+        tol,
+        min(SWEEPS, max_iter),
+        measure if per_contact or shifted else None,  # else the kernel's test is the FCLIB one
+    )
+    if converged or sweeps >= max_iter:
+        detail = f"gauss-seidel {sweeps} sweeps" + ("" if converged else " (budget spent)")
+        reactions = r - shift
+        product, magnitude = np.empty(m), np.empty(m)  # W r and |W| |r|, read once
+        kernels.row_products(*arrays, reactions, product, magnitude)
+        return finish(
+            problem,
+            reactions,
+            tol,
+            sweeps,
+            start,
+            detail,
+            method="planar",
+            per_contact=per_contact,
+            products=(product, magnitude),
+        )
+    newton = solve_coulomb(
+        problem,
+        r0=None if r0 is None else given,
+        tol=tol,
+        max_iter=max_iter - sweeps,
+        check_psd=check_psd,  # all of W: Newton factors it
+        per_contact=per_contact,
+    )
+    return dataclasses.replace(
+        newton,
+        iterations=newton.iterations + sweeps,
+        seconds=time.perf_counter() - start,
+        message=f"gauss-seidel {sweeps} sweeps (stalled), then {newton.message}",
+    )
