@@ -375,7 +375,10 @@ class ReducedModel:
     factored at once (its factor gives ``U = K^-1 P`` and is kept); a flexibility's definiteness
     is proven by the factorisations that use it (``K`` on first use, and the blocks of ``W`` a
     method factors), each raising :class:`~contactqp.errors.NotPositiveDefiniteError` if the
-    matrix it meets is not definite.
+    matrix it meets is not definite. A route that factors neither (the frictional Newton
+    route factors its own Jacobians) leaves an indefinite flexibility that passes the
+    ``O(n^2)`` checks unproven; its certificate still judges the answer on the matrix as given,
+    and :attr:`stiffness` proves definiteness on request.
 
     Parameters
     ----------
