@@ -612,14 +612,16 @@ class _Sequencer:
         return (
             entry.name == "coulomb"
             and "r0" not in options
-            and isinstance(self.base.local().W, np.ndarray)
+            and isinstance(self._local_base()[1].W, np.ndarray)
             and problem.n_contacts >= ACTIVE_SET_MIN
             and not np.any(problem.law.cohesion)
         )
 
-    def _rows(self, contacts: np.ndarray) -> np.ndarray:
-        d = self.base.dim
-        return (d * contacts[:, None] + np.arange(d)).reshape(-1)
+    def _local_base(self):
+        """The assembly's frictional problem (every pair) and its local form."""
+        base = self.base
+        assert isinstance(base, FrictionalProblem)
+        return base, base.local()
 
     def _coupling(self, contacts, structure, linked, form) -> np.ndarray:
         """``B = H R E`` of the contacts ``contacts`` under links of ``structure``, kept."""
@@ -637,7 +639,9 @@ class _Sequencer:
         key = ("operator", contacts.tobytes(), structure)
         cached = cache.get(key)
         if cached is None:
-            W, rows = self.base.local().W, self._rows(contacts)
+            base, form = self._local_base()
+            W, d = form.W, base.dim
+            rows = (d * contacts[:, None] + np.arange(d)).reshape(-1)
             if linked is None:
                 operator = ReducedOperator(W, rows, None)
             else:
