@@ -273,7 +273,11 @@ class ReducedOperator(Operator):
         n = self.shape[0]
         r = np.arange(n)[rows] if rows is not None else np.arange(n)
         c = np.arange(n)[cols] if cols is not None else np.arange(n)
-        picked = self._W.take(self.rows[r], axis=0).take(self.rows[c], axis=1)
+        W = self._W
+        if c.size < r.size:  # W is symmetric: the fewer rows read whole, then transposed
+            picked = W.take(self.rows[c], axis=0).take(self.rows[r], axis=1).T.copy()
+        else:
+            picked = W.take(self.rows[r], axis=0).take(self.rows[c], axis=1)
         if self._X is not None:
             picked -= self._X[:, r].T @ self._X[:, c]
         picked /= self.scale

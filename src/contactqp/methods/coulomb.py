@@ -368,7 +368,7 @@ def _entries(W, rows, cols) -> np.ndarray:
     return W[np.ix_(rows, cols)]
 
 
-def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
+def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
     """Solve on the contacts that can close; ``(r, iterations, stages, index)``.
 
     The FCLIB problem ``(W, q, mu)`` (dense ``W``, or an :class:`Operator` read only on the
@@ -382,12 +382,16 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
     problem's, so a converged ``C`` without violators solves the whole problem.
     ``index`` is the components of ``C`` (``r`` is zero elsewhere), or None when a
     subproblem did not converge or ``C`` grew past half of the contacts: the caller then
-    solves the whole problem from ``r``.
+    solves the whole problem from ``r``. ``look_ahead``: the open contacts that the warm
+    start itself closes join ``C`` before its first solve (a warm start from a nearby
+    problem's answer then usually needs one solve, not two).
     """
     nc = mu.shape[0]
     normal = np.arange(nc) * d
     R = r.reshape(nc, d)
     candidate = np.flatnonzero(np.any(R != 0.0, axis=1))
+    if look_ahead and candidate.size:
+        candidate = _with_violators(W, q, d, r, candidate, normal)
     iterations, stages = 0, []
     while True:
         rows = (candidate[:, None] * d + np.arange(d)).reshape(-1)
@@ -406,18 +410,28 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
             r[rows] = r_sub
             if measure(r_sub, sub_W @ r_sub + sub_q)[1] > tol:
                 return r, iterations, stages, None
-        outside = np.setdiff1d(np.arange(nc), candidate, assume_unique=True)
-        gaps = _entries(W, normal[outside], rows) @ r[rows] + q[normal[outside]]
-        violated = np.flatnonzero(gaps < 0.0)
-        if violated.size == 0:
+        grown = _with_violators(W, q, d, r, candidate, normal)
+        if grown.size == candidate.size:
             return r, iterations, stages, rows
-        if violated.size > max(ACTIVE_SET_GROWTH, candidate.size):
-            closing = -gaps[violated] / W.diagonal()[normal[outside[violated]]]
-            keep = max(ACTIVE_SET_GROWTH, candidate.size)
-            violated = violated[np.argpartition(-closing, keep)[:keep]]
-        candidate = np.union1d(candidate, outside[violated])
+        candidate = grown
         if 2 * candidate.size > nc or iterations >= max_iter:
             return r, iterations, stages, None
+
+
+def _with_violators(W, q, d, r, candidate, normal) -> np.ndarray:
+    """``candidate`` with the open contacts outside it that ``r`` (zero outside it) makes
+    penetrate: the most violated first, at most as many as it holds and at least
+    :data:`ACTIVE_SET_GROWTH`."""
+    nc = normal.size
+    rows = (candidate[:, None] * d + np.arange(d)).reshape(-1)
+    outside = np.setdiff1d(np.arange(nc), candidate, assume_unique=True)
+    gaps = _entries(W, normal[outside], rows) @ r[rows] + q[normal[outside]]
+    violated = np.flatnonzero(gaps < 0.0)
+    if violated.size > max(ACTIVE_SET_GROWTH, candidate.size):
+        closing = -gaps[violated] / W.diagonal()[normal[outside[violated]]]
+        keep = max(ACTIVE_SET_GROWTH, candidate.size)
+        violated = violated[np.argpartition(-closing, keep)[:keep]]
+    return np.union1d(candidate, outside[violated]) if violated.size else candidate
 
 
 @dataclass(frozen=True)
@@ -439,6 +453,7 @@ def solve_on_candidates(
     tol: float = 1e-8,
     max_iter: int = MAX_ITER,
     per_contact: bool = False,
+    look_ahead: bool = False,
 ) -> CandidateSolution | None:
     """The FCLIB problem ``(W, q, mu)`` without cohesion, by the candidate-set path of
     :func:`solve_coulomb` on an operator too large to form (only the candidates' blocks and
@@ -449,11 +464,16 @@ def solve_on_candidates(
     Otherwise the natural-map error of the last candidate set, at most ``tol``, bounds the
     whole problem's (every contact outside is open with a nonnegative gap); ``W`` is taken as
     positive semidefinite (not checked), e.g. a Schur complement of a validated ``H R H^T``.
+    ``look_ahead``: the open contacts that ``r0`` closes join the first candidate set (for a
+    warm start from a nearby problem's answer: one candidate solve instead of two, usually;
+    the answer then differs from the default's within ``tol``).
     """
     q = np.asarray(q, dtype=float).reshape(-1)
     mu = np.asarray(mu, dtype=float).reshape(-1)
     r = np.zeros(q.shape[0]) if r0 is None else warm_start(r0, q.shape[0])
-    r, iterations, stages, index = _active_set(W, q, mu, dim, r, tol, max_iter, per_contact)
+    r, iterations, stages, index = _active_set(
+        W, q, mu, dim, r, tol, max_iter, per_contact, look_ahead=look_ahead
+    )
     if index is None:
         return None
     return CandidateSolution(

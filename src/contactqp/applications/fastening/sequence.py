@@ -571,6 +571,9 @@ class _Sequencer:
                     tol=given["tol"],
                     max_iter=given["max_iter"],
                     per_contact=given["per_contact"],
+                    # warm started from another sequence (a study's nominal), not this one's
+                    # previous stage: the contacts that start closes are candidates at once
+                    look_ahead=isinstance(self.warm, AssemblySequence),
                 )
         if solution is None:  # the whole W' / w formed (once per contact set and links)
             if linked is None:
