@@ -396,6 +396,14 @@ class _Sequencer:
             else:
                 stage = warm.stages[self.stage_index]
                 forces = np.column_stack([stage.normal_forces, stage.tangential_forces])
+                if self.frictional and self.stage_index and self.previous is not None:
+                    # this sequence's previous stage plus what the stage changed in the warm one
+                    before = warm.stages[self.stage_index - 1]
+                    change = forces - np.column_stack(
+                        [before.normal_forces, before.tangential_forces]
+                    )
+                    where = np.searchsorted(self.previous_contacts, contacts)
+                    return self.previous.forces[where] + change[contacts]
                 return forces[contacts] if self.frictional else forces[contacts, 0]
         if warm is not None:
             d = self.base.dim if isinstance(self.base, FrictionalProblem) else 1
