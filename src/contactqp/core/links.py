@@ -43,8 +43,9 @@ from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .model import ReducedModel, finite_array
+from .operators import Operator
 
-__all__ = ["Links", "LinkedModel"]
+__all__ = ["Links", "LinkedModel", "ReducedOperator"]
 
 #: ``S``'s smallest Cholesky pivot below this fraction of its largest: links not independent.
 SINGULAR_PIVOT = 1e-12
@@ -205,6 +206,18 @@ class LinkedModel:
         correction = X.T @ X  # a symmetric rank-m product (BLAS syrk)
         return np.subtract(np.asarray(W, dtype=float), correction, out=correction)
 
+    def reduced(self, W: np.ndarray, rows: ArrayLike, coupling: ArrayLike) -> ReducedOperator:
+        """``W'`` of :meth:`reduced_operator` scaled by its largest diagonal, as an operator
+        that reads ``W`` (the contact operator of a larger set, ``rows`` the contacts' rows
+        in it) only where asked: ``B = G R E`` on those rows."""
+        B = np.asarray(coupling, dtype=float)
+        if self._factor is None:
+            return ReducedOperator(W, rows, None)
+        X = scipy.linalg.solve_triangular(
+            self._factor[0], np.ascontiguousarray(B.T), lower=True, check_finite=False
+        )
+        return ReducedOperator(W, rows, np.ascontiguousarray(X))
+
     def offset(self, coupling: ArrayLike, free_relative: ArrayLike) -> np.ndarray:
         """``B S^{-1} (d0 - E^T R P)`` (m): what the links add to ``G R P``."""
         return np.asarray(coupling, dtype=float) @ self.forces(free_relative)
@@ -217,6 +230,76 @@ class LinkedModel:
             return R.copy()
         linked = R - self.influence @ self.solve_schur(self.influence.T)
         return 0.5 * (linked + linked.T)
+
+
+class ReducedOperator(Operator):
+    r"""``W' = (W_{cc} - X^T X) / w`` read lazily: blocks, diagonal and products, never formed
+    unless :attr:`matrix` is asked for.
+
+    ``W_cc = W[rows][:, rows]`` is the contact operator of the remaining contacts (``W`` that of
+    a larger set, e.g. every pair of an assembly, symmetric), ``X = L^{-1} B^T`` with
+    ``S = L L^T`` the links' Schur matrix and ``B = G R E`` (so ``X^T X = B S^{-1} B^T``, the
+    links' rank-``m`` correction), and ``w`` the largest diagonal entry of ``W_cc - X^T X``:
+    the dimensionless FCLIB operator of a linked stage (:meth:`LinkedModel.reduced`). A block on
+    ``p`` rows and ``q`` columns costs ``p q (m + 1)``; :attr:`matrix` the full product, as
+    :meth:`LinkedModel.reduced_operator`.
+
+    Parameters
+    ----------
+    W : ndarray, shape (N, N)
+        Symmetric, not copied.
+    rows : array_like of int, shape (n,)
+        The remaining contacts' rows (and columns) in ``W``.
+    factor : ndarray, shape (m, n), or None
+        ``X``; None without links.
+    """
+
+    def __init__(self, W: np.ndarray, rows: ArrayLike, factor: np.ndarray | None):
+        self._W = W
+        self.rows = np.asarray(rows, dtype=np.intp).reshape(-1)
+        n = self.rows.size
+        super().__init__((n, n))
+        self._X = factor if factor is not None and factor.shape[0] else None
+        diagonal = np.diagonal(W)[self.rows].copy()
+        if self._X is not None:
+            diagonal -= np.einsum("ij,ij->j", self._X, self._X)
+        self.scale = float(np.max(diagonal, initial=0.0)) or 1.0
+        self._diagonal = diagonal / self.scale
+
+    def diagonal(self) -> np.ndarray:
+        return self._diagonal
+
+    def block(self, rows=None, cols=None) -> np.ndarray:
+        n = self.shape[0]
+        r = np.arange(n)[rows] if rows is not None else np.arange(n)
+        c = np.arange(n)[cols] if cols is not None else np.arange(n)
+        W = self._W
+        if c.size < r.size:  # W is symmetric: the fewer rows read whole, then transposed
+            picked = W.take(self.rows[c], axis=0).take(self.rows[r], axis=1).T.copy()
+        else:
+            picked = W.take(self.rows[r], axis=0).take(self.rows[c], axis=1)
+        if self._X is not None:
+            picked -= self._X[:, r].T @ self._X[:, c]
+        picked /= self.scale
+        return picked
+
+    def __matmul__(self, x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        full = np.zeros((self._W.shape[0],) + x.shape[1:])
+        full[self.rows] = x
+        product = (self._W @ full)[self.rows]
+        if self._X is not None:
+            product -= self._X.T @ (self._X @ x)
+        return product / self.scale
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The dense ``W'`` (``n x n``), formed on each call."""
+        W = self._W.take(self.rows, axis=0).take(self.rows, axis=1)
+        if self._X is not None:
+            W -= self._X.T @ self._X
+        W /= self.scale
+        return W
 
 
 def _cholesky(S: np.ndarray) -> tuple[np.ndarray, bool]:

@@ -380,7 +380,7 @@ class LocalForm:
         twin = copy.copy(self)
         twin.operator = self.operator[rows]
         twin._columns = rows if self._columns is None else self._columns[rows]
-        twin.W = self.W[np.ix_(rows, rows)]
+        twin.W = self.W.take(rows, axis=0).take(rows, axis=1)  # two gathers: faster than ix_
         twin.offset = np.zeros(len(rows))
         twin.offset[::dim] = gaps
         twin._templates = {}  # its W is new: no shared FCLIB problem

@@ -51,6 +51,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -64,11 +65,12 @@ from ..core.local_problem import (
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.operators import Operator
 from ..errors import InvalidInputError
 from .local_global import finish
 from .pgs import GaussSeidel
 
-__all__ = ["solve_coulomb", "alart_curnier"]
+__all__ = ["solve_coulomb", "solve_on_candidates", "CandidateSolution", "alart_curnier"]
 
 REGULARISATION = 1e-2  # largest eta of the Newton matrix A + B (W + eta D); LM start
 LM_MIN, LM_MAX, LM_TRIES = 1e-12, 1e6, 3  # Levenberg-Marquardt range of eta, tries per step
@@ -359,10 +361,18 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure):
     return r, iterations, stages
 
 
-def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
+def _entries(W, rows, cols) -> np.ndarray:
+    """Dense ``W[rows][:, cols]`` of a dense ``W`` or an :class:`Operator`."""
+    if isinstance(W, Operator):
+        return W.block(rows, cols)
+    return W[np.ix_(rows, cols)]
+
+
+def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
     """Solve on the contacts that can close; ``(r, iterations, stages, index)``.
 
-    The FCLIB problem ``(W, q, mu)`` (dense ``W``) is solved on a candidate set ``C`` of
+    The FCLIB problem ``(W, q, mu)`` (dense ``W``, or an :class:`Operator` read only on the
+    blocks asked for) is solved on a candidate set ``C`` of
     contacts (those of the warm start ``r`` that carry force), the others held open at
     ``r = 0``. An open contact satisfies the law exactly when its normal gap
     ``u_N = W_NC r_C + q_N`` is not negative, which one product with the columns of ``C``
@@ -372,17 +382,21 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
     problem's, so a converged ``C`` without violators solves the whole problem.
     ``index`` is the components of ``C`` (``r`` is zero elsewhere), or None when a
     subproblem did not converge or ``C`` grew past half of the contacts: the caller then
-    solves the whole problem from ``r``.
+    solves the whole problem from ``r``. ``look_ahead``: the open contacts that the warm
+    start itself closes join ``C`` before its first solve (a warm start from a nearby
+    problem's answer then usually needs one solve, not two).
     """
     nc = mu.shape[0]
     normal = np.arange(nc) * d
     R = r.reshape(nc, d)
     candidate = np.flatnonzero(np.any(R != 0.0, axis=1))
+    if look_ahead and candidate.size:
+        candidate = _with_violators(W, q, d, r, candidate, normal)
     iterations, stages = 0, []
     while True:
         rows = (candidate[:, None] * d + np.arange(d)).reshape(-1)
         if candidate.size:
-            sub_W, sub_q, sub_mu = W[np.ix_(rows, rows)], q[rows], mu[candidate]
+            sub_W, sub_q, sub_mu = _entries(W, rows, rows), q[rows], mu[candidate]
             sub = LocalProblem(sub_W, sub_q, sub_mu, d)
 
             def measure(r_sub, u_sub, sub=sub):
@@ -396,18 +410,75 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact):
             r[rows] = r_sub
             if measure(r_sub, sub_W @ r_sub + sub_q)[1] > tol:
                 return r, iterations, stages, None
-        outside = np.setdiff1d(np.arange(nc), candidate, assume_unique=True)
-        gaps = W[np.ix_(normal[outside], rows)] @ r[rows] + q[normal[outside]]
-        violated = np.flatnonzero(gaps < 0.0)
-        if violated.size == 0:
+        grown = _with_violators(W, q, d, r, candidate, normal)
+        if grown.size == candidate.size:
             return r, iterations, stages, rows
-        if violated.size > max(ACTIVE_SET_GROWTH, candidate.size):
-            closing = -gaps[violated] / W[normal[outside[violated]], normal[outside[violated]]]
-            keep = max(ACTIVE_SET_GROWTH, candidate.size)
-            violated = violated[np.argpartition(-closing, keep)[:keep]]
-        candidate = np.union1d(candidate, outside[violated])
+        candidate = grown
         if 2 * candidate.size > nc or iterations >= max_iter:
             return r, iterations, stages, None
+
+
+def _with_violators(W, q, d, r, candidate, normal) -> np.ndarray:
+    """``candidate`` with the open contacts outside it that ``r`` (zero outside it) makes
+    penetrate: the most violated first, at most as many as it holds and at least
+    :data:`ACTIVE_SET_GROWTH`."""
+    nc = normal.size
+    rows = (candidate[:, None] * d + np.arange(d)).reshape(-1)
+    outside = np.setdiff1d(np.arange(nc), candidate, assume_unique=True)
+    gaps = _entries(W, normal[outside], rows) @ r[rows] + q[normal[outside]]
+    violated = np.flatnonzero(gaps < 0.0)
+    if violated.size > max(ACTIVE_SET_GROWTH, candidate.size):
+        closing = -gaps[violated] / W.diagonal()[normal[outside[violated]]]
+        keep = max(ACTIVE_SET_GROWTH, candidate.size)
+        violated = violated[np.argpartition(-closing, keep)[:keep]]
+    return np.union1d(candidate, outside[violated]) if violated.size else candidate
+
+
+@dataclass(frozen=True)
+class CandidateSolution:
+    """What :func:`solve_on_candidates` found: reactions, iterations, an account of them."""
+
+    forces: np.ndarray
+    iterations: int
+    message: str
+
+
+def solve_on_candidates(
+    W: Operator,
+    q,
+    mu,
+    dim: int,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = MAX_ITER,
+    per_contact: bool = False,
+    look_ahead: bool = False,
+) -> CandidateSolution | None:
+    """The FCLIB problem ``(W, q, mu)`` without cohesion, by the candidate-set path of
+    :func:`solve_coulomb` on an operator too large to form (only the candidates' blocks and
+    the open contacts' normal rows are read).
+
+    Returns None when the candidate set gives up (a subproblem not converged, or the set grew
+    past half of the contacts): the caller then solves the whole problem (:func:`solve_coulomb`).
+    Otherwise the natural-map error of the last candidate set, at most ``tol``, bounds the
+    whole problem's (every contact outside is open with a nonnegative gap); ``W`` is taken as
+    positive semidefinite (not checked), e.g. a Schur complement of a validated ``H R H^T``.
+    ``look_ahead``: the open contacts that ``r0`` closes join the first candidate set (for a
+    warm start from a nearby problem's answer: one candidate solve instead of two, usually;
+    the answer then differs from the default's within ``tol``).
+    """
+    q = np.asarray(q, dtype=float).reshape(-1)
+    mu = np.asarray(mu, dtype=float).reshape(-1)
+    r = np.zeros(q.shape[0]) if r0 is None else warm_start(r0, q.shape[0])
+    r, iterations, stages, index = _active_set(
+        W, q, mu, dim, r, tol, max_iter, per_contact, look_ahead=look_ahead
+    )
+    if index is None:
+        return None
+    return CandidateSolution(
+        r, iterations, "converged on a candidate set (no open contact closes): " + ", ".join(stages)
+    )
 
 
 def _check_options(problem, r0, tol, max_iter):

@@ -42,7 +42,7 @@ import numpy as np
 
 from ...core.certificate import CERTIFICATE_TOL
 from ...core.contact import local_frames
-from ...core.links import LinkedModel, Links
+from ...core.links import LinkedModel, Links, ReducedOperator
 from ...core.local_problem import LocalProblem
 from ...core.model import finite_array, iteration_cap, positive_tolerance, real_array
 from ...core.problem import ContactProblem, FrictionalProblem
@@ -51,6 +51,7 @@ from ...core.status import ContactStatus
 from ...errors import InvalidInputError
 from ...methods import solve
 from ...methods.box_qp import solve_box_qp
+from ...methods.coulomb import ACTIVE_SET_MIN, solve_on_candidates
 from ...methods.dispatch import resolve
 from ...methods.lawson_hanson import solve_nonnegative_qp
 from .parts import Fastener
@@ -395,6 +396,14 @@ class _Sequencer:
             else:
                 stage = warm.stages[self.stage_index]
                 forces = np.column_stack([stage.normal_forces, stage.tangential_forces])
+                if self.frictional and self.stage_index and self.previous is not None:
+                    # this sequence's previous stage plus what the stage changed in the warm one
+                    before = warm.stages[self.stage_index - 1]
+                    change = forces - np.column_stack(
+                        [before.normal_forces, before.tangential_forces]
+                    )
+                    where = np.searchsorted(self.previous_contacts, contacts)
+                    return self.previous.forces[where] + change[contacts]
                 return forces[contacts] if self.frictional else forces[contacts, 0]
         if warm is not None:
             d = self.base.dim if isinstance(self.base, FrictionalProblem) else 1
@@ -546,22 +555,46 @@ class _Sequencer:
         q = (form.operator @ free + form.offset).reshape(k, d)
         q[:, 1:] -= tangential
         q = q.reshape(-1)
-        if linked is None:
-            template = form.fclib_template(problem.law)
-            scale = float(np.max(form.W.diagonal()))
-        else:
-            coupling, scale, template = self._reduced(contacts, structure, linked, problem)
+        coupling = None
+        if linked is not None:
+            coupling = self._coupling(contacts, structure, linked, form)
             q = q + linked.offset(coupling, linked.links.relative(free))
         # the FCLIB problem W' / w, q / L (FrictionStep's scaling; no cohesion here)
         length = float(np.max(np.abs(q))) or 1.0
-        fclib, force_unit = template.with_q(q / length), length / scale
         _, entry, options = resolve(problem, self.method, self.options)
         if "facets" in entry.option_names:
             options["facets"] = problem.law.facets
-        if start is not None and "r0" in entry.option_names:
-            options["r0"] = np.asarray(start, dtype=float).reshape(-1) / force_unit
-        with np.errstate(over="ignore", invalid="ignore"):
-            solution = solve(fclib, entry.name, **options)
+        solution = None
+        if self._candidates_apply(entry, problem, options):  # W' read on candidates only
+            operator = self._operator(contacts, structure, linked, coupling)
+            force_unit = length / operator.scale
+            given = {option.name: option.default for option in entry.options} | options
+            with np.errstate(over="ignore", invalid="ignore"):
+                solution = solve_on_candidates(
+                    operator,
+                    q / length,
+                    problem.law.mu,
+                    problem.dim,
+                    r0=None if start is None else np.reshape(start, -1) / force_unit,
+                    tol=given["tol"],
+                    max_iter=given["max_iter"],
+                    per_contact=given["per_contact"],
+                    # warm started from another sequence (a study's nominal), not this one's
+                    # previous stage: the contacts that start closes are candidates at once
+                    look_ahead=isinstance(self.warm, AssemblySequence),
+                )
+        if solution is None:  # the whole W' / w formed (once per contact set and links)
+            if linked is None:
+                template = form.fclib_template(problem.law)
+                scale = float(np.max(form.W.diagonal()))
+            else:
+                scale, template = self._reduced(contacts, structure, linked, problem)
+            force_unit = length / scale
+            if start is not None and "r0" in entry.option_names:
+                options["r0"] = np.asarray(start, dtype=float).reshape(-1) / force_unit
+            with np.errstate(over="ignore", invalid="ignore"):
+                solution = solve(template.with_q(q / length), entry.name, **options)
+        success = getattr(solution, "success", True)  # a candidate solution has converged
         r = force_unit * np.asarray(solution.forces).reshape(-1)
         link_forces = np.zeros(0)
         if linked is not None:
@@ -573,28 +606,75 @@ class _Sequencer:
         result = problem.make_result(
             r,
             method=entry.name,
-            converged=solution.success,
+            converged=success,
             message=solution.message,
             iterations=solution.iterations,
             seconds=time.perf_counter() - clock,
         )
         return result, link_forces
 
+    def _candidates_apply(self, entry, problem, options) -> bool:
+        """True when the stage is solved by coulomb's candidate-set path on a lazily read
+        ``W'`` (:func:`~contactqp.methods.coulomb.solve_on_candidates`): the coulomb method,
+        a dense contact operator, enough contacts for that path and no cohesion. ``W'`` is not
+        checked for semidefiniteness there: it is ``H R' H^T`` with ``R'`` the linked model's
+        flexibility (:meth:`~contactqp.core.links.LinkedModel.flexibility`), semidefinite by
+        construction."""
+        return (
+            entry.name == "coulomb"
+            and "r0" not in options
+            and isinstance(self._local_base()[1].W, np.ndarray)
+            and problem.n_contacts >= ACTIVE_SET_MIN
+            and not np.any(problem.law.cohesion)
+        )
+
+    def _local_base(self):
+        """The assembly's frictional problem (every pair) and its local form."""
+        base = self.base
+        assert isinstance(base, FrictionalProblem)
+        return base, base.local()
+
+    def _coupling(self, contacts, structure, linked, form) -> np.ndarray:
+        """``B = H R E`` of the contacts ``contacts`` under links of ``structure``, kept."""
+        cache = self.assembly.operators
+        key = ("coupling", contacts.tobytes(), structure)
+        cached = cache.get(key)
+        if cached is None:
+            cached = _kept(cache, key, linked.coupling(form.operator))
+        return cached
+
+    def _operator(self, contacts, structure, linked, coupling) -> ReducedOperator:
+        """``W' / w`` of the contacts ``contacts`` under links of ``structure`` (``B`` their
+        ``coupling``) as an operator on the assembly's ``W``, read where asked; kept."""
+        cache = self.assembly.operators
+        key = ("operator", contacts.tobytes(), structure)
+        cached = cache.get(key)
+        if cached is None:
+            base, form = self._local_base()
+            W, d = form.W, base.dim
+            rows = (d * contacts[:, None] + np.arange(d)).reshape(-1)
+            if linked is None:
+                operator = ReducedOperator(W, rows, None)
+            else:
+                operator = linked.reduced(W, rows, coupling)
+            cached = _kept(cache, key, operator)
+        return cached
+
     def _reduced(self, contacts, structure, linked, problem):
-        """``(B, w, W' / w)`` of the contacts ``contacts`` under links of ``structure``:
-        ``B = H R E``, ``W' = W - B S^{-1} B^T`` scaled by its largest diagonal ``w`` as an
+        """``(w, W' / w)`` of the contacts ``contacts`` under links of ``structure``:
+        ``W' = W - B S^{-1} B^T`` (``B = H R E``) scaled by its largest diagonal ``w`` as an
         FCLIB problem (validated, and its semidefiniteness checked, once per structure)."""
         cache = self.assembly.operators
         key = ("reduced", contacts.tobytes(), structure)
         cached = cache.get(key)
         if cached is None:
             form = problem.local()
-            coupling = linked.coupling(form.operator)
+            coupling = self._coupling(contacts, structure, linked, form)
             W = linked.reduced_operator(form.W, coupling)
             scale = float(np.max(W.diagonal()))
             W /= scale  # W' is new here: scaled in place
             template = LocalProblem(W, np.zeros(W.shape[0]), problem.law.mu, problem.dim)
-            cached = _kept(cache, key, (coupling, scale, template))
+            cached = _kept(cache, key, (scale, template))
         return cached
 
     def _previous_on(self, contacts: np.ndarray) -> FrictionalResult | None:
