@@ -7,6 +7,7 @@ from . import (  # noqa: F401  (register the commands)
     methods,
     riveting,
     rod,
+    rough,
     solve,
     springs,
 )

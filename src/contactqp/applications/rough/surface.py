@@ -131,8 +131,9 @@ def self_affine_surface(
     long_cutoff, rolloff, short_cutoff : float
         ``q_L <= q_r <= q_s`` in multiples of the fundamental wavenumber ``2 pi / L`` (``L``
         the longer side): modes below ``q_L`` or above ``q_s`` are empty, those between ``q_L``
-        and ``q_r`` have the plateau's power. Defaults: ``q_L = 1``, ``q_r = q_L`` (no plateau) and the
-        Nyquist mode number ``max(nx, ny) / 2`` (the wavenumber ``pi / cell``).
+        and ``q_r`` have the plateau's power. Defaults: ``q_L = 1``, ``q_r = q_L`` (no
+        plateau) and the Nyquist mode number ``max(nx, ny) / 2`` (the wavenumber
+        ``pi / cell``).
     seed : int or numpy.random.Generator, optional
         The phases' random source; the same seed gives the same surface.
 
