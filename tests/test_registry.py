@@ -78,6 +78,16 @@ def fastened_problem(k=6, seed=4):
     return cq.FastenedProblem(problem, [0, 3])
 
 
+def surface_problem(load=2.0, n=6):
+    """A rigid sphere (radius 5 mm) pressed on an ``n x n`` patch of a steel half-space."""
+    from contactqp.compliance import grid, normal_influence
+
+    x, y = grid(n, n, 1e-5, 1e-5)
+    x, y = x - x.mean(), y - y.mean()
+    W = normal_influence(x, y, 1e-5, 1e-5, 210e9, 0.3)
+    return cq.SurfaceProblem(W, (x**2 + y**2) / 1e-2, load=load)
+
+
 # --- solve() on every kind, default methods ------------------------------------------------
 
 
@@ -94,6 +104,7 @@ def test_every_problem_class_carries_its_kind():
         "local",
         "global",
         "fastened",
+        "surface",
     }
 
 
@@ -111,6 +122,7 @@ def test_every_problem_class_carries_its_kind():
         (local_problem, "local", "coulomb", LocalResult),
         (global_problem, "global", "coulomb", LocalResult),
         (fastened_problem, "fastened", "lawson-hanson", cq.FastenedResult),
+        (surface_problem, "surface", "constrained-cg", cq.SurfaceResult),
     ],
 )
 def test_solve_takes_every_kind_with_its_default_method(make, kind, default, result_type):
@@ -288,6 +300,8 @@ def _answer(result):
         (global_problem, "coulomb"),
         (fastened_problem, "lawson-hanson"),
         (fastened_problem, "active-set"),
+        (surface_problem, "constrained-cg"),
+        (surface_problem, "surface-active-set"),
     ],
 )
 def test_r0_warm_starts_every_method(make, method):

@@ -10,6 +10,7 @@ from .core.model import ReducedModel, unit_load_compliance
 from .core.problem import ContactProblem, FrictionalProblem
 from .core.result import ContactResult, FastenedResult, FrictionalResult, LocalResult
 from .core.status import STATUS_LABELS, ContactStatus
+from .core.surface import SurfaceProblem, SurfaceResult
 from .errors import (
     ContactError,
     ContactWarning,
@@ -40,6 +41,8 @@ __all__ = [
     "GlobalProblem",
     "FastenedProblem",
     "FastenedResult",
+    "SurfaceProblem",
+    "SurfaceResult",
     "solve_history",
     "linear_path",
     "HistoryResult",

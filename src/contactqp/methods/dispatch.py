@@ -71,6 +71,7 @@ def solve(problem, method: str | None = None, **options):
     ``GlobalProblem`` (FCLIB)                   ``coulomb``         LocalResult (certified on
                                                                     the global equations)
     ``FastenedProblem``                         ``lawson-hanson``   FastenedResult
+    ``SurfaceProblem``                          ``constrained-cg``  SurfaceResult
     ==========================================  ==================  ===========================
 
     ``mu = 0`` on every contact of a frictional, local or global problem: the default method

@@ -14,6 +14,7 @@ A problem carries its kind as the attribute ``kind``:
 ``local``                 :class:`~contactqp.core.local_problem.LocalProblem` (FCLIB local)
 ``global``                :class:`~contactqp.core.local_problem.GlobalProblem` (FCLIB global)
 ``fastened``              :class:`~contactqp.core.fastened.FastenedProblem`
+``surface``               :class:`~contactqp.core.surface.SurfaceProblem` (through products)
 ========================  ===================================================================
 """
 
@@ -28,11 +29,14 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from .active_set import solve_active_set
+from .constrained_cg import MAX_ITER as CG_MAX_ITER
+from .constrained_cg import solve_constrained_cg
 from .coulomb import MAX_ITER, solve_coulomb
 from .fastened import solve_lawson_hanson, solve_nnls
 from .local_global import solve_frictionless
 from .polygonal import solve_polygonal
 from .qp import DEFAULT_BACKEND, solve_qp
+from .surface_active_set import solve_surface_active_set
 from .tresca import solve_tresca_fixed_point
 
 __all__ = [
@@ -270,6 +274,39 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 "Lawson and Hanson's active set on the Schur complement, one contact at a time",
             ),
             Method(
+                "constrained-cg",
+                ("surface",),
+                solve_constrained_cg,
+                (
+                    Option(
+                        "r0", np.ndarray, None, "warm start: forces of a nearby problem (N), (m,)"
+                    ),
+                    Option(
+                        "tol", float, 1e-10, "gap on the contact, penetration off it (relative)"
+                    ),
+                    Option("max_iter", int, CG_MAX_ITER, "largest number of iterations"),
+                ),
+                None,
+                "exact",
+                "Polonsky and Keer's constrained conjugate gradient, through W's products only",
+            ),
+            Method(
+                "surface-active-set",
+                ("surface",),
+                solve_surface_active_set,
+                (
+                    Option(
+                        "r0", np.ndarray, None, "warm start: forces of a nearby problem (N), (m,)"
+                    ),
+                    Option("tol", float, 1e-10, "box-QP natural residual and load balance"),
+                    Option("max_iter", int, 500, "largest number of iterations of each box QP"),
+                ),
+                None,
+                "cross-check",
+                "the box QP's active set at each approach (Newton on it at a fixed load); "
+                "factors blocks of W",
+            ),
+            Method(
                 "nnls",
                 ("fastened",),
                 solve_nnls,
@@ -301,6 +338,7 @@ KINDS: Mapping[str, Kind] = MappingProxyType(
             Kind("local", "LocalProblem", "coulomb"),
             Kind("global", "GlobalProblem", "coulomb"),
             Kind("fastened", "FastenedProblem", "lawson-hanson"),
+            Kind("surface", "SurfaceProblem", "constrained-cg"),
         )
     }
 )
