@@ -5,6 +5,9 @@ Submodules
 halfspace
     Analytic influence coefficients of a linear elastic half-space (Boussinesq, Love;
     Cerruti tangential and coupling terms).
+fft_halfspace
+    The same half-space (and a plane-strain half-plane) as matrix-free operators applied by
+    FFT, non-periodic (zero padding) or periodic (Westergaard); the composite modulus.
 condensation
     Flexibility of chosen freedoms of a sparse stiffness matrix by static condensation.
 importers
@@ -18,6 +21,7 @@ fem
 """
 
 from .condensation import condense, factorize
+from .fft_halfspace import HalfPlaneOperator, HalfSpaceOperator, composite_modulus
 from .halfspace import grid, influence_matrix, normal_influence
 from .importers import load_compliance
 
@@ -25,6 +29,9 @@ __all__ = [
     "grid",
     "normal_influence",
     "influence_matrix",
+    "HalfSpaceOperator",
+    "HalfPlaneOperator",
+    "composite_modulus",
     "condense",
     "factorize",
     "load_compliance",

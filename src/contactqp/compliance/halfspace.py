@@ -246,19 +246,18 @@ def normal_influence(
     dx = _positive_length(dx, "dx")
     dy = _positive_length(dy, "dy")
     E, nu = _material(young, poisson)
-    scale = (1.0 - nu * nu) / (np.pi * E * dx * dy)
-    half_x, half_y = 0.5 * dx, 0.5 * dy
     result = np.empty((xs.size, xs.size))
     for rows, (integral,), _, _ in _pairwise(
-        xs,
-        ys,
-        dx,
-        dy,
-        lambda X, Y: (scale * _rectangle_integral(X, Y, half_x, half_y),),
-        signs=False,
+        xs, ys, dx, dy, lambda X, Y: (_normal_kernel(X, Y, dx, dy, E, nu),), signs=False
     ):
         result[rows] = integral
     return result
+
+
+def _normal_kernel(X, Y, dx: float, dy: float, E: float, nu: float) -> np.ndarray:
+    """The entries of :func:`normal_influence` (m/N) at offsets ``(X, Y) >= 0`` of the centres."""
+    scale = (1.0 - nu * nu) / (np.pi * E * dx * dy)
+    return scale * _rectangle_integral(X, Y, 0.5 * dx, 0.5 * dy)
 
 
 def _pairwise(xs, ys, dx, dy, evaluate, signs: bool = True):
@@ -374,6 +373,28 @@ def _cerruti_integrals(X, Y, half_x: float, half_y: float):
     )
 
 
+def _cell_kernels(X, Y, dx: float, dy: float, E: float, nu: float, coupling: bool):
+    """The six distinct entries of :func:`influence_matrix` at offsets ``(X, Y) >= 0``.
+
+    Returns ``(R_xx, R_yy, R_xy, R_zz, R_xz, R_yz)`` (m/N) for a unit force on a ``dx`` by
+    ``dy`` cell, seen from the offset ``(X, Y)`` of the centres (target minus source); the
+    last three are odd in the offsets: multiply ``R_xy`` by the signs of both, ``R_xz`` by the
+    sign of ``X`` and ``R_yz`` by that of ``Y`` (``R_zx = -R_xz``, ``R_zy = -R_yz``).
+    """
+    c = (1.0 + nu) / (np.pi * E * dx * dy)
+    coupling_scale = 0.5 * c * (1.0 - 2.0 * nu) if coupling else 0.0
+    half_x, half_y = 0.5 * dx, 0.5 * dy
+    one, xx, yy, xy, along_x, along_y = _cerruti_integrals(X, Y, half_x, half_y)
+    return (
+        c * ((1.0 - nu) * one + nu * xx),
+        c * ((1.0 - nu) * one + nu * yy),
+        c * nu * xy,
+        _normal_kernel(X, Y, dx, dy, E, nu),
+        coupling_scale * along_x,
+        coupling_scale * along_y,
+    )
+
+
 def influence_matrix(
     x: ArrayLike,
     y: ArrayLike,
@@ -450,21 +471,9 @@ def influence_matrix(
     E, nu = _material(young, poisson)
     if not isinstance(coupling, (bool, np.bool_)):
         raise InvalidInputError(f"coupling must be True or False, got {coupling!r}")
-    c = (1.0 + nu) / (np.pi * E * dx * dy)
-    normal_scale = (1.0 - nu * nu) / (np.pi * E * dx * dy)  # c (1 - nu), as normal_influence
-    coupling_scale = 0.5 * c * (1.0 - 2.0 * nu) if coupling else 0.0
-    half_x, half_y = 0.5 * dx, 0.5 * dy
 
     def evaluate(X, Y):
-        one, xx, yy, xy, along_x, along_y = _cerruti_integrals(X, Y, half_x, half_y)
-        return (
-            c * ((1.0 - nu) * one + nu * xx),
-            c * ((1.0 - nu) * one + nu * yy),
-            c * nu * xy,
-            normal_scale * _rectangle_integral(X, Y, half_x, half_y),
-            coupling_scale * along_x,
-            coupling_scale * along_y,
-        )
+        return _cell_kernels(X, Y, dx, dy, E, nu, coupling)
 
     n = xs.size
     result = np.empty((3 * n, 3 * n))
