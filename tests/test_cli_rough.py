@@ -72,6 +72,10 @@ def test_the_same_seed_gives_the_same_answers():
     assert first[0]["stiffness"] is None  # one load: no difference to take
 
 
+def test_mu_zero_is_the_frictionless_contact():
+    assert records("--grid", 8, "--pressures", "1e9", "--mu", 0)[0]["certificate"]
+
+
 def test_a_wavy_surface_follows_westergaard_up_to_full_contact(tmp_path):
     nx = 128
     path, full = sinusoid(tmp_path, nx=nx)
@@ -136,6 +140,8 @@ def test_the_ascii_grid_and_the_figures(tmp_path):
     ("args", "needle"),
     [
         (("--mu", "0.3"), "--mu: friction on rough surfaces"),
+        (("--mu", "-1"), "--mu must be a friction coefficient >= 0"),
+        (("--surface", "FLAT", "--cell", "1e-6"), "the surface is flat"),
         (("--surface", "SURFACE", "--grid", "32"), "--grid shape a generated surface"),
         (("--surface", "missing.npy", "--cell", "1e-6"), "missing.npy: file not found"),
         (("--surface", "SURFACE"), "holds no cell size"),
@@ -151,12 +157,10 @@ def test_the_ascii_grid_and_the_figures(tmp_path):
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
     path, _ = sinusoid(tmp_path, nx=8, ny=8)
-    args = [
-        str(path)
-        if a == "SURFACE"
-        else a.replace("OUT", str(tmp_path)).replace("a.png", str(tmp_path / "a.png"))
-        for a in args
-    ]
+    flat = tmp_path / "flat.npy"
+    np.save(flat, np.zeros((8, 8)))
+    names = {"SURFACE": str(path), "FLAT": str(flat), "a.png": str(tmp_path / "a.png")}
+    args = [names.get(a, a.replace("OUT", str(tmp_path))) for a in args]
     before = path.read_bytes()
     status, out, err = run(*args)
     lines = err.strip().splitlines()

@@ -84,7 +84,8 @@ DEFAULT_CELL = 1e-6  # m, for a generated surface
 @click.option(
     "--mu",
     type=float,
-    help="Friction coefficient: refused, no matrix-free frictional method for surfaces yet.",
+    help="Friction coefficient: only 0 (frictionless) is accepted; there is no matrix-free "
+    "frictional method for surfaces yet, so any other value is refused (exit 2).",
 )
 @click.option(
     "--json",
@@ -127,7 +128,9 @@ def rough(
     (--surface) or generated (self-affine, --grid, --hurst, --rms-slope, --seed). Exit status 1
     when a load is not solved to its certificate.
     """
-    if mu is not None:
+    if mu is not None and not mu >= 0:
+        raise InvalidInputError(f"--mu must be a friction coefficient >= 0, got {mu!r}")
+    if mu:
         raise UnsupportedProblemError(
             "--mu: friction on rough surfaces needs a matrix-free frictional method, which "
             "this version does not have; leave out --mu for the frictionless contact"
@@ -167,6 +170,8 @@ def rough(
         height_map = heightmap.HeightMap(heights, size)
     slope = surfaces.rms_slope(height_map.heights, height_map.cell)
     if pressures is None:
+        if not slope > 0:
+            raise InvalidInputError("the surface is flat (rms slope 0); give --pressures")
         scale = young / (1 - poisson**2) * slope
         pressures = [fraction * scale for fraction in RELATIVE_PRESSURES]
     from ..applications.rough.contact import solve_rough_contact
@@ -239,7 +244,7 @@ def _table(contact) -> None:
         table.add_row(
             f"{point.pressure:.6g}",
             f"{point.area_fraction:.4f}",
-            f"{float(contact.linear_law(point.pressure)):.4f}",
+            f"{float(contact.linear_law(point.pressure)):.4f}" if contact.rms_slope > 0 else "",
             f"{point.mean_gap:.4g}",
             "" if point.stiffness is None else f"{point.stiffness:.4g}",
             str(point.iterations),

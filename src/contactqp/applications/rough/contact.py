@@ -159,8 +159,10 @@ class RoughContact:
         return all(point.certificate for point in self.points)
 
     def linear_law(self, pressure, kappa: float = KAPPA_PERSSON):
-        """:math:`\\kappa p / (E^* h'_\\mathrm{rms})`: the small-load area fraction."""
-        return kappa * np.asarray(pressure, dtype=float) / (self.modulus * self.rms_slope)
+        """:math:`\\kappa p / (E^* h'_\\mathrm{rms})`: the small-load area fraction (inf for a
+        flat surface, where the law does not apply)."""
+        with np.errstate(divide="ignore"):
+            return kappa * np.asarray(pressure, dtype=float) / (self.modulus * self.rms_slope)
 
 
 def solve_rough_contact(

@@ -55,13 +55,18 @@ def plot_rough_contact(contact: RoughContact, path: str | os.PathLike[str]) -> P
     scale = contact.modulus * contact.rms_slope
     last = contact.points[-1]
     surface = contact.surface
+    laws = (
+        {  # none for a flat surface
+            "Persson, kappa = sqrt(8/pi)": KAPPA_PERSSON / scale,
+            "Bush-Gibson-Thomas, kappa = sqrt(2 pi)": KAPPA_BGT / scale,
+        }
+        if scale > 0
+        else {}
+    )
     return plot_area_load(
         [point.pressure for point in contact.points],
         [point.area_fraction for point in contact.points],
-        {
-            "Persson, kappa = sqrt(8/pi)": KAPPA_PERSSON / scale,
-            "Bush-Gibson-Thomas, kappa = sqrt(2 pi)": KAPPA_BGT / scale,
-        },
+        laws,
         last.pressure_map(surface.shape, surface.cell),
         surface.cell,
         path,
