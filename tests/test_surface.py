@@ -75,7 +75,8 @@ def test_fixed_approach_equals_the_active_set_solve_of_the_same_model(n, rough):
     assert result.load == pytest.approx(reference.forces.sum(), rel=1e-9)
     # the answer's displacements are W r (one more product, the certificate's)
     np.testing.assert_allclose(result.displacements, W @ result.forces, rtol=1e-12)
-    assert operator.products == 2 * result.iterations + 2  # start, 2 per step, certificate
+    # the start, one per step, a fresh one after a projection, the certificate's
+    assert result.iterations + 2 <= operator.products <= 2 * result.iterations + 3
 
 
 @pytest.mark.parametrize("n, rough", [(12, 0.0), (18, 3e-7)])

@@ -15,8 +15,10 @@ mean over the contact (that mean is the approach ``delta``, the multiplier of th
 rescales the forces to the load after each step. At a fixed approach the same iteration runs
 without the mean and the rescaling.
 
-Each iteration costs two products with ``W`` (the search direction's, and the new forces')
-and a few passes over the vectors: ``W`` is reached through
+Each iteration costs one product with ``W``, the search direction's, and a few passes over the
+vectors; the displacements ``W r`` follow the forces along the step, and are computed afresh
+(a second product) only when the projection or the points joining the contact move the forces
+off that line, and before the answer is judged. ``W`` is reached through
 :class:`~contactqp.core.operators.Operator` products only (an FFT half-space never forms it).
 The iteration stops when the gaps vanish on the contact and no free point penetrates, to
 ``tol`` times the length scale of the certificate (:func:`~contactqp.core.surface.certify_surface`),
@@ -105,6 +107,7 @@ def solve_constrained_cg(
     load, fixed_load = problem.load, problem.load is not None
     with np.errstate(over="ignore", invalid="ignore"):  # the certificate judges non-finite r
         r, u = _start(problem, r0)
+        fresh = True  # u is the product W r (not updated from the previous step's)
         direction = np.zeros_like(r)
         previous, conjugate = 1.0, False
         approach = 0.0 if problem.approach is None else problem.approach
@@ -118,14 +121,12 @@ def solve_constrained_cg(
                 approach = float(np.mean(g[contact]))
             g -= approach
             length = max(float(np.max(np.abs(u))), abs(approach - lowest), np.finfo(float).tiny)
-            residual = (
-                max(
-                    float(np.max(np.abs(g[contact]), initial=0.0)),
-                    float(np.max(-g[~contact], initial=0.0)),
-                )
-                / length
-            )
+            gc = np.where(contact, g, 0.0)
+            residual = max(float(np.max(np.abs(gc))), float(np.max(-g, initial=0.0))) / length
             if residual <= tol:
+                if not fresh:  # judge the forces by their own product, not the updated one
+                    u, fresh = W @ r, True
+                    continue
                 converged = True
                 message = f"converged in {iterations} iterations (residual {residual:.1e})"
                 break
@@ -135,7 +136,6 @@ def solve_constrained_cg(
             if iterations >= max_iter:
                 break
             iterations += 1
-            gc = np.where(contact, g, 0.0)
             G = float(gc @ gc)
             if conjugate:  # t = g + (G / G_old) t_old on the contact, 0 off it
                 direction = np.where(contact, gc + (G / previous) * direction, 0.0)
@@ -143,9 +143,8 @@ def solve_constrained_cg(
                 direction = gc
             previous = G
             q = W @ direction
-            if fixed_load:
-                q -= np.mean(q[contact])
-            curvature = float(np.where(contact, q, 0.0) @ direction)
+            projected = q - np.mean(q[contact]) if fixed_load else q
+            curvature = float(np.where(contact, projected, 0.0) @ direction)
             if not curvature > 0.0:
                 message = (
                     f"stopped after {iterations} iterations: no descent along the search "
@@ -153,15 +152,22 @@ def solve_constrained_cg(
                 )
                 break
             step = float(gc @ direction) / curvature
-            r = np.maximum(r - step * direction, 0.0)
-            joining = (r == 0.0) & (g < 0.0)
+            r = r - step * direction
+            joining = (r <= 0.0) & (g < 0.0)  # penetrating points without force
             conjugate = not np.any(joining)
-            if not conjugate:
+            moved = not conjugate or bool(np.any(r < 0.0))
+            if moved:  # the projection takes r off the line, and its product with it
+                r = np.maximum(r, 0.0)
                 r[joining] -= step * g[joining]
+            scale = 1.0
             if fixed_load:
                 assert load is not None
-                r *= load / np.sum(r)
-            u = W @ r
+                scale = load / float(np.sum(r))
+                r *= scale
+            if moved:
+                u, fresh = W @ r, True
+            else:  # r stayed on the line: so did its product (one product this step)
+                u, fresh = scale * (u - step * q), False
     return problem.make_result(
         r,
         approach,
