@@ -8,7 +8,10 @@ sinusoidal tractions, which a grid mode reproduces to rounding (the kernel is sp
 
 from __future__ import annotations
 
+import concurrent.futures
 import math
+import pickle
+import sys
 
 import numpy as np
 import pytest
@@ -23,11 +26,13 @@ from contactqp.compliance import (
     normal_influence,
 )
 from contactqp.core.operators import as_operator
-from contactqp.errors import InvalidInputError, UnsupportedProblemError
+from contactqp.errors import InvalidInputError, MissingDependencyError, UnsupportedProblemError
 
 E, NU = 210e9, 0.3
 GRIDS = [(1, 1, 1e-3, 1e-3), (7, 1, 1e-3, 2e-3), (1, 6, 2e-3, 1e-3), (5, 3, 1e-3, 2e-3),
          (8, 6, 1.5e-3, 1e-3), (13, 16, 1e-3, 1e-3)]  # fmt: skip
+#: both FFT libraries (pyFFTW comes with the test extra)
+FFTS = ["scipy", "pyfftw"]
 #: FFT products round at a few 1e-16 relative per transform on these sizes
 PRODUCT_RTOL = 1e-12
 
@@ -36,10 +41,12 @@ def relative(a, b) -> float:
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
 
 
+@pytest.mark.parametrize("fft", FFTS)
 @pytest.mark.parametrize(("nx", "ny", "dx", "dy"), GRIDS)
-def test_normal_products_equal_the_dense_love_matrix(nx, ny, dx, dy):
+def test_normal_products_equal_the_dense_love_matrix(nx, ny, dx, dy, fft):
     rng = np.random.default_rng(nx * 100 + ny)
-    W = HalfSpaceOperator(nx, ny, dx, dy, E, NU)
+    W = HalfSpaceOperator(nx, ny, dx, dy, E, NU, fft=fft)
+    assert W.fft == fft
     R = normal_influence(*grid(nx, ny, dx, dy), dx, dy, E, NU)
     assert W.shape == R.shape
     f = rng.standard_normal(nx * ny)
@@ -50,11 +57,12 @@ def test_normal_products_equal_the_dense_love_matrix(nx, ny, dx, dy):
     assert relative(W @ np.abs(f), R @ np.abs(f)) < PRODUCT_RTOL  # one-signed, like pressures
 
 
+@pytest.mark.parametrize("fft", FFTS)
 @pytest.mark.parametrize(("nx", "ny", "dx", "dy"), GRIDS)
 @pytest.mark.parametrize(("poisson", "coupling"), [(0.3, True), (0.3, False), (-0.4, True)])
-def test_full_products_equal_the_dense_cerruti_matrix(nx, ny, dx, dy, poisson, coupling):
+def test_full_products_equal_the_dense_cerruti_matrix(nx, ny, dx, dy, poisson, coupling, fft):
     rng = np.random.default_rng(nx * 100 + ny)
-    W = HalfSpaceOperator(nx, ny, dx, dy, E, poisson, components="full", coupling=coupling)
+    W = HalfSpaceOperator(nx, ny, dx, dy, E, poisson, components="full", coupling=coupling, fft=fft)
     R = influence_matrix(*grid(nx, ny, dx, dy), dx, dy, E, poisson, coupling=coupling)
     assert W.shape == R.shape
     f = rng.standard_normal(3 * nx * ny)
@@ -123,8 +131,9 @@ WAVY = [
 ]
 
 
+@pytest.mark.parametrize("fft", FFTS)
 @pytest.mark.parametrize(("nx", "ny", "dx", "dy", "mx", "my"), WAVY)
-def test_periodic_normal_sinusoid_is_westergaard(nx, ny, dx, dy, mx, my):
+def test_periodic_normal_sinusoid_is_westergaard(nx, ny, dx, dy, mx, my, fft):
     """p = p0 cos(q . x) gives u = 2 p0 cos(q . x) / (E* |q|) (Westergaard; Johnson 1985
     §13.2); the spectral kernel collocated at the centres makes a grid mode exact to rounding."""
     x, y, Lx, Ly = westergaard_grid(nx, ny, dx, dy)
@@ -132,7 +141,7 @@ def test_periodic_normal_sinusoid_is_westergaard(nx, ny, dx, dy, mx, my):
     q = math.hypot(qx, qy)
     p0 = 3e6
     pressure = p0 * np.cos(qx * x + qy * y + 0.4)
-    W = HalfSpaceOperator(nx, ny, dx, dy, E, NU, periodic=True)
+    W = HalfSpaceOperator(nx, ny, dx, dy, E, NU, periodic=True, fft=fft)
     u = W @ (pressure * dx * dy)
     E_star = E / (1 - NU**2)
     expected = 2 * p0 / (E_star * q) * np.cos(qx * x + qy * y + 0.4)
@@ -167,9 +176,10 @@ def test_periodic_normal_operator_is_symmetric_semidefinite_with_zero_mean():
     assert relative(dent_periodic, dent_love) < 0.01
 
 
+@pytest.mark.parametrize("fft", FFTS)
 @pytest.mark.parametrize(("nx", "ny"), [(16, 16), (15, 12), (12, 9)])
 @pytest.mark.parametrize("poisson", [0.3, 0.0, -0.3])
-def test_periodic_tangential_sinusoids_are_the_closed_forms(nx, ny, poisson):
+def test_periodic_tangential_sinusoids_are_the_closed_forms(nx, ny, poisson, fft):
     """Longitudinal and transverse sinusoidal shear on a periodic half-space.
 
     A shear traction t0 cos(q . x) along q displaces the surface along q by 2 t0 / (E* q) (as
@@ -181,7 +191,7 @@ def test_periodic_tangential_sinusoids_are_the_closed_forms(nx, ny, poisson):
     vectors check the rotation of the kernel."""
     dx = dy = 1e-3
     x, y, Lx, Ly = westergaard_grid(nx, ny, dx, dy)
-    W = HalfSpaceOperator(nx, ny, dx, dy, E, poisson, components="full", periodic=True)
+    W = HalfSpaceOperator(nx, ny, dx, dy, E, poisson, components="full", periodic=True, fft=fft)
     G = E / (2 * (1 + poisson))
     E_star = E / (1 - poisson**2)
     t0 = 2e6
@@ -256,10 +266,11 @@ def strip_matrix_by_quadrature(n, dx, E_star, r0):
     return matrix
 
 
+@pytest.mark.parametrize("fft", FFTS)
 @pytest.mark.parametrize(("n", "reference"), [(1, None), (9, None), (12, 2e-3), (7, 0.5)])
-def test_half_plane_equals_the_strip_kernel_by_quadrature(n, reference):
+def test_half_plane_equals_the_strip_kernel_by_quadrature(n, reference, fft):
     dx = 1e-3
-    W = HalfPlaneOperator(n, dx, E, NU, reference=reference)
+    W = HalfPlaneOperator(n, dx, E, NU, reference=reference, fft=fft)
     r0 = n * dx if reference is None else reference
     assert W.reference == r0
     R = strip_matrix_by_quadrature(n, dx, E / (1 - NU**2), r0)
@@ -284,12 +295,13 @@ def test_half_plane_datum_shifts_every_entry_by_one_constant():
     np.testing.assert_allclose(far - near, shift, rtol=1e-12)
 
 
+@pytest.mark.parametrize("fft", FFTS)
 @pytest.mark.parametrize("n", [32, 33])
-def test_periodic_half_plane_sinusoid_and_the_half_space_uniform_in_y(n):
+def test_periodic_half_plane_sinusoid_and_the_half_space_uniform_in_y(n, fft):
     dx, p0 = 2e-3, 5e6
     L = n * dx
     x = (np.arange(n) - 0.5 * (n - 1)) * dx
-    W = HalfPlaneOperator(n, dx, E, NU, periodic=True)
+    W = HalfPlaneOperator(n, dx, E, NU, periodic=True, fft=fft)
     E_star = E / (1 - NU**2)
     for m in (1, 2, 5):
         q = 2 * np.pi * m / L
@@ -299,7 +311,7 @@ def test_periodic_half_plane_sinusoid_and_the_half_space_uniform_in_y(n):
     rng = np.random.default_rng(2)
     pressure = rng.random(n)
     ny, dy = 6, 1e-3
-    space = HalfSpaceOperator(n, ny, dx, dy, E, NU, periodic=True)
+    space = HalfSpaceOperator(n, ny, dx, dy, E, NU, periodic=True, fft=fft)
     u3 = (space @ np.tile(pressure * dx * dy, ny)).reshape(ny, n)
     u2 = W @ (pressure * dx)
     for row in u3:
@@ -368,6 +380,10 @@ def test_composite_modulus_and_the_operator_of_two_bodies():
             lambda: HalfSpaceOperator(2, 2, 1e-3, 1e-3, E, NU).block([0.5]),
             "rows must be None, a slice, a mask or 1-D indices",
         ),
+        (
+            lambda: HalfSpaceOperator(4, 4, 1e-3, 1e-3, E, NU, fft="mkl"),
+            'fft must be None, "scipy" or "pyfftw"',
+        ),
         (lambda: HalfPlaneOperator(0, 1e-3, E, NU), "n must be a positive integer"),
         (
             lambda: HalfPlaneOperator(4, 1e-3, E, NU, reference=0.0),
@@ -386,3 +402,32 @@ def test_composite_modulus_and_the_operator_of_two_bodies():
 def test_bad_input_is_one_clear_line(make, message):
     with pytest.raises(InvalidInputError, match=message):
         make()
+
+
+@pytest.mark.parametrize("fft", FFTS)
+def test_threads_pickles_and_the_default_library(fft):
+    """Threads and worker counts change no product beyond rounding; a pickled operator (sent
+    to a worker process) plans its transforms afresh; products from several threads at once
+    share the buffers safely."""
+    nx, ny, d = 24, 20, 1e-3
+    W = HalfSpaceOperator(nx, ny, d, d, E, NU, components="full", fft=fft)
+    F = np.random.default_rng(5).standard_normal((3 * nx * ny, 8))
+    expected = W @ F
+    for workers in (2, -1):
+        threaded = HalfSpaceOperator(nx, ny, d, d, E, NU, components="full", fft=fft,
+                                     workers=workers)  # fmt: skip
+        assert relative(threaded @ F, expected) < 1e-13
+    copy = pickle.loads(pickle.dumps(W))
+    assert copy.fft == fft and relative(copy @ F, expected) < 1e-15
+    with concurrent.futures.ThreadPoolExecutor(4) as pool:
+        answers = list(pool.map(lambda j: W @ F[:, j], range(8)))
+    for j, answer in enumerate(answers):
+        assert relative(answer, expected[:, j]) < 1e-13
+    assert HalfSpaceOperator(2, 2, d, d, E, NU).fft == "pyfftw"  # installed: the default
+
+
+def test_without_pyfftw_the_operators_use_scipy(monkeypatch):
+    monkeypatch.setitem(sys.modules, "pyfftw", None)  # import pyfftw raises ImportError
+    assert HalfSpaceOperator(4, 3, 1e-3, 1e-3, E, NU).fft == "scipy"
+    with pytest.raises(MissingDependencyError, match=r"pip install 'contactqp\[fft\]'"):
+        HalfPlaneOperator(4, 1e-3, E, NU, fft="pyfftw")

@@ -2,7 +2,7 @@
 
 The flexibility of a regular grid of equal cells on an elastic half-space is a convolution: the
 displacement of cell ``i`` under a force on cell ``j`` depends on their offset only. The
-operators here hold the kernel's transform and apply ``W`` with real FFTs (``scipy.fft``), in
+operators here hold the kernel's transform and apply ``W`` with real FFTs (see "Which FFT"), in
 ``O(n log n)`` time and ``O(n)`` memory, where the dense matrix of
 :func:`~contactqp.compliance.normal_influence` takes ``O(n^2)`` of both.
 
@@ -17,16 +17,16 @@ Non-periodic (a finite grid on an infinite half-space)
 
 Periodic (the grid is one period of the surface, as for rough surfaces)
     The periodic sum of the cell kernel diverges (it decays as ``1 / r``). The operator uses
-    the spectral (Westergaard) kernel instead, as Stanley & Kato and Tamaas do: a traction mode
-    of wave vector ``q`` displaces the surface by the half-space's surface Green's function at
-    ``q`` (below), the tractions being the forces of the cells divided by the cell area and the
-    displacements collocated at the cell centres. A mode of the grid (``p0 cos(q x)``
-    sampled at the centres) is then displaced by exactly Westergaard's
-    ``2 p0 cos(q x) / (E* |q|)``. The mean (``q = 0``) mode of the displacement is
-    undetermined (a periodic half-space under a net force sinks without limit): it is set to 0,
-    so ``W`` is positive semidefinite with the constant vector in its null space, and a
-    periodic contact problem is posed with a fixed load, the mean approach being the unknown
-    that balances it. With ``G = E / (2 (1 + nu))``, ``E* = E / (1 - nu^2)``:
+    the spectral (Westergaard) kernel instead, as Stanley & Kato [Stanley1997]_ and Tamaas
+    do: a traction mode of wave vector ``q`` displaces the surface by the half-space's surface
+    Green's function at ``q`` (below), the tractions being the forces of the cells divided by
+    the cell area and the displacements collocated at the cell centres. A mode of the grid
+    (``p0 cos(q x)`` sampled at the centres) is then displaced by exactly Westergaard's
+    ``2 p0 cos(q x) / (E* |q|)`` [Westergaard1939]_. The mean (``q = 0``) mode of the
+    displacement is undetermined (a periodic half-space under a net force sinks without
+    limit): it is set to 0, so ``W`` is positive semidefinite with the constant vector in its
+    null space, and a periodic contact problem is posed with a fixed load, the mean approach
+    being the unknown that balances it. With ``G = E / (2 (1 + nu))``, ``E* = E / (1 - nu^2)``:
 
     .. math::
 
@@ -37,7 +37,7 @@ Periodic (the grid is one period of the surface, as for rough surfaces)
         \\hat u_z \\mathrel{+}= \\frac{i (1 - 2\\nu)}{2 G |q|^2} (q_x \\hat p_x + q_y \\hat p_y)
 
     (``u_y`` by exchanging ``x`` and ``y``): the transforms of Cerruti's and Boussinesq's
-    point-force solutions (``z`` the outward normal, the convention of
+    point-force solutions [Johnson1985b]_ (``z`` the outward normal, the convention of
     :func:`~contactqp.compliance.influence_matrix`). The odd terms vanish on a grid's Nyquist
     frequencies, where ``q`` and ``-q`` are the same mode, which keeps ``W`` real and symmetric.
 
@@ -56,10 +56,25 @@ Two bodies in contact
     terms cancel).
 
 Which FFT
-    ``scipy.fft`` (pocketfft) was measured against pyFFTW (0.15, ``FFTW_MEASURE`` plans built
-    once, aligned buffers) for the product (one ``rfft2`` and one ``irfft2`` of the padded
-    grid and a multiplication by the kernel), one thread, median CPU time of alternating
-    runs: see :data:`FFT_MEASUREMENT`. The dependency stays ``scipy.fft``.
+    Measured for one product of the normal non-periodic operator (one forward and one inverse
+    real transform of the padded grid, the multiplication, padding and crop), one thread,
+    median CPU time of alternating runs, on the project's 2-core machine under load
+    (``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_fft.py --sizes 256,512,1024,2048``,
+    scipy 1.17.1, pyFFTW 0.15.1):
+
+    ============  =============  ==============================  ========================
+    padded grid   scipy.fft      pyFFTW, ``FFTW_ESTIMATE``       pyFFTW, ``FFTW_MEASURE``
+    ============  =============  ==============================  ========================
+    256 x 256     2.9 ms         1.4 ms (0.49)                   1.1 ms
+    512 x 512     11.3 ms        5.7 ms (0.50)                   5.3 ms
+    1024 x 1024   47.7 ms        31.0 ms (0.65)                  26.6 ms
+    2048 x 2048   205 ms         139 ms (0.68)                   127 ms
+    ============  =============  ==============================  ========================
+
+    pyFFTW is faster, so the operators use it when it is installed (the ``fft`` extra), with
+    ``FFTW_ESTIMATE`` plans: they take milliseconds, where ``FFTW_MEASURE`` takes about 1 s
+    per size for the last 5-15 %. Without pyFFTW (or with ``fft="scipy"``) the products use
+    ``scipy.fft``; the two agree to rounding.
 
 References
 ----------
@@ -81,12 +96,10 @@ import scipy.fft
 
 from ..core.operators import Operator
 from ..errors import InvalidInputError
+from ._fft import transforms
 from .halfspace import _cell_kernels, _finite_float, _material, _normal_kernel, _positive_length
 
-__all__ = ["FFT_MEASUREMENT", "HalfPlaneOperator", "HalfSpaceOperator", "composite_modulus"]
-
-#: The FFT libraries' times measured for one product (see the module notes), filled in below.
-FFT_MEASUREMENT = ""
+__all__ = ["HalfPlaneOperator", "HalfSpaceOperator", "composite_modulus"]
 
 # The 3 x 3 per cell layout of influence_matrix: (kernel kind, sign) for each pair of
 # components (x, y, z); the kinds are _cell_kernels' six kernels, in its order.
@@ -136,6 +149,7 @@ class _LatticeOperator(Operator):
         pairs,
         parity,
         workers: int | None,
+        fft: str | None,
         *,
         tables: list[np.ndarray] | None = None,
         spectra: list[np.ndarray] | None = None,
@@ -164,7 +178,9 @@ class _LatticeOperator(Operator):
         assert spectra is not None
         # a kernel that is zero everywhere (the coupling, switched off) is skipped
         self._spectra = [spectrum if np.any(spectrum) else None for spectrum in spectra]
-        self._columns = [None if s is None else s[..., None] for s in self._spectra]
+        self._engine = transforms(self._fft_shape, cells, workers, fft)
+        #: The FFT library the products use, ``"scipy"`` or ``"pyfftw"``.
+        self.fft = self._engine.name
 
     def _padded_spectrum(self, kind: int) -> np.ndarray:
         """The transform of kernel ``kind`` laid on the padded grid (offset ``-d`` at ``N - d``)."""
@@ -197,25 +213,20 @@ class _LatticeOperator(Operator):
         if np.iscomplexobj(x):
             raise InvalidInputError("the operator takes real vectors, got complex ones")
         columns = x.shape[1:]
-        spectra = self._spectra if x.ndim == 1 else self._columns
-        s, axes, workers = self._fft_shape, self._axes, self._workers
+        engine = self._engine
         c = self._components
         if c == 1:
-            kernel = spectra[0]
+            kernel = self._spectra[0]
             if kernel is None:
                 return np.zeros(x.shape)
-            spectrum = scipy.fft.rfftn(
-                x.reshape(self._cells + columns), s=s, axes=axes, workers=workers
-            )
-            spectrum *= kernel
-            field = scipy.fft.irfftn(spectrum, overwrite_x=True, s=s, axes=axes, workers=workers)
-            return field[self._crop].reshape(x.shape)
+            return engine.convolve(x.reshape(self._cells + columns), kernel).reshape(x.shape)
         lattice = (slice(None),) * len(self._cells)
+        if columns:
+            spectra = [None if k is None else k[..., None] for k in self._spectra]
+        else:
+            spectra = self._spectra
         fields = x.reshape(self._cells + (c,) + columns)
-        forward = [
-            scipy.fft.rfftn(fields[lattice + (b,)], s=s, axes=axes, workers=workers)
-            for b in range(c)
-        ]
+        forward = [engine.forward(fields[lattice + (b,)]) for b in range(c)]
         out = np.empty(self._cells + (c,) + columns)
         for a in range(c):
             total = None
@@ -230,11 +241,7 @@ class _LatticeOperator(Operator):
                     total += term
                 else:
                     total -= term
-            if total is None:
-                out[lattice + (a,)] = 0.0
-            else:
-                field = scipy.fft.irfftn(total, overwrite_x=True, s=s, axes=axes, workers=workers)
-                out[lattice + (a,)] = field[self._crop]
+            out[lattice + (a,)] = 0.0 if total is None else engine.inverse(total)
         return out.reshape(x.shape)
 
     def _periodic_tables(self) -> np.ndarray:
@@ -345,7 +352,11 @@ class HalfSpaceOperator(_LatticeOperator):
         displacements of zero mean; see the module notes). False: a finite grid on an infinite
         half-space (the dense matrix's kernel, zero padding).
     workers : int or None
-        Threads of :mod:`scipy.fft` (None: its default, one).
+        Threads of the FFTs (None: one; negative: counted back from the CPU count, as
+        :mod:`scipy.fft` does).
+    fft : {None, "scipy", "pyfftw"}
+        The FFT library of the products; None: pyFFTW if it is installed (the ``fft`` extra,
+        measured faster), else :mod:`scipy.fft`. The attribute :attr:`fft` says which.
 
     Raises
     ------
@@ -376,6 +387,7 @@ class HalfSpaceOperator(_LatticeOperator):
         coupling: bool = True,
         periodic: bool = False,
         workers: int | None = None,
+        fft: str | None = None,
     ):
         nx, ny = _count(nx, "nx"), _count(ny, "ny")
         dx, dy = _positive_length(dx, "dx"), _positive_length(dy, "dy")
@@ -394,7 +406,7 @@ class HalfSpaceOperator(_LatticeOperator):
         cells = (ny, nx)
         if periodic:
             spectra = _half_space_spectra(nx, ny, dx, dy, E, nu, full, coupling)
-            super().__init__(cells, pairs, parity, _workers(workers), spectra=spectra)
+            super().__init__(cells, pairs, parity, _workers(workers), fft, spectra=spectra)
             return
         X = (np.arange(nx) * dx)[None, :]
         Y = (np.arange(ny) * dy)[:, None]
@@ -404,7 +416,7 @@ class HalfSpaceOperator(_LatticeOperator):
             ]
         else:
             tables = [_normal_kernel(X, Y, dx, dy, E, nu)]
-        super().__init__(cells, pairs, parity, _workers(workers), tables=tables)
+        super().__init__(cells, pairs, parity, _workers(workers), fft, tables=tables)
 
 
 def _half_space_spectra(nx, ny, dx, dy, E, nu, full: bool, coupling: bool) -> list[np.ndarray]:
@@ -471,8 +483,8 @@ class HalfPlaneOperator(_LatticeOperator):
         half-plane (zero padding).
     reference : float or None
         The datum ``r0`` (m), > 0, non-periodic only; None: ``n dx``.
-    workers : int or None
-        Threads of :mod:`scipy.fft`.
+    workers, fft
+        As for :class:`HalfSpaceOperator`.
 
     Raises
     ------
@@ -491,6 +503,7 @@ class HalfPlaneOperator(_LatticeOperator):
         periodic: bool = False,
         reference: float | None = None,
         workers: int | None = None,
+        fft: str | None = None,
     ):
         n = _count(n, "n")
         dx = _positive_length(dx, "dx")
@@ -509,12 +522,12 @@ class HalfPlaneOperator(_LatticeOperator):
             q = 2.0 * np.pi * scipy.fft.rfftfreq(n, dx)
             inverse = np.divide(1.0, q, out=np.zeros_like(q), where=q > 0)
             spectrum = 2.0 / (E_star * dx) * inverse
-            super().__init__((n,), pairs, ((0,),), _workers(workers), spectra=[spectrum])
+            super().__init__((n,), pairs, ((0,),), _workers(workers), fft, spectra=[spectrum])
             return
         r0 = n * dx if reference is None else _positive_length(reference, "reference")
         self.reference = r0
         table = _strip_kernel(np.arange(n) * dx, dx, E_star, r0)
-        super().__init__((n,), pairs, ((0,),), _workers(workers), tables=[table])
+        super().__init__((n,), pairs, ((0,),), _workers(workers), fft, tables=[table])
 
 
 def _strip_kernel(X: np.ndarray, dx: float, E_star: float, r0: float) -> np.ndarray:
