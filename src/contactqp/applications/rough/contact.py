@@ -25,7 +25,7 @@ Per load
 ``stiffness``
     The normal contact stiffness per unit area :math:`k = -\mathrm{d}p / \mathrm{d}\bar g`
     (Pa/m), by finite differences on the loads' mean gaps (second order,
-    :func:`numpy.gradient` on unequal steps); None for a single load.
+    :func:`numpy.gradient` on unequal steps); None for a single load and in full contact.
 
 Linear law
 ----------
@@ -86,7 +86,7 @@ class LoadPoint:
         Mean gap over the period (m).
     stiffness : float or None
         ``-dp / d(mean gap)`` (Pa/m) by finite differences over the loads; None for one load
-        or where neighbouring loads have the same mean gap (full contact).
+        or in full contact (the gap closed: infinitely stiff).
     seconds, iterations :
         The solve's wall time (s) and iterations.
     certificate : bool
@@ -236,6 +236,9 @@ def solve_rough_contact(
         with np.errstate(all="ignore"):  # equal mean gaps (full contact): no finite stiffness
             slopes = -np.gradient(p, gaps)
         stiffness = [float(value) if np.isfinite(value) else None for value in slopes]
+    for k, result in enumerate(results):  # full contact: the gap is closed, no finite stiffness
+        if result.contact_fraction == 1.0:
+            stiffness[k] = None
     points = [
         LoadPoint(
             pressure=float(pressure),
