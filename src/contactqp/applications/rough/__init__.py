@@ -8,6 +8,11 @@ surface
     seed) and the spectral rms height and slope.
 heightmap
     Readers of measured height maps: CSV rows, NPY, and the ASCII grid with units.
+contact
+    The load sweep: a rigid flat on the periodic FFT half-space at increasing mean pressures;
+    area fraction, mean gap, stiffness, and the linear area-load law.
+output
+    The area-load figure and the VTU grid of the surface.
 """
 
 from .heightmap import HeightMap, read_height_map
