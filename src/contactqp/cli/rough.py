@@ -151,7 +151,9 @@ def rough(
             )
     _outputs_apart(surface, plot, vtu)
     if plot is not None:
-        _figure_format(plot)
+        from ..io.plot import figure_path
+
+        figure_path(plot)  # an unwritable figure format: refused before any solve
     from ..applications.rough import heightmap
     from ..applications.rough import surface as surfaces
 
@@ -213,18 +215,6 @@ def _outputs_apart(surface: Path | None, plot: Path | None, vtu: Path | None) ->
     for option, path in (("--plot", plot), ("--vtu", vtu)):
         if surface is not None and path is not None and _same(path, surface):
             raise InvalidInputError(f"{option} {path} would overwrite the input surface")
-
-
-def _figure_format(path: Path) -> None:
-    """Refuse, before any solve, a figure file whose suffix matplotlib does not write."""
-    from ..optional import require
-
-    canvas = require("matplotlib.backend_bases", "figures", "plot", "matplotlib")
-    formats = canvas.FigureCanvasBase.get_supported_filetypes()
-    if path.suffix.lstrip(".").lower() not in formats:
-        raise InvalidInputError(
-            f"{path}: a figure file needs a suffix among {', '.join(sorted(formats))}"
-        )
 
 
 def _same(a: Path, b: Path) -> bool:

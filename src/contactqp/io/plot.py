@@ -33,6 +33,7 @@ __all__ = [
     "plot_sliding_curve",
     "plot_area_load",
     "save_figure",
+    "figure_path",
     "subplots",
 ]
 
@@ -50,6 +51,24 @@ def subplots(
     return figure, figure.subplots(nrows, ncols, **options)
 
 
+def figure_path(path: str | os.PathLike[str]) -> Path:
+    """``path`` as a Path, checked (before any work) to end in a format matplotlib writes.
+
+    Raises
+    ------
+    InvalidInputError
+        The suffix is not a format matplotlib writes (png, pdf, svg, ...).
+    """
+    path = Path(path)
+    backends = require("matplotlib.backend_bases", "figures", "plot", "matplotlib")
+    formats = backends.FigureCanvasBase.get_supported_filetypes()
+    if path.suffix.lstrip(".").lower() not in formats:
+        raise InvalidInputError(
+            f"{path}: a figure file needs a suffix among {', '.join(sorted(formats))}"
+        )
+    return path
+
+
 def save_figure(figure: Any, path: str | os.PathLike[str]) -> Path:
     """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders.
 
@@ -58,12 +77,7 @@ def save_figure(figure: Any, path: str | os.PathLike[str]) -> Path:
     InvalidInputError
         The suffix is not a format matplotlib writes (png, pdf, svg, ...).
     """
-    path = Path(path)
-    formats = figure.canvas.get_supported_filetypes()
-    if path.suffix.lstrip(".").lower() not in formats:
-        raise InvalidInputError(
-            f"{path}: a figure file needs a suffix among {', '.join(sorted(formats))}"
-        )
+    path = figure_path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     return path
