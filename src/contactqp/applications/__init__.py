@@ -1,2 +1,2 @@
 """Applications built on the library: the spring chain, the rod over an obstacle, riveting of
-plates (with or without friction) and sliding soil layers."""
+plates (with or without friction), sliding soil layers and rough surfaces."""

@@ -64,6 +64,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "rod",
         "The published rod over an obstacle: reduced model (8 nodes) against full FE contact.",
     ),
+    "rough": (
+        "rough",
+        "A rigid flat pressed onto a periodic rough surface on an elastic half-space.",
+    ),
     "solve": (
         "solve",
         "Solve the contact problem (with friction, or a load history) in a TOML file.",

@@ -31,7 +31,9 @@ __all__ = [
     "plot_fastener_forces",
     "plot_statistics",
     "plot_sliding_curve",
+    "plot_area_load",
     "save_figure",
+    "figure_path",
     "subplots",
 ]
 
@@ -49,6 +51,24 @@ def subplots(
     return figure, figure.subplots(nrows, ncols, **options)
 
 
+def figure_path(path: str | os.PathLike[str]) -> Path:
+    """``path`` as a Path, checked (before any work) to end in a format matplotlib writes.
+
+    Raises
+    ------
+    InvalidInputError
+        The suffix is not a format matplotlib writes (png, pdf, svg, ...).
+    """
+    path = Path(path)
+    backends = require("matplotlib.backend_bases", "figures", "plot", "matplotlib")
+    formats = backends.FigureCanvasBase.get_supported_filetypes()
+    if path.suffix.lstrip(".").lower() not in formats:
+        raise InvalidInputError(
+            f"{path}: a figure file needs a suffix among {', '.join(sorted(formats))}"
+        )
+    return path
+
+
 def save_figure(figure: Any, path: str | os.PathLike[str]) -> Path:
     """Write ``figure`` to ``path`` (its suffix chooses the format), creating folders.
 
@@ -57,12 +77,7 @@ def save_figure(figure: Any, path: str | os.PathLike[str]) -> Path:
     InvalidInputError
         The suffix is not a format matplotlib writes (png, pdf, svg, ...).
     """
-    path = Path(path)
-    formats = figure.canvas.get_supported_filetypes()
-    if path.suffix.lstrip(".").lower() not in formats:
-        raise InvalidInputError(
-            f"{path}: a figure file needs a suffix among {', '.join(sorted(formats))}"
-        )
+    path = figure_path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     return path
@@ -334,6 +349,57 @@ def plot_sliding_curve(
     axes.set_title(title)
     axes.grid(True, alpha=0.3)
     axes.legend()
+    figure.tight_layout()
+    return save_figure(figure, path)
+
+
+def plot_area_load(
+    pressure: ArrayLike,
+    area_fraction: ArrayLike,
+    laws: Mapping[str, float],
+    pressure_map: ArrayLike,
+    cell: float,
+    path: str | os.PathLike[str],
+    *,
+    title: str = "",
+) -> Path:
+    """The real contact area against the mean pressure beside linear laws, and a pressure map.
+
+    Parameters
+    ----------
+    pressure, area_fraction : array_like, shape (n,)
+        Mean pressure (Pa, drawn in MPa) and fraction of the area in contact of each load.
+    laws : dict of float
+        ``{label: slope}``: lines ``area_fraction = slope * pressure`` (slope in 1/Pa), e.g. the
+        small-load law ``kappa / (E* h'_rms)``.
+    pressure_map : array_like, shape (ny, nx)
+        Contact pressure (Pa, drawn in MPa) of each cell at the largest (last) load.
+    cell : float
+        Side of a cell (m; the map's axes in um).
+    path : str or Path
+        Output file; its suffix chooses the format.
+    title : str
+    """
+    pressure, fraction = np.asarray(pressure, dtype=float), np.asarray(area_fraction)
+    grid = np.asarray(pressure_map, dtype=float) / 1e6
+    figure, (curve, image) = subplots(1, 2, figsize=(11, 4.5))
+    curve.plot(pressure / 1e6, fraction, "o-", ms=4, label="computed")
+    span = np.linspace(0.0, float(pressure.max()), 50)
+    for k, (label, slope) in enumerate(laws.items()):
+        curve.plot(span / 1e6, slope * span, ls="--", color=f"C{k + 1}", label=label)
+    curve.set_ylim(0, min(1.0, 1.15 * float(max(fraction.max(), 1e-12))))
+    curve.set_xlabel("mean pressure (MPa)")
+    curve.set_ylabel("real contact area fraction")
+    curve.grid(True, alpha=0.3)
+    curve.legend()
+    ny, nx = grid.shape
+    extent = (0.0, nx * cell * 1e6, 0.0, ny * cell * 1e6)
+    shown = image.imshow(grid, origin="lower", extent=extent, cmap="magma", interpolation="none")
+    figure.colorbar(shown, ax=image, label="contact pressure (MPa)")
+    image.set_xlabel("x (um)")
+    image.set_ylabel("y (um)")
+    image.set_title(f"at {pressure[-1] / 1e6:.4g} MPa")
+    figure.suptitle(title)
     figure.tight_layout()
     return save_figure(figure, path)
 
