@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 from ..errors import PureNumpyKernelsWarning
 
@@ -23,6 +23,10 @@ __all__ = [
     "natural_map_rows",
     "alart_curnier_rows",
     "sparse_newton_matrix",
+    "small_newton",
+    "small_certificate",
+    "small_semidefinite",
+    "SMALL_REASONS",
     "IMPLEMENTATION",
     "FORCE_PURE_NUMPY",
     "pure_numpy_forced",
@@ -40,6 +44,16 @@ def pure_numpy_forced(environ: Mapping[str, str] = os.environ) -> bool:
 #: ``"compiled"`` or ``"pure_numpy"``: the module whose functions this one offers.
 IMPLEMENTATION: str
 
+#: The compiled small-problem route (:func:`contactqp.kernels.compiled.small_newton`, its
+#: certificate and PSD check), None with the pure-numpy kernels: it has no numpy twin, its
+#: oracle is the Python Newton run of :mod:`contactqp.methods.coulomb`, which the solvers use
+#: where it is None.
+small_newton: Callable[..., None] | None = None
+small_certificate: Callable[..., None] | None = None
+small_semidefinite: Callable[..., None] | None = None
+#: The reasons of :func:`small_newton`'s codes (those of coulomb's Newton run).
+SMALL_REASONS: tuple[str, ...] = ()
+
 if pure_numpy_forced():
     from .pure_numpy import alart_curnier_rows, natural_map_rows, project_rows, sparse_newton_matrix
 
@@ -47,9 +61,13 @@ if pure_numpy_forced():
 else:
     try:
         from .compiled import (
+            SMALL_REASONS,
             alart_curnier_rows,
             natural_map_rows,
             project_rows,
+            small_certificate,
+            small_newton,
+            small_semidefinite,
             sparse_newton_matrix,
         )
 

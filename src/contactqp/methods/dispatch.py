@@ -25,7 +25,9 @@ def _is_frictionless(problem, kind: str) -> bool:
     """True when ``mu = 0`` on every contact of a problem of a frictional ``kind``."""
     if kind in ("frictional", "frictional-polygonal"):
         return problem.frictionless
-    if kind in ("local", "global"):
+    if kind == "local":
+        return problem.frictionless
+    if kind == "global":
         return not np.any(problem.mu > 0)
     return False
 

@@ -362,17 +362,17 @@ def get_method(name: str | None, kind: str | None = None) -> Method:
         if kind is None:
             raise InvalidInputError("name a method (or a problem kind for its default)")
         name = default_method(kind)
-    where = f" for {kind} problems" if kind else ""
-    listing = _listing(kind) if kind else ", ".join(METHODS)
-    if not isinstance(name, str) or name not in METHODS:
+    method = METHODS.get(name) if isinstance(name, str) else None
+    if method is not None and (kind is None or kind in method.kinds):
+        return method
+    listing = _listing(kind) if kind else ", ".join(METHODS)  # only for the message
+    if method is None:
+        where = f" for {kind} problems" if kind else ""
         raise InvalidInputError(f"unknown method {name!r}{where}; choose one of {listing}")
-    method = METHODS[name]
-    if kind is not None and kind not in method.kinds:
-        raise InvalidInputError(
-            f"method {name!r} does not solve {kind} problems (it solves "
-            f"{', '.join(method.kinds)}); methods for {kind} problems: {listing}"
-        )
-    return method
+    raise InvalidInputError(
+        f"method {name!r} does not solve {kind} problems (it solves "
+        f"{', '.join(method.kinds)}); methods for {kind} problems: {listing}"
+    )
 
 
 def method_options(name: str | None, kind: str) -> dict[str, object]:
