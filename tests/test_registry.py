@@ -94,6 +94,7 @@ def test_every_problem_class_carries_its_kind():
         "local",
         "global",
         "fastened",
+        "local-batch",
     }
 
 

@@ -5,6 +5,7 @@ from .core.contact import GapObstacle, NodePairs, PlaneObstacle, ProfileObstacle
 from .core.fastened import FastenedProblem
 from .core.friction import FrictionLaw
 from .core.history import HistoryResult, linear_path
+from .core.local_batch import LocalBatch, LocalBatchResult
 from .core.local_problem import GlobalProblem, LocalProblem
 from .core.model import ReducedModel, unit_load_compliance
 from .core.problem import ContactProblem, FrictionalProblem
@@ -38,6 +39,8 @@ __all__ = [
     "FrictionLaw",
     "LocalProblem",
     "GlobalProblem",
+    "LocalBatch",
+    "LocalBatchResult",
     "FastenedProblem",
     "FastenedResult",
     "solve_history",

@@ -18,6 +18,9 @@ types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overr
 
 from libc.math cimport fabs, isfinite, sqrt
 from libc.stdlib cimport free, malloc
+from cpython.buffer cimport (
+    PyBUF_C_CONTIGUOUS, PyBUF_FORMAT, PyBUF_WRITABLE, PyBuffer_Release, PyObject_GetBuffer
+)
 from libc.stdint cimport int64_t
 
 __all__ = ["project_rows", "natural_map_rows", "alart_curnier_rows", "sparse_newton_matrix"]
@@ -607,10 +610,43 @@ cdef void _problem(Small* S, const double* W, const double* q, const double* mu,
         S.rho[i] = 1.0 / S.scale[i]
 
 
-def small_newton(const double[:, :, ::1] W, const double[:, ::1] q, const double[:, ::1] mu,
-                 const double[:, ::1] shift, double[:, ::1] r, double tol, Py_ssize_t max_iter,
-                 bint per_contact, double floor, Py_ssize_t[::1] iterations,
-                 Py_ssize_t[::1] reasons, double[::1] errors):
+cdef void* _buffer(object array, char kind, int ndim, Py_ssize_t* shape, bint writable,
+                   str name) except NULL:
+    """The data of a C-contiguous array of ``ndim`` dimensions, of float64 (``kind`` ``d``) or
+    intp (``n``), its shape written to ``shape``.
+
+    A typed memoryview costs a few thousand instructions to set up, the whole Newton run of a
+    one-contact problem: the small-problem functions read their arrays through this. The buffer
+    is released at once; the caller holds the arrays for the call.
+    """
+    cdef Py_buffer view
+    cdef int i, flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT
+    cdef char code
+    cdef bint ok
+    if writable:
+        flags |= PyBUF_WRITABLE
+    PyObject_GetBuffer(array, &view, flags)
+    cdef void* data = view.buf
+    ok = view.ndim == ndim and view.itemsize == 8 and view.format != NULL
+    if ok:
+        code = view.format[0]
+        if code == b'@' or code == b'=' or code == b'<':
+            code = view.format[1]
+        ok = code == b'd' if kind == b'd' else (code == b'q' or code == b'l' or code == b'n')
+    if ok:
+        for i in range(ndim):
+            shape[i] = view.shape[i]
+    PyBuffer_Release(&view)
+    if not ok:
+        raise ValueError(
+            f"{name} must be a C-contiguous {ndim}-D "
+            f"{'float64' if kind == b'd' else 'intp'} array{' (writable)' if writable else ''}"
+        )
+    return data if data != NULL else <void*> shape  # an empty array's data is never read
+
+
+def small_newton(W, q, mu, shift, r, double tol, Py_ssize_t max_iter, bint per_contact,
+                 double floor, iterations, reasons, errors):
     """Coulomb's first Newton run on each of ``P`` small dense problems, in C.
 
     Problem ``p``: ``u = W[p] r + q[p]`` (``W[p]`` row-major, ``m`` unknowns), friction
@@ -624,14 +660,31 @@ def small_newton(const double[:, :, ::1] W, const double[:, ::1] q, const double
     else the best), ``iterations[p]`` the iterations, ``reasons[p]`` an index of
     :data:`SMALL_REASONS` and ``errors[p]`` its error.
     """
-    cdef Py_ssize_t p, P = W.shape[0], m = W.shape[1], nc = mu.shape[1]
-    if W.shape[2] != m or q.shape[1] != m or shift.shape[1] != m or r.shape[1] != m:
+    cdef Py_ssize_t p, P, m, nc
+    cdef Py_ssize_t sw[3]
+    cdef Py_ssize_t sq[2]
+    cdef Py_ssize_t smu[2]
+    cdef Py_ssize_t ss[2]
+    cdef Py_ssize_t sr[2]
+    cdef Py_ssize_t si[1]
+    cdef Py_ssize_t sn[1]
+    cdef Py_ssize_t se[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 2, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 2, smu, False, "mu")
+    cdef const double* sd = <const double*> _buffer(shift, b'd', 2, ss, False, "shift")
+    cdef double* rd = <double*> _buffer(r, b'd', 2, sr, True, "r")
+    cdef Py_ssize_t* itd = <Py_ssize_t*> _buffer(iterations, b'n', 1, si, True, "iterations")
+    cdef Py_ssize_t* red = <Py_ssize_t*> _buffer(reasons, b'n', 1, sn, True, "reasons")
+    cdef double* erd = <double*> _buffer(errors, b'd', 1, se, True, "errors")
+    P, m, nc = sw[0], sw[1], smu[1]
+    if sw[2] != m or sq[1] != m or ss[1] != m or sr[1] != m:
         raise ValueError("W, q, shift and r must have m = W.shape[1] columns")
     if nc == 0 or m != (m // nc) * nc:
         raise ValueError(f"{m} unknowns do not make rows of {nc} contacts")
     _check_dimension(m // nc)
-    if (q.shape[0] != P or mu.shape[0] != P or shift.shape[0] != P or r.shape[0] != P
-            or iterations.shape[0] != P or reasons.shape[0] != P or errors.shape[0] != P):
+    if (sq[0] != P or smu[0] != P or ss[0] != P or sr[0] != P or si[0] != P or sn[0] != P
+            or se[0] != P):
         raise ValueError("every argument must hold P = W.shape[0] problems")
     if max_iter < 0:
         raise ValueError("max_iter must be >= 0")
@@ -644,19 +697,17 @@ def small_newton(const double[:, :, ::1] W, const double[:, ::1] q, const double
             S.per_contact = per_contact
             S.floor = floor
             for p in range(P):
-                _problem(&S, &W[p, 0, 0], &q[p, 0], &mu[p, 0], &shift[p, 0])
-                reasons[p] = _run(&S, &r[p, 0], tol, max_iter, &count, &errors[p])
-                iterations[p] = count
+                _problem(&S, Wd + p * m * m, qd + p * m, mud + p * nc, sd + p * m)
+                red[p] = _run(&S, rd + p * m, tol, max_iter, &count, erd + p)
+                itd[p] = count
             free(block)
             free(S.rows)
     if block == NULL:
         raise MemoryError()
 
 
-def small_certificate(const double[:, :, ::1] W, const double[:, ::1] q,
-                      const double[:, ::1] mu, const double[:, ::1] shift,
-                      const double[:, ::1] r, bint per_contact, double floor, double rtol,
-                      double[:, ::1] u, double[:, ::1] measures, Py_ssize_t[:, ::1] status):
+def small_certificate(W, q, mu, shift, r, bint per_contact, double floor, double rtol, u,
+                      measures, status):
     """The certificate of reactions ``r[p]`` of each small dense problem, from ``r`` alone.
 
     ``u[p] = W[p] r[p] + q[p]``; ``measures[p]`` = (natural-map error, ``|| |W| |r| ||`` over
@@ -666,20 +717,38 @@ def small_certificate(const double[:, :, ::1] W, const double[:, ::1] q,
     stick (1) / slip (2) code of each contact by the rule of
     :func:`~contactqp.core.local_problem.contact_status_unchecked` with ``rtol``.
     """
-    cdef Py_ssize_t p, i, j, k, P = W.shape[0], m = W.shape[1], nc = mu.shape[1], d
+    cdef Py_ssize_t p, i, j, k, P, m, nc, d
+    cdef Py_ssize_t sw[3]
+    cdef Py_ssize_t sq[2]
+    cdef Py_ssize_t smu[2]
+    cdef Py_ssize_t ss[2]
+    cdef Py_ssize_t sr[2]
+    cdef Py_ssize_t su[2]
+    cdef Py_ssize_t sm[2]
+    cdef Py_ssize_t st[2]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 2, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 2, smu, False, "mu")
+    cdef const double* sd = <const double*> _buffer(shift, b'd', 2, ss, False, "shift")
+    cdef const double* rd = <const double*> _buffer(r, b'd', 2, sr, False, "r")
+    cdef double* ud = <double*> _buffer(u, b'd', 2, su, True, "u")
+    cdef double* md = <double*> _buffer(measures, b'd', 2, sm, True, "measures")
+    cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 2, st, True, "status")
+    P, m, nc = sw[0], sw[1], smu[1]
     if nc == 0 or m != (m // nc) * nc:
         raise ValueError(f"{m} unknowns do not make rows of {nc} contacts")
     d = m // nc
     _check_dimension(d)
-    if (W.shape[2] != m or q.shape[1] != m or shift.shape[1] != m or r.shape[1] != m
-            or u.shape[1] != m or measures.shape[1] != 4 or status.shape[1] != nc):
+    if (sw[2] != m or sq[1] != m or ss[1] != m or sr[1] != m or su[1] != m or sm[1] != 4
+            or st[1] != nc):
         raise ValueError("inconsistent shapes")
-    if (q.shape[0] != P or mu.shape[0] != P or shift.shape[0] != P or r.shape[0] != P
-            or u.shape[0] != P or measures.shape[0] != P or status.shape[0] != P):
+    if (sq[0] != P or smu[0] != P or ss[0] != P or sr[0] != P or su[0] != P or sm[0] != P
+            or st[0] != P):
         raise ValueError("every argument must hold P = W.shape[0] problems")
     cdef double total, magnitude, product, largest, force, w, apex, size, aa, slip, carry
     cdef double residual, error, value
-    cdef double x[3]
+    cdef const double* rp
+    cdef double* up
     cdef Small S
     cdef double* squares = <double*> malloc(nc * sizeof(double))
     if squares == NULL:
@@ -690,7 +759,9 @@ def small_certificate(const double[:, :, ::1] W, const double[:, ::1] q,
     S.squares = squares
     with nogil:
         for p in range(P):
-            S.W, S.q, S.mu, S.shift = &W[p, 0, 0], &q[p, 0], &mu[p, 0], &shift[p, 0]
+            S.W, S.q, S.mu, S.shift = Wd + p * m * m, qd + p * m, mud + p * nc, sd + p * m
+            rp = rd + p * m
+            up = ud + p * m
             S.qq = _dot(S.q, S.q, m)
             product = 0.0
             w = 0.0
@@ -698,45 +769,45 @@ def small_certificate(const double[:, :, ::1] W, const double[:, ::1] q,
                 total = 0.0
                 magnitude = 0.0
                 for j in range(m):
-                    total += S.W[i * m + j] * r[p, j]
-                    magnitude += fabs(S.W[i * m + j]) * fabs(r[p, j])
-                u[p, i] = total + S.q[i]
+                    total += S.W[i * m + j] * rp[j]
+                    magnitude += fabs(S.W[i * m + j]) * fabs(rp[j])
+                up[i] = total + S.q[i]
                 if i % d == 0 or S.mu[i // d] != 0.0:  # the certified rows
                     product += magnitude * magnitude
                 w = max(w, fabs(S.W[i * m + i]))
             if w == 0.0:
                 w = 1.0
-            _natural_error(&S, &r[p, 0], &u[p, 0], &residual, &error)
-            measures[p, 0] = error
-            measures[p, 1] = sqrt(product)
-            measures[p, 2] = sqrt(S.qq)
+            _natural_error(&S, rp, up, &residual, &error)
+            md[p * 4 + 0] = error
+            md[p * 4 + 1] = sqrt(product)
+            md[p * 4 + 2] = sqrt(S.qq)
             size = 0.0
             aa = 0.0
             value = 0.0
             for i in range(m):
-                size += r[p, i] * r[p, i]
-                apex = r[p, i] + S.shift[i]
+                size += rp[i] * rp[i]
+                apex = rp[i] + S.shift[i]
                 aa += apex * apex
-                value += u[p, i] * u[p, i]
-            measures[p, 3] = sqrt(max(S.qq, max(size, value)))
+                value += up[i] * up[i]
+            md[p * 4 + 3] = sqrt(max(S.qq, max(size, value)))
             largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
             force = largest if largest > 0.0 else 1.0
             for i in range(nc):
                 carry = 0.0
                 slip = 0.0
                 for k in range(d):
-                    apex = r[p, i * d + k] + S.shift[i * d + k]
+                    apex = rp[i * d + k] + S.shift[i * d + k]
                     carry += apex * apex
                     if k:
-                        slip += u[p, i * d + k] ** 2
+                        slip += up[i * d + k] ** 2
                 if sqrt(carry) > rtol * force:
-                    status[p, i] = 2 if sqrt(slip) > rtol * w * force else 1
+                    std[p * nc + i] = 2 if sqrt(slip) > rtol * w * force else 1
                 else:
-                    status[p, i] = 0
+                    std[p * nc + i] = 0
     free(squares)
 
 
-def small_semidefinite(const double[:, :, ::1] W, double shift, Py_ssize_t[::1] passed):
+def small_semidefinite(W, double shift, passed):
     """``passed[p]`` = 1 when ``W[p]`` passes the test of
     :func:`~contactqp.core.local_problem.check_positive_semidefinite`, else 0.
 
@@ -745,8 +816,13 @@ def small_semidefinite(const double[:, :, ::1] W, double shift, Py_ssize_t[::1] 
     positive fails) of the Jacobi-scaled ``S`` on the rows with a positive diagonal, plus
     ``shift`` times the identity.
     """
-    cdef Py_ssize_t p, i, j, k, n, P = W.shape[0], m = W.shape[1]
-    if W.shape[2] != m or passed.shape[0] != P:
+    cdef Py_ssize_t p, i, j, k, n, P, m
+    cdef Py_ssize_t sw[3]
+    cdef Py_ssize_t sp[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
+    cdef Py_ssize_t* pd = <Py_ssize_t*> _buffer(passed, b'n', 1, sp, True, "passed")
+    P, m = sw[0], sw[1]
+    if sw[2] != m or sp[0] != P:
         raise ValueError("W must be (P, m, m) and passed (P,)")
     cdef double value
     cdef bint ok
@@ -762,7 +838,7 @@ def small_semidefinite(const double[:, :, ::1] W, double shift, Py_ssize_t[::1] 
             ok = True
             n = 0
             for i in range(m):
-                value = 0.5 * (W[p, i, i] + W[p, i, i])
+                value = 0.5 * (Wd[(p * m + i) * m + i] + Wd[(p * m + i) * m + i])
                 if value < 0.0 or not (value >= 0.0):
                     ok = False
                 elif value > 0.0:
@@ -771,12 +847,13 @@ def small_semidefinite(const double[:, :, ::1] W, double shift, Py_ssize_t[::1] 
                     n += 1
                 else:  # a zero diagonal entry: its row must be zero
                     for j in range(m):
-                        if 0.5 * (W[p, i, j] + W[p, j, i]) != 0.0:
+                        if 0.5 * (Wd[(p * m + i) * m + j] + Wd[(p * m + j) * m + i]) != 0.0:
                             ok = False
             if ok:
                 for i in range(n):
                     for j in range(n):
-                        value = 0.5 * (W[p, keep[i], keep[j]] + W[p, keep[j], keep[i]])
+                        value = 0.5 * (Wd[(p * m + keep[i]) * m + keep[j]]
+                                       + Wd[(p * m + keep[j]) * m + keep[i]])
                         S[i * n + j] = scaling[i] * value * scaling[j]
                     S[i * n + i] += shift
                 for j in range(n):  # lower Cholesky factor in place, by columns
@@ -791,6 +868,6 @@ def small_semidefinite(const double[:, :, ::1] W, double shift, Py_ssize_t[::1] 
                     for i in range(j + 1, n):
                         S[i * n + j] -= _dot(S + i * n, S + j * n, j)
                         S[i * n + j] /= value
-            passed[p] = 1 if ok else 0
+            pd[p] = 1 if ok else 0
     free(S)
     free(keep)

@@ -73,6 +73,7 @@ def solve(problem, method: str | None = None, **options):
     ``GlobalProblem`` (FCLIB)                   ``coulomb``         LocalResult (certified on
                                                                     the global equations)
     ``FastenedProblem``                         ``lawson-hanson``   FastenedResult
+    ``LocalBatch`` (many small local problems)  ``coulomb-batch``   LocalBatchResult
     ==========================================  ==================  ===========================
 
     ``mu = 0`` on every contact of a frictional, local or global problem: the default method
