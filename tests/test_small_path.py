@@ -99,7 +99,9 @@ def test_compiled_route_repeats_the_python_iterations(seed, nc, dim):
 def test_cohesion_and_per_contact_take_the_same_route(seed):
     problem = random_problem(seed, 4, 3, cohesion=True)
     for options in ({"per_contact": True, "tol": 1e-10}, {"tol": 1e-8}):
-        assert_same(solve_coulomb(problem, **options), solve_coulomb(python_route(problem), **options))
+        assert_same(
+            solve_coulomb(problem, **options), solve_coulomb(python_route(problem), **options)
+        )
 
 
 def test_a_run_that_stops_short_goes_on_to_the_later_stages():

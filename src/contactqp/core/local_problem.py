@@ -521,7 +521,7 @@ def certify_small(
     of the sums.
     """
     small = problem.small
-    if small is None:
+    if small is None or kernels.small_certificate is None:
         raise InvalidInputError("certify_small needs a problem with small arrays")
     m = r.shape[0]
     u = np.empty((1, m))

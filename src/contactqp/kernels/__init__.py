@@ -60,16 +60,18 @@ if pure_numpy_forced():
     IMPLEMENTATION = "pure_numpy"
 else:
     try:
+        from . import compiled as _compiled
         from .compiled import (
-            SMALL_REASONS,
             alart_curnier_rows,
             natural_map_rows,
             project_rows,
-            small_certificate,
-            small_newton,
-            small_semidefinite,
             sparse_newton_matrix,
         )
+
+        small_newton = _compiled.small_newton
+        small_certificate = _compiled.small_certificate
+        small_semidefinite = _compiled.small_semidefinite
+        SMALL_REASONS = _compiled.SMALL_REASONS
 
         IMPLEMENTATION = "compiled"
     except ImportError as _missing:

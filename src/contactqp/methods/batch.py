@@ -112,7 +112,7 @@ def solve_coulomb_batch(
     messages = {}
     for p in np.flatnonzero(reasons != 0):  # not converged: every stage, as alone
         alone = solve_coulomb(
-            batch.problem(p),
+            batch.problem(int(p)),
             r0=None if r0 is None else np.asarray(r0, dtype=float)[p],
             tol=tol,
             max_iter=max_iter,
@@ -164,7 +164,7 @@ def _one_by_one(batch, x, tol, max_iter, check_psd, per_contact, start) -> Local
             alone.iterations,
             alone.contact_status,
         )
-        error[p] = alone.certificate.natural_map  # type: ignore[union-attr]
+        error[p] = alone.certificate.natural_map
         messages[p] = alone.message
     return LocalBatchResult(
         forces=x,

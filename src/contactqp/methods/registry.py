@@ -211,9 +211,7 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 ("local-batch",),
                 solve_coulomb_batch,
                 (
-                    Option(
-                        "r0", np.ndarray, None, "warm starts: reactions, shape (P, d k)"
-                    ),
+                    Option("r0", np.ndarray, None, "warm starts: reactions, shape (P, d k)"),
                     _local_tol(1e-8),
                     Option(
                         "max_iter",
