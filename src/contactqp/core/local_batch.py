@@ -1,7 +1,8 @@
 """Many independent small local problems ``u_p = W_p r_p + q_p`` of one size, solved together.
 
-A :class:`LocalBatch` holds ``P`` FCLIB local problems (:class:`~contactqp.core.local_problem.
-LocalProblem`, Coulomb cones, no cohesion) of ``k`` contacts each, stacked: the samples of a
+A :class:`LocalBatch` holds ``P`` FCLIB local problems
+(:class:`~contactqp.core.local_problem.LocalProblem`, Coulomb cones, no cohesion) of ``k``
+contacts each, stacked: the samples of a
 variation study, the contacts of many independent bodies. :func:`~contactqp.solve` solves them
 with the method ``coulomb-batch`` (:mod:`contactqp.methods.batch`) and returns a
 :class:`LocalBatchResult`: per problem its reactions, velocities, natural-map error, verdict and

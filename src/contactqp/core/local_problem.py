@@ -159,7 +159,7 @@ class LocalProblem:
         dim = _check_dim(self.dim)
         object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
         W = _as_matrix("W", self.W)
-        q = finite_array(self.q, "q", 1)
+        q = np.ascontiguousarray(finite_array(self.q, "q", 1))  # read in place by the kernels
         mu = finite_array(self.mu, "mu", 1)
         nc = mu.shape[0]
         m = dim * nc
@@ -203,7 +203,7 @@ class LocalProblem:
         (its semidefiniteness, :meth:`check_semidefinite`; the apex shift) carries over: the
         cheap way to solve many problems that differ only in ``q``.
         """
-        values = finite_array(q, "q", 1)
+        values = np.ascontiguousarray(finite_array(q, "q", 1))
         if values.shape != self.q.shape:
             raise InvalidInputError(
                 f"q must have length dim*n_contacts = {self.q.shape[0]}, got shape {values.shape}"
@@ -224,7 +224,7 @@ class LocalProblem:
     @functools.cached_property
     def frictionless(self) -> bool:
         """True when ``mu = 0`` on every contact (the cones are rays)."""
-        return not bool(np.any(self.mu > 0))
+        return not (self.mu > 0).any()
 
     @functools.cached_property
     def small(self) -> SmallArrays | None:
@@ -237,10 +237,10 @@ class LocalProblem:
         m = self.q.shape[0]
         if m > SMALL_UNKNOWNS or m == 0 or kernels.small_newton is None:
             return None
-        W = self.W.toarray() if sp.issparse(self.W) else self.W
+        W = self.W if isinstance(self.W, np.ndarray) else self.W.toarray()
         arrays = SmallArrays(
-            W=np.ascontiguousarray(W, dtype=float).reshape(1, m, m),
-            mu=np.ascontiguousarray(self.mu, dtype=float).reshape(1, -1),
+            W=np.ascontiguousarray(W).reshape(1, m, m),  # float, as validated
+            mu=np.ascontiguousarray(self.mu).reshape(1, -1),
             shift=np.ascontiguousarray(self.apex_shift).reshape(1, m),
             data_rounding=(
                 relative_rounding(self.digits.get("W")),
@@ -287,7 +287,8 @@ class LocalProblem:
         from .friction import apex_distance
 
         shift = np.zeros((self.n_contacts, self.dim))
-        shift[:, 0] = apex_distance(self.mu, self.law.cohesion)  # the field, as validated
+        if self.law.cohesion.any():
+            shift[:, 0] = apex_distance(self.mu, self.law.cohesion)  # the field, as validated
         shift.flags.writeable = False
         return shift.reshape(-1)
 
@@ -529,7 +530,7 @@ def certify_small(
     status = np.empty((1, problem.n_contacts), dtype=np.intp)
     kernels.small_certificate(
         small.W,
-        np.ascontiguousarray(problem.q).reshape(1, m),
+        problem.q.reshape(1, m),  # C-contiguous, as validated
         small.mu,
         small.shift,
         np.ascontiguousarray(r, dtype=float).reshape(1, m),

@@ -51,7 +51,7 @@ IMPLEMENTATION: str
 small_newton: Callable[..., None] | None = None
 small_certificate: Callable[..., None] | None = None
 small_semidefinite: Callable[..., None] | None = None
-#: The reasons of :func:`small_newton`'s codes (those of coulomb's Newton run).
+#: The reasons of :func:`~contactqp.kernels.compiled.small_newton`'s codes (coulomb's Newton run).
 SMALL_REASONS: tuple[str, ...] = ()
 
 if pure_numpy_forced():

@@ -653,7 +653,7 @@ def small_newton(W, q, mu, shift, r, double tol, Py_ssize_t max_iter, bint per_c
     coefficients ``mu[p]`` (``nc`` contacts, ``d = m / nc`` components each), apex shift
     ``shift[p]`` (:attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`). From the start
     ``r[p]`` (apex coordinates: reactions plus ``shift[p]``) it runs exactly the iterations of
-    :meth:`contactqp.methods.coulomb._Newton.run` with ``adaptive=False`` (the same steps,
+    ``contactqp.methods.coulomb._Newton.run`` with ``adaptive=False`` (the same steps,
     safeguards and stopping rules, up to rounding: sums in another order), measured by the
     natural-map error (``per_contact``: each contact on its own scale too, floored at ``floor``
     times the problem's). ``r[p]`` receives the point returned (the last one when converged,

@@ -63,8 +63,9 @@ def solve_coulomb_batch(
     max_iter : int
     check_psd : bool
         Check that every ``W[p]`` is positive semidefinite (a compiled Cholesky test each; a
-        failure is confirmed by :func:`~contactqp.core.local_problem.
-        check_positive_semidefinite` and raised naming the problem).
+        failure is confirmed by
+        :func:`~contactqp.core.local_problem.check_positive_semidefinite` and raised naming
+        the problem).
     per_contact : bool
 
     Returns

@@ -551,7 +551,7 @@ def _solve_small(
     counts = np.empty(1, dtype=np.intp)
     reasons = np.empty(1, dtype=np.intp)
     errors = np.empty(1)
-    q = np.ascontiguousarray(problem.q)
+    q = problem.q  # C-contiguous, as validated
     assert kernels.small_newton is not None  # problem.small exists only with the kernels
     kernels.small_newton(
         small.W,
