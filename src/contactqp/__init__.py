@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from .core.fastened import FastenedProblem
     from .core.friction import FrictionLaw
     from .core.history import HistoryResult, linear_path
+    from .core.local_batch import LocalBatch, LocalBatchResult
     from .core.local_problem import GlobalProblem, LocalProblem
     from .core.model import ReducedModel, unit_load_compliance
     from .core.problem import ContactProblem, FrictionalProblem
@@ -46,6 +47,8 @@ _EXPORTS: dict[str, str] = {
     "FrictionLaw": ".core.friction",
     "HistoryResult": ".core.history",
     "linear_path": ".core.history",
+    "LocalBatch": ".core.local_batch",
+    "LocalBatchResult": ".core.local_batch",
     "GlobalProblem": ".core.local_problem",
     "LocalProblem": ".core.local_problem",
     "ReducedModel": ".core.model",
@@ -108,6 +111,8 @@ __all__ = [
     "FrictionLaw",
     "LocalProblem",
     "GlobalProblem",
+    "LocalBatch",
+    "LocalBatchResult",
     "FastenedProblem",
     "FastenedResult",
     "SurfaceProblem",

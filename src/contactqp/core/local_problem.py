@@ -43,8 +43,12 @@ __all__ = [
     "GlobalProblem",
     "LocalProblem",
     "accuracy_limits",
+    "certify_small",
+    "SMALL_UNKNOWNS",
+    "SmallArrays",
     "check_diagonal",
     "check_positive_semidefinite",
+    "small_semidefinite",
     "column_products",
     "condense_global",
     "contact_status",
@@ -155,7 +159,7 @@ class LocalProblem:
         dim = _check_dim(self.dim)
         object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
         W = _as_matrix("W", self.W)
-        q = finite_array(self.q, "q", 1)
+        q = np.ascontiguousarray(finite_array(self.q, "q", 1))  # read in place by the kernels
         mu = finite_array(self.mu, "mu", 1)
         nc = mu.shape[0]
         m = dim * nc
@@ -199,7 +203,7 @@ class LocalProblem:
         (its semidefiniteness, :meth:`check_semidefinite`; the apex shift) carries over: the
         cheap way to solve many problems that differ only in ``q``.
         """
-        values = finite_array(q, "q", 1)
+        values = np.ascontiguousarray(finite_array(q, "q", 1))
         if values.shape != self.q.shape:
             raise InvalidInputError(
                 f"q must have length dim*n_contacts = {self.q.shape[0]}, got shape {values.shape}"
@@ -212,8 +216,40 @@ class LocalProblem:
         """:func:`check_positive_semidefinite` of ``W``, factored once per problem (and its
         :meth:`with_q` twins); raises on every call when ``W`` fails."""
         if not self._checks.get("semidefinite", False):
-            check_positive_semidefinite(self.W)
+            small = self.small  # the same test in C first; numpy and LAPACK for the verdict
+            if small is None or not small_semidefinite(small.W).all():
+                check_positive_semidefinite(self.W)
             self._checks["semidefinite"] = True
+
+    @functools.cached_property
+    def frictionless(self) -> bool:
+        """True when ``mu = 0`` on every contact (the cones are rays)."""
+        return not (self.mu > 0).any()
+
+    @functools.cached_property
+    def small(self) -> SmallArrays | None:
+        """The arrays of the compiled small-problem route (:class:`SmallArrays`), or None when
+        ``W`` has more than :data:`SMALL_UNKNOWNS` rows or the compiled kernels are absent.
+
+        Computed once per problem (and shared by its :meth:`with_q` twins): a dense copy of a
+        sparse ``W``, so that no solve converts it again.
+        """
+        m = self.q.shape[0]
+        if m > SMALL_UNKNOWNS or m == 0 or kernels.small_newton is None:
+            return None
+        W = self.W if isinstance(self.W, np.ndarray) else self.W.toarray()
+        arrays = SmallArrays(
+            W=np.ascontiguousarray(W).reshape(1, m, m),  # float, as validated
+            mu=np.ascontiguousarray(self.mu).reshape(1, -1),
+            shift=np.ascontiguousarray(self.apex_shift).reshape(1, m),
+            data_rounding=(
+                relative_rounding(self.digits.get("W")),
+                relative_rounding(self.digits.get("q")),
+            ),
+        )
+        for array in (arrays.W, arrays.mu, arrays.shift):
+            array.flags.writeable = False
+        return arrays
 
     @functools.cached_property
     def _largest_diagonal(self) -> float:
@@ -251,9 +287,37 @@ class LocalProblem:
         from .friction import apex_distance
 
         shift = np.zeros((self.n_contacts, self.dim))
-        shift[:, 0] = apex_distance(self.mu, self.law.cohesion)  # the field, as validated
+        if self.law.cohesion.any():
+            shift[:, 0] = apex_distance(self.mu, self.law.cohesion)  # the field, as validated
         shift.flags.writeable = False
         return shift.reshape(-1)
+
+
+#: Largest number of unknowns ``d k`` of a problem solved by the compiled small-problem route
+#: (:attr:`LocalProblem.small`): a dense ``W`` of that size is a few kilobytes, and its Newton
+#: steps cost less in C than one numpy call each.
+SMALL_UNKNOWNS = 60
+
+
+@dataclass(frozen=True)
+class SmallArrays:
+    """A small problem's arrays as the compiled kernels take them (one problem of a batch).
+
+    Attributes
+    ----------
+    W : numpy.ndarray, shape (1, m, m)
+        Dense, C-contiguous, read-only.
+    mu : numpy.ndarray, shape (1, k)
+    shift : numpy.ndarray, shape (1, m)
+        :attr:`LocalProblem.apex_shift`.
+    data_rounding : tuple of float
+        :func:`relative_rounding` of the digits of ``W`` and ``q``.
+    """
+
+    W: np.ndarray
+    mu: np.ndarray
+    shift: np.ndarray
+    data_rounding: tuple[float, float]
 
 
 def _check_digits(digits, names) -> dict[str, int]:
@@ -445,6 +509,47 @@ def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyL
     return AccuracyLimits(
         rounding=_EPS * (product + size_q) / scale, data=data / scale, digits=dict(digits)
     )
+
+
+def certify_small(
+    problem: LocalProblem, r: np.ndarray, *, per_contact: bool = False, rtol: float = 1e-6
+) -> tuple[np.ndarray, float, AccuracyLimits, np.ndarray]:
+    """``(u, error, limits, status)`` of reactions ``r`` (float, shape (m,)) of a problem with
+    :attr:`LocalProblem.small` arrays, in one compiled pass over ``W``.
+
+    The same figures as ``u = W r + q``, :func:`natural_map_residual` (its error),
+    :func:`accuracy_limits` and :func:`contact_status_unchecked` (with ``rtol``), up to the order
+    of the sums.
+    """
+    small = problem.small
+    if small is None or kernels.small_certificate is None:
+        raise InvalidInputError("certify_small needs a problem with small arrays")
+    m = r.shape[0]
+    u = np.empty((1, m))
+    measures = np.empty((1, 4))
+    status = np.empty((1, problem.n_contacts), dtype=np.intp)
+    kernels.small_certificate(
+        small.W,
+        problem.q.reshape(1, m),  # C-contiguous, as validated
+        small.mu,
+        small.shift,
+        np.ascontiguousarray(r, dtype=float).reshape(1, m),
+        per_contact,
+        CONTACT_FLOOR,
+        rtol,
+        u,
+        measures,
+        status,
+    )
+    error, product, size_q, scale = measures[0].tolist()
+    scale = scale or 1.0
+    data_w, data_q = small.data_rounding
+    limits = AccuracyLimits(
+        rounding=_EPS * (product + size_q) / scale,
+        data=(data_w * product + data_q * size_q) / scale,
+        digits=dict(problem.digits),
+    )
+    return u[0], error, limits, status[0]
 
 
 #: Entries of a block of rows (512 kB, in cache) by which :func:`column_products` reads a dense
@@ -1016,6 +1121,17 @@ def check_diagonal(S, name: str = "W") -> np.ndarray:
                 f"has nonzero off-diagonal entries"
             )
     return diag
+
+
+def small_semidefinite(W: np.ndarray) -> np.ndarray:
+    """Whether each of small dense matrices ``W`` (shape (P, m, m), C-contiguous) passes
+    :func:`check_positive_semidefinite`'s test, shape (P,) of bool, by the compiled kernel
+    (one unblocked Cholesky factorisation each, no numpy call per matrix)."""
+    if kernels.small_semidefinite is None:
+        raise InvalidInputError("small_semidefinite needs the compiled kernels")
+    passed = np.zeros(W.shape[0], dtype=np.intp)
+    kernels.small_semidefinite(W, PSD_SHIFT, passed)
+    return passed.astype(bool)
 
 
 def check_positive_semidefinite(W, name: str = "W") -> None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 from ..errors import PureNumpyKernelsWarning
 
@@ -27,6 +27,10 @@ __all__ = [
     "planar_gauss_seidel",
     "planar_blocks",
     "row_products",
+    "small_newton",
+    "small_certificate",
+    "small_semidefinite",
+    "SMALL_REASONS",
     "IMPLEMENTATION",
     "FORCE_PURE_NUMPY",
     "pure_numpy_forced",
@@ -44,6 +48,16 @@ def pure_numpy_forced(environ: Mapping[str, str] = os.environ) -> bool:
 #: ``"compiled"`` or ``"pure_numpy"``: the module whose functions this one offers.
 IMPLEMENTATION: str
 
+#: The compiled small-problem route (:func:`contactqp.kernels.compiled.small_newton`, its
+#: certificate and PSD check), None with the pure-numpy kernels: it has no numpy twin, its
+#: oracle is the Python Newton run of :mod:`contactqp.methods.coulomb`, which the solvers use
+#: where it is None.
+small_newton: Callable[..., None] | None = None
+small_certificate: Callable[..., None] | None = None
+small_semidefinite: Callable[..., None] | None = None
+#: The reasons of :func:`~contactqp.kernels.compiled.small_newton`'s codes (coulomb's Newton run).
+SMALL_REASONS: tuple[str, ...] = ()
+
 if pure_numpy_forced():
     from .pure_numpy import (
         alart_curnier_rows,
@@ -58,6 +72,7 @@ if pure_numpy_forced():
     IMPLEMENTATION = "pure_numpy"
 else:
     try:
+        from . import compiled as _compiled
         from .compiled import (
             alart_curnier_rows,
             natural_map_rows,
@@ -67,6 +82,11 @@ else:
             row_products,
             sparse_newton_matrix,
         )
+
+        small_newton = _compiled.small_newton
+        small_certificate = _compiled.small_certificate
+        small_semidefinite = _compiled.small_semidefinite
+        SMALL_REASONS = _compiled.SMALL_REASONS
 
         IMPLEMENTATION = "compiled"
     except ImportError as _missing:

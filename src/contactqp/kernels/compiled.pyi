@@ -17,6 +17,37 @@ __all__ = [
     "row_products",
 ]
 
+SMALL_REASONS: tuple[str, ...]
+SMALL_CONSTANTS: dict[str, float]
+
+def small_newton(
+    W: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    shift: np.ndarray,
+    r: np.ndarray,
+    tol: float,
+    max_iter: int,
+    per_contact: bool,
+    floor: float,
+    iterations: np.ndarray,
+    reasons: np.ndarray,
+    errors: np.ndarray,
+) -> None: ...
+def small_certificate(
+    W: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    shift: np.ndarray,
+    r: np.ndarray,
+    per_contact: bool,
+    floor: float,
+    rtol: float,
+    u: np.ndarray,
+    measures: np.ndarray,
+    status: np.ndarray,
+) -> None: ...
+def small_semidefinite(W: np.ndarray, shift: float, passed: np.ndarray) -> None: ...
 def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None: ...
 def natural_map_rows(
     R: np.ndarray, U: np.ndarray, mu: np.ndarray, squares: np.ndarray

@@ -16,7 +16,11 @@ types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overr
 :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb` are their callers.
 """
 
-from libc.math cimport log, sqrt
+from libc.math cimport fabs, isfinite, log, sqrt
+from libc.stdlib cimport free, malloc
+from cpython.buffer cimport (
+    PyBUF_C_CONTIGUOUS, PyBUF_FORMAT, PyBUF_WRITABLE, PyBuffer_Release, PyObject_GetBuffer
+)
 from libc.stdint cimport int64_t
 
 __all__ = [
@@ -27,6 +31,10 @@ __all__ = [
     "planar_gauss_seidel",
     "planar_blocks",
     "row_products",
+    "small_newton",
+    "small_certificate",
+    "small_semidefinite",
+    "SMALL_REASONS",
 ]
 
 
@@ -68,6 +76,25 @@ def project_rows(const double[:, :] X, const double[:] mu, double[:, :] P):
             P[i, k] = p[k]
 
 
+cdef inline double _natural_row(const double* r, const double* u, Py_ssize_t d,
+                                double mu) noexcept nogil:
+    """Squared natural-map residual of one contact (``r`` from the cone apex, ``u`` its
+    velocity): ``||r - P_K(r - u - mu ||u_T|| e_N)||^2``."""
+    cdef Py_ssize_t k
+    cdef double slip = 0.0, square = 0.0
+    cdef double x[3]
+    cdef double p[3]
+    for k in range(1, d):
+        slip += u[k] * u[k]
+    for k in range(d):
+        x[k] = r[k] - u[k]
+    x[0] -= mu * sqrt(slip)
+    _project(x, d, mu, p)
+    for k in range(d):
+        square += (r[k] - p[k]) ** 2
+    return square
+
+
 def natural_map_rows(const double[:, :] R, const double[:, :] U, const double[:] mu,
                      double[:] squares):
     """Squared natural-map residual of each contact into ``squares``; returns their sum.
@@ -77,23 +104,53 @@ def natural_map_rows(const double[:, :] R, const double[:, :] U, const double[:]
     """
     cdef Py_ssize_t i, k, d = R.shape[1]
     _check_dimension(d)
-    cdef double slip, square, total = 0.0
-    cdef double x[3]
-    cdef double p[3]
+    cdef double square, total = 0.0
+    cdef double r[3]
+    cdef double u[3]
     for i in range(R.shape[0]):
-        slip = 0.0
-        for k in range(1, d):
-            slip += U[i, k] * U[i, k]
         for k in range(d):
-            x[k] = R[i, k] - U[i, k]
-        x[0] -= mu[i] * sqrt(slip)
-        _project(x, d, mu[i], p)
-        square = 0.0
-        for k in range(d):
-            square += (R[i, k] - p[k]) ** 2
+            r[k] = R[i, k]
+            u[k] = U[i, k]
+        square = _natural_row(r, u, d, mu[i])
         squares[i] = square
         total += square
     return total
+
+
+cdef inline void _alart_curnier(const double* r, const double* u, Py_ssize_t d, double mu,
+                                double rho, double* phi, double* A, double* B) noexcept nogil:
+    """Alart-Curnier function of one contact into ``phi``; its Jacobian blocks ``A``, ``B``
+    (row-major ``d x d``) too unless ``A`` is NULL (see :func:`alart_curnier_rows`)."""
+    cdef Py_ssize_t k, a, b
+    cdef bint pressed, outside
+    cdef double xn, radius, norm = 0.0, s, inverse, c, identity
+    cdef double y[3]  # the trial point X_i (its tangential part)
+    xn = r[0] - rho * u[0]
+    pressed = xn > 0.0
+    radius = mu * xn if pressed else 0.0
+    for k in range(1, d):
+        y[k] = r[k] - rho * u[k]
+        norm += y[k] * y[k]
+    norm = sqrt(norm)
+    outside = norm > radius
+    s = radius / norm if outside else 1.0
+    phi[0] = r[0] - (xn if pressed else 0.0)
+    for k in range(1, d):
+        phi[k] = r[k] - s * y[k]
+    if A == NULL:
+        return
+    inverse = 1.0 / norm if outside else 0.0  # y / ||y|| is the slip direction
+    for a in range(d):
+        for b in range(d):
+            identity = 1.0 if a == b else 0.0
+            if a == 0:
+                c = 1.0 if (b == 0 and pressed) else 0.0
+            elif b == 0:
+                c = mu * y[a] * inverse if pressed else 0.0
+            else:
+                c = s * (identity - y[a] * y[b] * inverse * inverse)
+            A[a * d + b] = identity - c
+            B[a * d + b] = rho * c
 
 
 def alart_curnier_rows(const double[:, :] R, const double[:, :] U, const double[:] mu,
@@ -110,37 +167,25 @@ def alart_curnier_rows(const double[:, :] R, const double[:, :] U, const double[
     """
     cdef Py_ssize_t i, k, a, b, d = R.shape[1]
     _check_dimension(d)
-    cdef bint jacobian = A.shape[0] > 0, pressed, outside
-    cdef double xn, radius, norm, s, inverse, c, identity
-    cdef double y[3]  # the trial point X_i (its tangential part)
+    cdef bint jacobian = A.shape[0] > 0
+    cdef double r[3]
+    cdef double u[3]
+    cdef double phi[3]
+    cdef double a_block[9]
+    cdef double b_block[9]
     for i in range(R.shape[0]):
-        xn = R[i, 0] - rho[i] * U[i, 0]
-        pressed = xn > 0.0
-        radius = mu[i] * xn if pressed else 0.0
-        norm = 0.0
-        for k in range(1, d):
-            y[k] = R[i, k] - rho[i] * U[i, k]
-            norm += y[k] * y[k]
-        norm = sqrt(norm)
-        outside = norm > radius
-        s = radius / norm if outside else 1.0
-        Phi[i, 0] = R[i, 0] - (xn if pressed else 0.0)
-        for k in range(1, d):
-            Phi[i, k] = R[i, k] - s * y[k]
+        for k in range(d):
+            r[k] = R[i, k]
+            u[k] = U[i, k]
+        _alart_curnier(r, u, d, mu[i], rho[i], phi, a_block if jacobian else NULL, b_block)
+        for k in range(d):
+            Phi[i, k] = phi[k]
         if not jacobian:
             continue
-        inverse = 1.0 / norm if outside else 0.0  # y / ||y|| is the slip direction
         for a in range(d):
             for b in range(d):
-                identity = 1.0 if a == b else 0.0
-                if a == 0:
-                    c = 1.0 if (b == 0 and pressed) else 0.0
-                elif b == 0:
-                    c = mu[i] * y[a] * inverse if pressed else 0.0
-                else:
-                    c = s * (identity - y[a] * y[b] * inverse * inverse)
-                A[i, a, b] = identity - c
-                B[i, a, b] = rho[i] * c
+                A[i, a, b] = a_block[a * d + b]
+                B[i, a, b] = b_block[a * d + b]
 
 
 def sparse_newton_matrix(const double[:, :, :] A, const double[:, :, :] B,
@@ -366,3 +411,661 @@ def row_products(const double[:, :] W, const int64_t[:] indptr, const int64_t[:]
                 a += v if v >= 0.0 else -v
         product[i] = s
         magnitude[i] = a
+
+
+# ---------------------------------------------------------------------------------------------
+# Small dense problems: the whole Newton run, the certificate and the PSD check in C.
+
+#: Why :func:`small_newton` stopped, by the code it returns (the reasons of coulomb's Newton run).
+SMALL_REASONS = (
+    "converged", "stalled", "singular Newton matrix", "line search failed", "iteration limit"
+)
+cdef enum:
+    _CONVERGED = 0
+    _STALLED = 1
+    _SINGULAR = 2
+    _NO_STEP = 3
+    _LIMIT = 4
+
+# the constants of contactqp.methods.coulomb's Newton run (passed by the caller would cost more
+# than it says: tests/test_kernels.py checks that the two agree)
+cdef double REGULARISATION = 1e-2
+cdef Py_ssize_t MEMORY = 5
+cdef double ARMIJO = 1e-4
+cdef Py_ssize_t MAX_HALVINGS = 30
+cdef Py_ssize_t STALL = 20
+SMALL_CONSTANTS = {
+    "REGULARISATION": REGULARISATION,
+    "MEMORY": MEMORY,
+    "ARMIJO": ARMIJO,
+    "MAX_HALVINGS": MAX_HALVINGS,
+    "STALL": STALL,
+}
+
+
+cdef struct Small:
+    # one problem u = W r + q (W row-major m x m), nc contacts of dimension d, apex shift
+    Py_ssize_t m, nc, d
+    const double* W
+    const double* q
+    const double* mu
+    const double* shift
+    bint per_contact
+    double floor  # CONTACT_FLOOR
+    double qq  # q . q
+    double* qt  # q - W shift: the problem from the cone apex
+    double* rho
+    double* scale  # mean diagonal of each contact block (1 where not positive)
+    # work
+    double* u
+    double* phi
+    double* A
+    double* B
+    double* step
+    double* rhs
+    double* trial
+    double* trial_u
+    double* trial_phi
+    double* best
+    double* react
+    double* J
+    double* squares
+    Py_ssize_t* rows
+    Py_ssize_t* pivots
+    double* errors
+    double* history
+
+
+cdef inline double _dot(const double* x, const double* y, Py_ssize_t n) noexcept nogil:
+    cdef Py_ssize_t i
+    cdef double total = 0.0
+    for i in range(n):
+        total += x[i] * y[i]
+    return total
+
+
+cdef inline void _product(const Small* S, const double* r, const double* q,
+                          double* u) noexcept nogil:
+    """``u = W r + q``."""
+    cdef Py_ssize_t i, j, m = S.m
+    cdef double total
+    for i in range(m):
+        total = 0.0
+        for j in range(m):
+            total += S.W[i * m + j] * r[j]
+        u[i] = total + q[i]
+
+
+cdef void _natural_error(Small* S, const double* r, const double* u, double* residual,
+                         double* error) noexcept nogil:
+    """Natural-map residual and error of reactions ``r`` and velocities ``u``
+    (:func:`contactqp.core.local_problem.natural_map_residual`: ``r + shift`` is measured)."""
+    cdef Py_ssize_t i, k, d = S.d, m = S.m
+    cdef double total = 0.0, rr = 0.0, uu = 0.0, scale, own, a, b, c, worst = 0.0, floor
+    cdef double x[3]
+    for i in range(S.nc):
+        for k in range(d):
+            x[k] = r[i * d + k] + S.shift[i * d + k]
+        S.squares[i] = _natural_row(x, u + i * d, d, S.mu[i])
+        total += S.squares[i]
+    for i in range(m):
+        rr += r[i] * r[i]
+        uu += u[i] * u[i]
+    residual[0] = sqrt(total)
+    scale = sqrt(max(S.qq, max(rr, uu)))
+    if scale == 0.0:
+        scale = 1.0
+    error[0] = residual[0] / scale
+    if S.per_contact and S.nc:
+        floor = (S.floor * scale) ** 2
+        for i in range(S.nc):
+            a = 0.0
+            b = 0.0
+            c = 0.0
+            for k in range(d):
+                a += S.q[i * d + k] ** 2
+                b += r[i * d + k] ** 2
+                c += u[i * d + k] ** 2
+            own = max(max(a, b), max(c, floor))
+            worst = max(worst, S.squares[i] / own)
+        error[0] = max(error[0], sqrt(worst))
+
+
+cdef void _measure(Small* S, const double* r, const double* u, double* residual,
+                   double* error) noexcept nogil:
+    """:func:`_natural_error` of ``r`` from the apex: of the reactions ``r - shift``."""
+    cdef Py_ssize_t i
+    for i in range(S.m):
+        S.react[i] = r[i] - S.shift[i]
+    _natural_error(S, S.react, u, residual, error)
+
+
+cdef void _residual(const Small* S, const double* r, double* u, double* phi) noexcept nogil:
+    """``u = W r + q~`` and the Alart-Curnier function ``phi`` of ``(r, u)``."""
+    cdef Py_ssize_t i, d = S.d
+    _product(S, r, S.qt, u)
+    for i in range(S.nc):
+        _alart_curnier(r + i * d, u + i * d, d, S.mu[i], S.rho[i], phi + i * d, NULL, NULL)
+
+
+cdef bint _lu_solve(double* J, Py_ssize_t n, double* b, Py_ssize_t* pivots) noexcept nogil:
+    """Solve ``J x = b`` in place (``b`` becomes ``x``) by LU with partial pivoting (LAPACK's
+    ``getrf``/``getrs`` unblocked); False when a pivot is exactly zero (``numpy.linalg.solve``'s
+    LinAlgError)."""
+    cdef Py_ssize_t i, j, k, p
+    cdef double big, value, pivot
+    for k in range(n):
+        p = k
+        big = fabs(J[k * n + k])
+        for i in range(k + 1, n):
+            value = fabs(J[i * n + k])
+            if value > big:
+                big = value
+                p = i
+        pivots[k] = p
+        if J[p * n + k] == 0.0:
+            return False
+        if p != k:
+            for j in range(n):
+                value = J[k * n + j]
+                J[k * n + j] = J[p * n + j]
+                J[p * n + j] = value
+        pivot = 1.0 / J[k * n + k]
+        for i in range(k + 1, n):
+            J[i * n + k] *= pivot
+        for i in range(k + 1, n):
+            value = J[i * n + k]
+            if value != 0.0:
+                for j in range(k + 1, n):
+                    J[i * n + j] -= value * J[k * n + j]
+    for k in range(n):
+        p = pivots[k]
+        if p != k:
+            value = b[k]
+            b[k] = b[p]
+            b[p] = value
+    for i in range(n):
+        value = b[i]
+        for j in range(i):
+            value -= J[i * n + j] * b[j]
+        b[i] = value
+    for i in range(n - 1, -1, -1):
+        value = b[i]
+        for j in range(i + 1, n):
+            value -= J[i * n + j] * b[j]
+        b[i] = value / J[i * n + i]
+    return True
+
+
+cdef bint _direction(Small* S, const double* r, const double* u, double eta) noexcept nogil:
+    """``S.step`` = the Newton step ``(A + B (W + eta D)) dr = -Phi`` (coulomb's
+    ``_Newton.direction``, dense); False if the matrix is singular or the step not finite."""
+    cdef Py_ssize_t i, j, a, b, c, k, kk, d = S.d, m = S.m, dd = S.d * S.d, n = 0, ni, nj
+    cdef Py_ssize_t kept = 0
+    cdef double value, factor
+    cdef double* Ai
+    cdef double* Bi
+    for i in range(S.nc):
+        Ai = S.A + i * dd
+        Bi = S.B + i * dd
+        _alart_curnier(r + i * d, u + i * d, d, S.mu[i], S.rho[i], S.phi + i * d, Ai, Bi)
+        factor = eta * S.scale[i]
+        c = 0
+        for k in range(dd):
+            Ai[k] += factor * Bi[k]
+            if Bi[k] != 0.0:
+                c = 1
+        if c:  # kept: the contact's rows enter the factored block
+            for a in range(d):
+                S.rows[n + a] = i * d + a
+            n += d
+            kept += 1
+    for k in range(m):
+        S.step[k] = -S.phi[k]
+    if kept == 0:
+        return True
+    for k in range(n):
+        S.rhs[k] = S.step[S.rows[k]]
+    if kept < S.nc:  # rhs -= B W (the released contacts' steps)
+        for k in range(m):
+            S.trial[k] = S.step[k]
+        for k in range(n):
+            S.trial[S.rows[k]] = 0.0
+        for k in range(m):  # coupling, in trial_u
+            value = 0.0
+            for j in range(m):
+                value += S.W[k * m + j] * S.trial[j]
+            S.trial_u[k] = value
+        for kk in range(n // d):
+            ni = kk * d
+            i = S.rows[ni] // d
+            Bi = S.B + i * dd
+            for a in range(d):
+                value = 0.0
+                for c in range(d):
+                    value += Bi[a * d + c] * S.trial_u[i * d + c]
+                S.rhs[ni + a] -= value
+    # J = B_kept W[kept, kept] + blockdiag(A_kept)
+    for kk in range(n // d):
+        ni = kk * d
+        i = S.rows[ni] // d
+        Bi = S.B + i * dd
+        Ai = S.A + i * dd
+        for a in range(d):
+            for nj in range(n):
+                value = 0.0
+                for c in range(d):
+                    value += Bi[a * d + c] * S.W[(i * d + c) * m + S.rows[nj]]
+                S.J[(ni + a) * n + nj] = value
+            for b in range(d):
+                S.J[(ni + a) * n + ni + b] += Ai[a * d + b]
+    if not _lu_solve(S.J, n, S.rhs, S.pivots):
+        return False
+    for k in range(n):
+        S.step[S.rows[k]] = S.rhs[k]
+    for k in range(m):
+        if not isfinite(S.step[k]):
+            return False
+    return True
+
+
+cdef int _run(Small* S, double* r, double tol, Py_ssize_t max_iter, Py_ssize_t* iterations,
+              double* out_error) noexcept nogil:
+    """Coulomb's Newton run (``_Newton.run``, ``adaptive=False``) from ``r`` (apex coordinates,
+    overwritten by the point returned); the reason code, ``iterations`` and the error."""
+    cdef Py_ssize_t k, i, count = 1, tries, first
+    cdef double residual, error, best_error, merit, reference, t, trial_residual, trial_error
+    cdef double low_recent, low_before
+    cdef bint found
+    cdef Py_ssize_t m = S.m
+    _residual(S, r, S.u, S.phi)
+    _measure(S, r, S.u, &residual, &error)
+    for i in range(m):
+        S.best[i] = r[i]
+    best_error = error
+    S.errors[0] = error
+    for k in range(max_iter):
+        if error <= tol:
+            iterations[0] = k
+            out_error[0] = error
+            return _CONVERGED
+        if count > STALL:
+            low_recent = S.errors[count - STALL]
+            for i in range(count - STALL, count):
+                low_recent = min(low_recent, S.errors[i])
+            low_before = S.errors[0]
+            for i in range(count - STALL):
+                low_before = min(low_before, S.errors[i])
+            if low_recent > 0.5 * low_before:
+                break  # stalled
+        merit = 0.5 * _dot(S.phi, S.phi, m)
+        S.history[k] = merit
+        first = k - MEMORY + 1 if k >= MEMORY else 0
+        reference = S.history[first]
+        for i in range(first, k + 1):
+            reference = max(reference, S.history[i])
+        if not _direction(S, r, S.u, min(REGULARISATION, error)):
+            iterations[0] = k
+            out_error[0] = best_error
+            for i in range(m):
+                r[i] = S.best[i]
+            return _SINGULAR
+        t = 1.0
+        found = False
+        for tries in range(MAX_HALVINGS):
+            for i in range(m):
+                S.trial[i] = r[i] + t * S.step[i]
+            _residual(S, S.trial, S.trial_u, S.trial_phi)
+            _measure(S, S.trial, S.trial_u, &trial_residual, &trial_error)
+            if 0.5 * _dot(S.trial_phi, S.trial_phi, m) <= reference - ARMIJO * t * merit or (
+                t == 1.0 and trial_residual < residual
+            ):
+                found = True
+                break
+            t *= 0.5
+        if not found:
+            iterations[0] = k
+            out_error[0] = best_error
+            for i in range(m):
+                r[i] = S.best[i]
+            return _NO_STEP
+        for i in range(m):
+            r[i] = S.trial[i]
+            S.u[i] = S.trial_u[i]
+            S.phi[i] = S.trial_phi[i]
+        residual = trial_residual
+        error = trial_error
+        S.errors[count] = error
+        count += 1
+        if error < best_error:
+            best_error = error
+            for i in range(m):
+                S.best[i] = r[i]
+    else:
+        iterations[0] = max_iter
+        out_error[0] = best_error
+        for i in range(m):
+            r[i] = S.best[i]
+        return _LIMIT
+    iterations[0] = k
+    out_error[0] = best_error
+    for i in range(m):
+        r[i] = S.best[i]
+    return _STALLED
+
+
+cdef double* _setup(Small* S, Py_ssize_t m, Py_ssize_t nc, Py_ssize_t max_iter) noexcept nogil:
+    """Allocate the work arrays of problems of ``m`` unknowns and ``nc`` contacts (one block,
+    freed by the caller); NULL when out of memory."""
+    cdef Py_ssize_t dd = (m // nc) ** 2 if nc else 0
+    cdef Py_ssize_t size = 10 * m + 2 * nc * dd + m * m + 3 * nc + 2 * (max_iter + 1)
+    cdef double* block = <double*> malloc(size * sizeof(double))
+    cdef Py_ssize_t* indices = <Py_ssize_t*> malloc((2 * m + 1) * sizeof(Py_ssize_t))
+    if block == NULL or indices == NULL:
+        free(block)
+        free(indices)
+        return NULL
+    S.m, S.nc = m, nc
+    S.d = m // nc if nc else 3
+    S.qt = block
+    S.u = block + m
+    S.phi = block + 2 * m
+    S.step = block + 3 * m
+    S.rhs = block + 4 * m
+    S.trial = block + 5 * m
+    S.trial_u = block + 6 * m
+    S.trial_phi = block + 7 * m
+    S.best = block + 8 * m
+    S.react = block + 9 * m
+    S.J = block + 10 * m
+    S.A = S.J + m * m
+    S.B = S.A + nc * dd
+    S.rho = S.B + nc * dd
+    S.scale = S.rho + nc
+    S.squares = S.scale + nc
+    S.errors = S.squares + nc
+    S.history = S.errors + max_iter + 1
+    S.rows = indices
+    S.pivots = indices + m
+    return block
+
+
+cdef void _problem(Small* S, const double* W, const double* q, const double* mu,
+                   const double* shift) noexcept nogil:
+    """Point ``S`` at one problem: ``q~``, ``rho`` and the contact scales."""
+    cdef Py_ssize_t i, k, d = S.d, m = S.m
+    cdef double mean
+    S.W, S.q, S.mu, S.shift = W, q, mu, shift
+    S.qq = _dot(q, q, m)
+    for i in range(m):  # q~ = q - W shift
+        S.qt[i] = q[i] - _dot(W + i * m, shift, m)
+    for i in range(S.nc):
+        mean = 0.0
+        for k in range(d):
+            mean += W[(i * d + k) * m + i * d + k]
+        mean /= d
+        S.scale[i] = mean if mean > 0.0 else 1.0
+        S.rho[i] = 1.0 / S.scale[i]
+
+
+cdef void* _buffer(object array, char kind, int ndim, Py_ssize_t* shape, bint writable,
+                   str name) except NULL:
+    """The data of a C-contiguous array of ``ndim`` dimensions, of float64 (``kind`` ``d``) or
+    intp (``n``), its shape written to ``shape``.
+
+    A typed memoryview costs a few thousand instructions to set up, the whole Newton run of a
+    one-contact problem: the small-problem functions read their arrays through this. The buffer
+    is released at once; the caller holds the arrays for the call.
+    """
+    cdef Py_buffer view
+    cdef int i, flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT
+    cdef char code
+    cdef bint ok
+    if writable:
+        flags |= PyBUF_WRITABLE
+    PyObject_GetBuffer(array, &view, flags)
+    cdef void* data = view.buf
+    ok = view.ndim == ndim and view.itemsize == 8 and view.format != NULL
+    if ok:
+        code = view.format[0]
+        if code == b'@' or code == b'=' or code == b'<':
+            code = view.format[1]
+        ok = code == b'd' if kind == b'd' else (code == b'q' or code == b'l' or code == b'n')
+    if ok:
+        for i in range(ndim):
+            shape[i] = view.shape[i]
+    PyBuffer_Release(&view)
+    if not ok:
+        raise ValueError(
+            f"{name} must be a C-contiguous {ndim}-D "
+            f"{'float64' if kind == b'd' else 'intp'} array{' (writable)' if writable else ''}"
+        )
+    return data if data != NULL else <void*> shape  # an empty array's data is never read
+
+
+def small_newton(W, q, mu, shift, r, double tol, Py_ssize_t max_iter, bint per_contact,
+                 double floor, iterations, reasons, errors):
+    """Coulomb's first Newton run on each of ``P`` small dense problems, in C.
+
+    Problem ``p``: ``u = W[p] r + q[p]`` (``W[p]`` row-major, ``m`` unknowns), friction
+    coefficients ``mu[p]`` (``nc`` contacts, ``d = m / nc`` components each), apex shift
+    ``shift[p]`` (:attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`). From the start
+    ``r[p]`` (apex coordinates: reactions plus ``shift[p]``) it runs exactly the iterations of
+    ``contactqp.methods.coulomb._Newton.run`` with ``adaptive=False`` (the same steps,
+    safeguards and stopping rules, up to rounding: sums in another order), measured by the
+    natural-map error (``per_contact``: each contact on its own scale too, floored at ``floor``
+    times the problem's). ``r[p]`` receives the point returned (the last one when converged,
+    else the best), ``iterations[p]`` the iterations, ``reasons[p]`` an index of
+    :data:`SMALL_REASONS` and ``errors[p]`` its error.
+    """
+    cdef Py_ssize_t p, P, m, nc
+    cdef Py_ssize_t sw[3]
+    cdef Py_ssize_t sq[2]
+    cdef Py_ssize_t smu[2]
+    cdef Py_ssize_t ss[2]
+    cdef Py_ssize_t sr[2]
+    cdef Py_ssize_t si[1]
+    cdef Py_ssize_t sn[1]
+    cdef Py_ssize_t se[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 2, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 2, smu, False, "mu")
+    cdef const double* sd = <const double*> _buffer(shift, b'd', 2, ss, False, "shift")
+    cdef double* rd = <double*> _buffer(r, b'd', 2, sr, True, "r")
+    cdef Py_ssize_t* itd = <Py_ssize_t*> _buffer(iterations, b'n', 1, si, True, "iterations")
+    cdef Py_ssize_t* red = <Py_ssize_t*> _buffer(reasons, b'n', 1, sn, True, "reasons")
+    cdef double* erd = <double*> _buffer(errors, b'd', 1, se, True, "errors")
+    P, m, nc = sw[0], sw[1], smu[1]
+    if sw[2] != m or sq[1] != m or ss[1] != m or sr[1] != m:
+        raise ValueError("W, q, shift and r must have m = W.shape[1] columns")
+    if nc == 0 or m != (m // nc) * nc:
+        raise ValueError(f"{m} unknowns do not make rows of {nc} contacts")
+    _check_dimension(m // nc)
+    if (sq[0] != P or smu[0] != P or ss[0] != P or sr[0] != P or si[0] != P or sn[0] != P
+            or se[0] != P):
+        raise ValueError("every argument must hold P = W.shape[0] problems")
+    if max_iter < 0:
+        raise ValueError("max_iter must be >= 0")
+    cdef Small S
+    cdef double* block
+    cdef Py_ssize_t count
+    with nogil:
+        block = _setup(&S, m, nc, max_iter)
+        if block != NULL:
+            S.per_contact = per_contact
+            S.floor = floor
+            for p in range(P):
+                _problem(&S, Wd + p * m * m, qd + p * m, mud + p * nc, sd + p * m)
+                red[p] = _run(&S, rd + p * m, tol, max_iter, &count, erd + p)
+                itd[p] = count
+            free(block)
+            free(S.rows)
+    if block == NULL:
+        raise MemoryError()
+
+
+def small_certificate(W, q, mu, shift, r, bint per_contact, double floor, double rtol, u,
+                      measures, status):
+    """The certificate of reactions ``r[p]`` of each small dense problem, from ``r`` alone.
+
+    ``u[p] = W[p] r[p] + q[p]``; ``measures[p]`` = (natural-map error, ``|| |W| |r| ||`` over
+    the rows the error depends on, ``||q||``, ``max(||q||, ||r||, ||u||)``), the figures of
+    :func:`~contactqp.core.local_problem.natural_map_residual` and
+    :func:`~contactqp.core.local_problem.accuracy_limits`; ``status[p]`` the open (0) /
+    stick (1) / slip (2) code of each contact by the rule of
+    :func:`~contactqp.core.local_problem.contact_status_unchecked` with ``rtol``.
+    """
+    cdef Py_ssize_t p, i, j, k, P, m, nc, d
+    cdef Py_ssize_t sw[3]
+    cdef Py_ssize_t sq[2]
+    cdef Py_ssize_t smu[2]
+    cdef Py_ssize_t ss[2]
+    cdef Py_ssize_t sr[2]
+    cdef Py_ssize_t su[2]
+    cdef Py_ssize_t sm[2]
+    cdef Py_ssize_t st[2]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 2, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 2, smu, False, "mu")
+    cdef const double* sd = <const double*> _buffer(shift, b'd', 2, ss, False, "shift")
+    cdef const double* rd = <const double*> _buffer(r, b'd', 2, sr, False, "r")
+    cdef double* ud = <double*> _buffer(u, b'd', 2, su, True, "u")
+    cdef double* md = <double*> _buffer(measures, b'd', 2, sm, True, "measures")
+    cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 2, st, True, "status")
+    P, m, nc = sw[0], sw[1], smu[1]
+    if nc == 0 or m != (m // nc) * nc:
+        raise ValueError(f"{m} unknowns do not make rows of {nc} contacts")
+    d = m // nc
+    _check_dimension(d)
+    if (sw[2] != m or sq[1] != m or ss[1] != m or sr[1] != m or su[1] != m or sm[1] != 4
+            or st[1] != nc):
+        raise ValueError("inconsistent shapes")
+    if (sq[0] != P or smu[0] != P or ss[0] != P or sr[0] != P or su[0] != P or sm[0] != P
+            or st[0] != P):
+        raise ValueError("every argument must hold P = W.shape[0] problems")
+    cdef double total, magnitude, product, largest, force, w, apex, size, aa, slip, carry
+    cdef double residual, error, value
+    cdef const double* rp
+    cdef double* up
+    cdef Small S
+    cdef double* squares = <double*> malloc(nc * sizeof(double))
+    if squares == NULL:
+        raise MemoryError()
+    S.m, S.nc, S.d = m, nc, d
+    S.per_contact = per_contact
+    S.floor = floor
+    S.squares = squares
+    with nogil:
+        for p in range(P):
+            S.W, S.q, S.mu, S.shift = Wd + p * m * m, qd + p * m, mud + p * nc, sd + p * m
+            rp = rd + p * m
+            up = ud + p * m
+            S.qq = _dot(S.q, S.q, m)
+            product = 0.0
+            w = 0.0
+            for i in range(m):
+                total = 0.0
+                magnitude = 0.0
+                for j in range(m):
+                    total += S.W[i * m + j] * rp[j]
+                    magnitude += fabs(S.W[i * m + j]) * fabs(rp[j])
+                up[i] = total + S.q[i]
+                if i % d == 0 or S.mu[i // d] != 0.0:  # the certified rows
+                    product += magnitude * magnitude
+                w = max(w, fabs(S.W[i * m + i]))
+            if w == 0.0:
+                w = 1.0
+            _natural_error(&S, rp, up, &residual, &error)
+            md[p * 4 + 0] = error
+            md[p * 4 + 1] = sqrt(product)
+            md[p * 4 + 2] = sqrt(S.qq)
+            size = 0.0
+            aa = 0.0
+            value = 0.0
+            for i in range(m):
+                size += rp[i] * rp[i]
+                apex = rp[i] + S.shift[i]
+                aa += apex * apex
+                value += up[i] * up[i]
+            md[p * 4 + 3] = sqrt(max(S.qq, max(size, value)))
+            largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
+            force = largest if largest > 0.0 else 1.0
+            for i in range(nc):
+                carry = 0.0
+                slip = 0.0
+                for k in range(d):
+                    apex = rp[i * d + k] + S.shift[i * d + k]
+                    carry += apex * apex
+                    if k:
+                        slip += up[i * d + k] ** 2
+                if sqrt(carry) > rtol * force:
+                    std[p * nc + i] = 2 if sqrt(slip) > rtol * w * force else 1
+                else:
+                    std[p * nc + i] = 0
+    free(squares)
+
+
+def small_semidefinite(W, double shift, passed):
+    """``passed[p]`` = 1 when ``W[p]`` passes the test of
+    :func:`~contactqp.core.local_problem.check_positive_semidefinite`, else 0.
+
+    With ``S = (W + W^T) / 2``: no diagonal entry negative, a row with a zero diagonal entry
+    zero, and a Cholesky factorisation (unblocked, as LAPACK's ``potrf``: a pivot that is not
+    positive fails) of the Jacobi-scaled ``S`` on the rows with a positive diagonal, plus
+    ``shift`` times the identity.
+    """
+    cdef Py_ssize_t p, i, j, k, n, P, m
+    cdef Py_ssize_t sw[3]
+    cdef Py_ssize_t sp[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
+    cdef Py_ssize_t* pd = <Py_ssize_t*> _buffer(passed, b'n', 1, sp, True, "passed")
+    P, m = sw[0], sw[1]
+    if sw[2] != m or sp[0] != P:
+        raise ValueError("W must be (P, m, m) and passed (P,)")
+    cdef double value
+    cdef bint ok
+    cdef double* S = <double*> malloc((m * m + m + 1) * sizeof(double))
+    cdef Py_ssize_t* keep = <Py_ssize_t*> malloc((m + 1) * sizeof(Py_ssize_t))
+    if S == NULL or keep == NULL:
+        free(S)
+        free(keep)
+        raise MemoryError()
+    cdef double* scaling = S + m * m
+    with nogil:
+        for p in range(P):
+            ok = True
+            n = 0
+            for i in range(m):
+                value = 0.5 * (Wd[(p * m + i) * m + i] + Wd[(p * m + i) * m + i])
+                if value < 0.0 or not (value >= 0.0):
+                    ok = False
+                elif value > 0.0:
+                    keep[n] = i
+                    scaling[n] = 1.0 / sqrt(value)
+                    n += 1
+                else:  # a zero diagonal entry: its row must be zero
+                    for j in range(m):
+                        if 0.5 * (Wd[(p * m + i) * m + j] + Wd[(p * m + j) * m + i]) != 0.0:
+                            ok = False
+            if ok:
+                for i in range(n):
+                    for j in range(n):
+                        value = 0.5 * (Wd[(p * m + keep[i]) * m + keep[j]]
+                                       + Wd[(p * m + keep[j]) * m + keep[i]])
+                        S[i * n + j] = scaling[i] * value * scaling[j]
+                    S[i * n + i] += shift
+                for j in range(n):  # lower Cholesky factor in place, by columns
+                    value = S[j * n + j]
+                    for k in range(j):
+                        value -= S[j * n + k] * S[j * n + k]
+                    if not (value > 0.0):
+                        ok = False
+                        break
+                    value = sqrt(value)
+                    S[j * n + j] = value
+                    for i in range(j + 1, n):
+                        S[i * n + j] -= _dot(S + i * n, S + j * n, j)
+                        S[i * n + j] /= value
+            pd[p] = 1 if ok else 0
+    free(S)
+    free(keep)

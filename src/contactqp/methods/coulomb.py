@@ -59,7 +59,9 @@ from scipy.sparse.linalg import splu
 
 from .. import kernels
 from ..core.local_problem import (
+    CONTACT_FLOOR,
     LocalProblem,
+    SmallArrays,
     better_dense,
     column_products,
     natural_map_residual,
@@ -325,11 +327,13 @@ class _Newton:
         return best[0], best[1], max_iter, "iteration limit"
 
 
-def _rounds(W, q, mu, d, r, tol, max_iter, measure):
+def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
     """Newton, Levenberg-Marquardt, then (Gauss-Seidel, both Newton runs) up to 3 rounds on
     the FCLIB problem ``(W, q, mu)`` from ``r``; ``(r, iterations, stages)``.
 
     ``measure(r, u)`` is ``(residual, error)``, the convergence test (error <= ``tol``).
+    ``first``: what the first Newton run returned when it was run already (by the compiled
+    small-problem route), ``(r, error, iterations, reason)``.
     """
     newton = _Newton(W, q, mu, d, measure)
     gauss_seidel = None
@@ -348,7 +352,10 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure):
             if iterations >= max_iter:
                 break
             budget = min(RUN_ITERATIONS, max_iter - iterations)
-            r, error, k, reason = newton.run(r, tol, budget, adaptive)
+            if first is not None and not round_ and not adaptive:
+                r, error, k, reason = first
+            else:
+                r, error, k, reason = newton.run(r, tol, budget, adaptive)
             iterations += k
             stages.append(f"{'levenberg-marquardt' if adaptive else 'newton'} {k} it. ({reason})")
             if error <= tol:
@@ -484,8 +491,10 @@ def solve_on_candidates(
 def _check_options(problem, r0, tol, max_iter):
     if not isinstance(problem, LocalProblem):
         raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    positive_tolerance(tol)
-    iteration_cap(max_iter)
+    if not (type(tol) is float and 0.0 < tol < math.inf):  # the common case without numbers' ABCs
+        positive_tolerance(tol)
+    if not (type(max_iter) is int and max_iter >= 1):
+        iteration_cap(max_iter)
     m = problem.q.shape[0]
     if r0 is None:
         return np.zeros(m)
@@ -548,6 +557,11 @@ def solve_coulomb(
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
+    small = problem.small
+    if small is not None:
+        if check_psd:
+            problem.check_semidefinite()  # once per problem and its with_q twins
+        return _solve_small(problem, small, r, tol, max_iter, per_contact, start)
     W, d, mu = problem.W, problem.dim, problem.mu  # a float ndarray or CSR, as validated
     if sp.issparse(W) and better_dense(W):
         W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
@@ -587,4 +601,65 @@ def solve_coulomb(
         method="coulomb",
         per_contact=per_contact,
         products=products,
+    )
+
+
+def _solve_small(
+    problem: LocalProblem,
+    small: SmallArrays,
+    r: np.ndarray,
+    tol: float,
+    max_iter: int,
+    per_contact: bool,
+    start: float,
+):
+    """:func:`solve_coulomb` of a small problem from ``r``: its first Newton run compiled
+    (:func:`~contactqp.kernels.compiled.small_newton`, the iterations of ``_Newton.run``); the
+    later stages, where that run does not converge, as on any problem."""
+    m = r.shape[0]
+    shift = small.shift[0]
+    x = (r + shift).reshape(1, m)
+    counts = np.empty(1, dtype=np.intp)
+    reasons = np.empty(1, dtype=np.intp)
+    errors = np.empty(1)
+    q = problem.q  # C-contiguous, as validated
+    assert kernels.small_newton is not None  # problem.small exists only with the kernels
+    kernels.small_newton(
+        small.W,
+        q.reshape(1, m),
+        small.mu,
+        small.shift,
+        x,
+        tol,
+        min(RUN_ITERATIONS, max_iter),
+        per_contact,
+        CONTACT_FLOOR,
+        counts,
+        reasons,
+        errors,
+    )
+    k, reason = int(counts[0]), kernels.SMALL_REASONS[reasons[0]]
+    if reason == "converged":
+        reactions, iterations, stages = x[0] - shift, k, [f"newton {k} it. (converged)"]
+    else:  # the Levenberg-Marquardt run and the later rounds, from where this one stopped
+        W, d, mu = small.W[0], problem.dim, problem.mu
+        q_apex = q - W @ shift if np.any(shift) else q
+
+        def measure(r_apex, u):
+            return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
+
+        first = (x[0], float(errors[0]), k, reason)
+        r_apex, iterations, stages = _rounds(
+            W, q_apex, mu, d, x[0], tol, max_iter, measure, first=first
+        )
+        reactions = r_apex - shift
+    return finish(
+        problem,
+        reactions,
+        tol,
+        iterations,
+        start,
+        ", ".join(stages),
+        method="coulomb",
+        per_contact=per_contact,
     )

@@ -28,7 +28,9 @@ def _is_frictionless(problem, kind: str) -> bool:
     """True when ``mu = 0`` on every contact of a problem of a frictional ``kind``."""
     if kind in ("frictional", "frictional-polygonal"):
         return problem.frictionless
-    if kind in ("local", "global"):
+    if kind == "local":
+        return problem.frictionless
+    if kind == "global":
         return not np.any(problem.mu > 0)
     return False
 
@@ -85,6 +87,7 @@ def solve(problem, method: str | None = None, **options):
                                                                     the global equations)
     ``FastenedProblem``                         ``lawson-hanson``   FastenedResult
     ``SurfaceProblem``                          ``constrained-cg``  SurfaceResult
+    ``LocalBatch`` (many small local problems)  ``coulomb-batch``   LocalBatchResult
     ==========================================  ==================  ===========================
 
     ``mu = 0`` on every contact of a frictional, local or global problem: the default method

@@ -28,6 +28,7 @@ from ..core.local_problem import (
     GlobalProblem,
     LocalProblem,
     accuracy_limits,
+    certify_small,
     check_diagonal,
     column_products,
     contact_status_unchecked,
@@ -59,9 +60,12 @@ def local_result(
     limits: AccuracyLimits | None = None,
     equilibrium: float | None = None,
     v: np.ndarray | None = None,
+    contact_status: np.ndarray | None = None,
 ) -> LocalResult:
     """The :class:`~contactqp.core.result.LocalResult` of reactions ``r`` and velocities ``u``
-    (shape (m,)) of ``problem``, with the contact status computed from them.
+    (shape (m,)) of ``problem``, with the contact status computed from them (unless given:
+    ``contact_status``, as :func:`~contactqp.core.local_problem.contact_status_unchecked`
+    computes it).
 
     ``error`` (natural-map), ``equilibrium``, ``limits`` and ``tol`` make its certificate;
     ``converged`` is the method's verdict (status 0, else 1).
@@ -79,7 +83,9 @@ def local_result(
         forces=r,
         nodal_forces=r,
         gaps=u[:: problem.dim],
-        contact_status=contact_status_unchecked(problem, r, u),
+        contact_status=(
+            contact_status_unchecked(problem, r, u) if contact_status is None else contact_status
+        ),
         energy=float("nan"),
         success=bool(converged),
         status=SUCCESS if converged else NOT_CONVERGED,
@@ -335,14 +341,18 @@ def finish(
     the columns where ``r`` is not zero), saves reading ``W`` again.
     """
     r = np.asarray(r, dtype=float)
-    if products is None:
-        u = np.asarray(problem.W @ r).reshape(-1) + problem.q
-        limits = accuracy_limits(problem, r, u)
+    status = None
+    if products is None and problem.small is not None:  # in one compiled pass
+        u, error, limits, status = certify_small(problem, r, per_contact=per_contact)
     else:
-        product, magnitude = products
-        u = product + problem.q
-        limits = accuracy_limits(problem, r, u, magnitude=magnitude)
-    error = natural_map_residual(problem, r, u, per_contact=per_contact)[1]
+        if products is None:
+            u = np.asarray(problem.W @ r).reshape(-1) + problem.q
+            limits = accuracy_limits(problem, r, u)
+        else:
+            product, magnitude = products
+            u = product + problem.q
+            limits = accuracy_limits(problem, r, u, magnitude=magnitude)
+        error = natural_map_residual(problem, r, u, per_contact=per_contact)[1]
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     return local_result(
@@ -356,6 +366,7 @@ def finish(
         seconds=time.perf_counter() - start,
         method=method,
         limits=limits,
+        contact_status=status,
         message=_with_limits(
             f"{verdict}: {detail}; natural-map error {error:.2e}"
             + (" (largest of the problem's and each contact's)" if per_contact else ""),

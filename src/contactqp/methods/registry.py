@@ -13,6 +13,7 @@ A problem carries its kind as the attribute ``kind``:
 ``frictional-polygonal``  :class:`~contactqp.FrictionalProblem` with ``facets``
 ``local``                 :class:`~contactqp.core.local_problem.LocalProblem` (FCLIB local)
 ``global``                :class:`~contactqp.core.local_problem.GlobalProblem` (FCLIB global)
+``local-batch``           :class:`~contactqp.core.local_batch.LocalBatch` (many small local)
 ``fastened``              :class:`~contactqp.core.fastened.FastenedProblem`
 ``surface``               :class:`~contactqp.core.surface.SurfaceProblem` (through products)
 ========================  ===================================================================
@@ -29,6 +30,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from .active_set import solve_active_set
+from .batch import solve_coulomb_batch
 from .constrained_cg import MAX_ITER as CG_MAX_ITER
 from .constrained_cg import solve_constrained_cg
 from .coulomb import MAX_ITER, solve_coulomb
@@ -216,6 +218,26 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 "semismooth Newton on Alart-Curnier, Gauss-Seidel fallback",
             ),
             Method(
+                "coulomb-batch",
+                ("local-batch",),
+                solve_coulomb_batch,
+                (
+                    Option("r0", np.ndarray, None, "warm starts: reactions, shape (P, d k)"),
+                    _local_tol(1e-8),
+                    Option(
+                        "max_iter",
+                        int,
+                        MAX_ITER,
+                        "budget of Newton iterations and Gauss-Seidel sweeps per problem",
+                    ),
+                    Option("check_psd", bool, True, "check that every W is positive semidefinite"),
+                    _PER_CONTACT,
+                ),
+                None,
+                "exact",
+                "coulomb on every problem of a batch, in one compiled loop",
+            ),
+            Method(
                 "planar",
                 ("local", "global"),
                 solve_planar,
@@ -389,6 +411,7 @@ KINDS: Mapping[str, Kind] = MappingProxyType(
             ),
             Kind("local", "LocalProblem", "coulomb"),
             Kind("global", "GlobalProblem", "coulomb"),
+            Kind("local-batch", "LocalBatch", "coulomb-batch"),
             Kind("fastened", "FastenedProblem", "lawson-hanson"),
             Kind("surface", "SurfaceProblem", "constrained-cg"),
         )
