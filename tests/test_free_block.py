@@ -58,3 +58,31 @@ def test_semidefinite_blocks_are_regularised_and_consistent_systems_solved():
     rhs = W @ rng.standard_normal(30)  # in the range of W
     x = solver.solve(free, rhs)
     assert np.linalg.norm(W @ x - rhs) <= 1e-6 * np.linalg.norm(rhs)
+
+
+def test_updates_dropping_and_bordering_overlapping_sets_match_direct_solves():
+    # free sets that drop (and border) the same indices again, as an active set settling near
+    # one base does: each solve must equal a direct one of its own block
+    rng = np.random.default_rng(11)
+    n = 120
+    W = spd(n, rng)
+    solver = FreeBlockSolver(W)
+    base = np.zeros(n, dtype=bool)
+    base[:90] = True
+    sets = [base]
+    for dropped, added in (
+        ([3, 40, 41, 88], []),
+        ([3, 41], []),
+        ([3, 40, 41, 88, 60], [95, 100]),
+        ([40], [100]),
+        ([], [95, 100, 110]),
+    ):
+        free = base.copy()
+        free[dropped] = False
+        free[added] = True
+        sets.append(free)
+    for free in sets:
+        rhs = rng.standard_normal(int(free.sum()))
+        expected = np.linalg.solve(W[np.ix_(free, free)], rhs)
+        np.testing.assert_allclose(solver.solve(free, rhs), expected, rtol=1e-9, atol=1e-12)
+    assert solver.factorizations == 1 and solver.updates == len(sets) - 1

@@ -145,3 +145,25 @@ def test_symmetric_dense_operator_reads_one_triangle_for_the_same_product():
     for bad in (A[:, :30].copy(), np.asfortranarray(A), A.astype(np.float32)):
         with pytest.raises(InvalidInputError, match="symmetric operator"):
             SymmetricDenseOperator(bad)
+
+
+def test_dense_block_on_runs_of_consecutive_indices_is_the_matrix_block():
+    # long runs of consecutive rows are gathered run by run; every selection must give the same
+    # entries as numpy's own indexing, and indices outside the matrix must still be refused
+    W = np.random.default_rng(4).standard_normal((60, 60))
+    operator = as_operator(W)
+    runs = np.r_[2:14, 20:41, 50:60]
+    mask = np.zeros(60, dtype=bool)
+    mask[runs] = True
+    for rows, cols in (
+        (runs, runs),
+        (mask, mask),
+        (runs, np.array([59, 0, 7, 7])),
+        (np.r_[-12:0, 0:12], runs),  # negative indices: numpy's meaning
+        (runs, np.r_[-5:0]),
+    ):
+        np.testing.assert_array_equal(operator.block(rows, cols), W[np.ix_(rows, cols)])
+    with pytest.raises(IndexError):
+        operator.block(runs, np.array([3, 60]))
+    with pytest.raises(IndexError):
+        operator.block(np.r_[50:61], runs)

@@ -245,6 +245,28 @@ class Operator(ABC):
             raise failure from None
 
 
+_RUN_LENGTH = 8  # mean length of the runs of consecutive indices worth one gather each
+
+
+def _runs(index: np.ndarray, n: int) -> list[tuple[int, int, int]] | None:
+    """``(first, stop, position)`` for each run of consecutive increasing indices of ``index``
+    (``index[position : position + stop - first] == range(first, stop)``), or None when the
+    runs are short on average (then one gather of the whole selection is cheaper) or ``index``
+    is not increasing within ``[0, n)``."""
+    if index.size < 2 * _RUN_LENGTH or index[0] < 0 or index[-1] >= n:
+        return None
+    steps = np.diff(index)
+    if np.any(steps <= 0):
+        return None
+    breaks = np.flatnonzero(steps != 1) + 1
+    if (breaks.size + 1) * _RUN_LENGTH > index.size:
+        return None
+    positions = np.concatenate(([0], breaks))
+    lengths = np.diff(np.concatenate((positions, [index.size])))
+    firsts = index[positions]
+    return list(zip(firsts.tolist(), (firsts + lengths).tolist(), positions.tolist(), strict=True))
+
+
 def _describe(index: np.ndarray) -> str:
     shown = ", ".join(str(int(i)) for i in index[:4])
     return f"[{shown}{', ...' if index.size > 4 else ''}]"
@@ -274,6 +296,18 @@ class DenseOperator(Operator):
             return W[rows, cols] if isinstance(cols, slice) else W[rows].take(cols, axis=1)
         if isinstance(cols, slice):
             return W.take(rows, axis=0)[:, cols]
+        runs = _runs(rows, self.shape[0])
+        if (  # row runs gathered straight into place ("clip" never clips: cols are in range)
+            runs is not None
+            and W.flags.c_contiguous
+            and cols.size
+            and 0 <= cols.min()
+            and cols.max() < self.shape[1]
+        ):
+            out = np.empty((rows.size, cols.size), dtype=W.dtype)
+            for first, stop, at in runs:
+                W[first:stop].take(cols, axis=1, out=out[at : at + stop - first], mode="clip")
+            return out
         if cols.size < rows.size:  # the smaller selection first
             return W.take(cols, axis=1).take(rows, axis=0)
         return W.take(rows, axis=0).take(cols, axis=1)

@@ -46,6 +46,32 @@ def _backward(L, rhs):
     return scipy.linalg.solve_triangular(L, rhs, lower=True, trans="T", check_finite=False)
 
 
+def _units(n: int, positions: np.ndarray) -> np.ndarray:
+    """The columns ``e_p`` of the ``n x n`` identity, ``p`` in ``positions``."""
+    unit = np.zeros((n, positions.size))
+    unit[positions, np.arange(positions.size)] = 1.0
+    return unit
+
+
+class _SolvedColumns:
+    """Columns ``L^{-1} M[:, j]`` solved once per base factor ``L``, keyed by ``j``: free sets
+    near one base border and drop mostly the same indices, and each column is independent of the
+    others solved with it."""
+
+    def __init__(self, keys: int):
+        self.slot = np.full(keys, -1, dtype=np.intp)
+        self.columns = np.empty((0, 0))
+
+    def get(self, keys: np.ndarray, solve) -> np.ndarray:
+        """The columns of ``keys``; ``solve(missing)`` gives those not solved yet (then kept)."""
+        missing = keys[self.slot[keys] < 0]
+        if missing.size:
+            solved = solve(missing)
+            self.slot[missing] = self.columns.shape[1] + np.arange(missing.size)
+            self.columns = solved if self.columns.size == 0 else np.hstack([self.columns, solved])
+        return self.columns[:, self.slot[keys]]
+
+
 class _Plan:
     """How to solve with one free set: the base factor, its border and the dropped rows."""
 
@@ -105,6 +131,8 @@ class FreeBlockSolver:
         self.base_factor: BlockFactor | None = None
         self.plans: OrderedDict[bytes, _Plan] = OrderedDict()
         self.update_cost = 0.0  # flops spent on updates since the base was factored
+        self.bordered = _SolvedColumns(0)  # L^{-1} W[base, j], by index j of W
+        self.held = _SolvedColumns(0)  # L^{-1} e_p, by position p in the base
         self.factorizations = 0
         self.updates = 0
 
@@ -141,6 +169,8 @@ class FreeBlockSolver:
         self.factorizations += 1
         self.base, self.base_index, self.base_factor = free.copy(), index, factor
         self.update_cost = 0.0
+        self.bordered = _SolvedColumns(free.size)
+        self.held = _SolvedColumns(index.size)
         self.plans.clear()
         return _Plan(factor.lower, np.arange(index.size))
 
@@ -152,7 +182,9 @@ class FreeBlockSolver:
         C = L_S = V = L_G = None
         try:
             if added.size:
-                C = _forward(L, self.matrix.block(base_index, added))
+                C = self.bordered.get(
+                    added, lambda j: _forward(L, self.matrix.block(base_index, j))
+                )
                 schur = self.matrix.block(added, added) - C.T @ C
                 if factor.shifted:
                     schur[np.diag_indices_from(schur)] += (
@@ -160,9 +192,7 @@ class FreeBlockSolver:
                     )
                 L_S = _cholesky(schur)
             if dropped.size:
-                unit = np.zeros((base_index.size, dropped.size))
-                unit[dropped, np.arange(dropped.size)] = 1.0
-                V = _forward(L, unit)
+                V = self.held.get(dropped, lambda p: _forward(L, _units(base_index.size, p)))
                 if C is not None:
                     V = np.vstack([V, -_forward(L_S, C.T @ V)])
                 L_G = _cholesky(V.T @ V)
