@@ -291,10 +291,16 @@ def main() -> None:
     parser.add_argument("--large", action="store_true", help="add Hertz 1024 and rough 2048")
     parser.add_argument("--repeat", type=int, default=3, help="runs per contender (best kept)")
     parser.add_argument("--timeout", type=float, default=900.0, help="s per contender and size")
+    parser.add_argument(
+        "--rough-loads",
+        default=",".join(str(v) for v in ROUGH_LOADS),
+        help="rough-surface mean pressures p / (E* h'_rms)",
+    )
     parser.add_argument("--skip-rough", action="store_true")
     args = parser.parse_args()
     sizes = [int(v) for v in args.sizes.split(",") if v]
     rough_sizes = [int(v) for v in args.rough_sizes.split(",") if v]
+    rough_loads = [float(v) for v in args.rough_loads.split(",") if v]
     if args.large:
         sizes += [1024] if 1024 not in sizes else []
         rough_sizes += [2048] if 2048 not in rough_sizes else []
@@ -354,7 +360,7 @@ def main() -> None:
             f"{'it':>5} {'load/P':>10} {'area':>9}  tolerance"
         )
         for n in rough_sizes:
-            for level in ROUGH_LOADS:
+            for level in rough_loads:
                 for name in ROUGH_PEERS:
                     row = measure("rough", name, n, level, args.repeat, args.timeout)
                     rough[name][(n, level)] = row
