@@ -3,13 +3,14 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP_DEMO := $(VENV)/.demo-installed
 STAMP_TEST := $(VENV)/.test-installed
+STAMP_BENCH := $(VENV)/.bench-installed
 # pyNastran holds numpy < 2: the NASTRAN importer's tests run in their own environment, so the
 # main one has the numpy that `make demo` gives users
 VENV_NASTRAN := .venv-nastran
 BIN_NASTRAN := $(VENV_NASTRAN)/bin
 STAMP_NASTRAN := $(VENV_NASTRAN)/.test-installed
 
-.PHONY: demo test lint docs bench clean
+.PHONY: demo test lint docs bench bench-scale clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -29,6 +30,10 @@ $(STAMP_TEST): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN)/python
 
 $(STAMP_NASTRAN): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN_NASTRAN)/python
 	$(BIN_NASTRAN)/python -m pip install --quiet -e ".[test-nastran]"
+	touch $@
+
+$(STAMP_BENCH): pyproject.toml src/contactqp/kernels/compiled.pyx | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[test,bench]"
 	touch $@
 
 demo: $(STAMP_DEMO)
@@ -64,6 +69,11 @@ docs: $(STAMP_TEST)
 
 bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_frictionless.py
+
+# matrix-free surface contact (FFT half-space) against Tamaas and ContactMechanics, one thread;
+# BENCH_SCALE_ARGS=--large adds Hertz 1024^2 and rough 2048^2 (see benchmarks/README.md)
+bench-scale: $(STAMP_BENCH)
+	$(BIN)/python benchmarks/bench_scale.py $(BENCH_SCALE_ARGS)
 
 clean:
 	rm -rf $(VENV) $(VENV_NASTRAN) out build docs/_build docs/auto_examples docs/api/generated docs/sg_execution_times.rst src/*.egg-info src/contactqp/kernels/compiled.c src/contactqp/kernels/compiled.*.so

@@ -1,0 +1,420 @@
+"""Matrix-free contact at scale: contactqp against Tamaas and ContactMechanics, one thread.
+
+Two problems, every contender run in its own subprocess (its peak resident memory is the
+subprocess's ``ru_maxrss``, C++ allocations included), one thread everywhere
+(``OMP_NUM_THREADS=1``, ``OPENBLAS_NUM_THREADS=1`` set before any import, FFT workers 1):
+
+1. **Non-periodic Hertz**: a rigid sphere (paraboloid, ``R = 10 mm``) on a steel half-space
+   (``E = 210 GPa``, ``nu = 0.3``), ``n x n`` square cells on a 1 mm square, the load ``F`` of
+   Hertz's theory for a contact radius ``a = n / 4`` cells (contact diameter half the grid).
+
+   * ``contactqp``: :class:`contactqp.compliance.HalfSpaceOperator` (non-periodic, zero padded)
+     + :class:`contactqp.core.surface.SurfaceProblem` (``load=F``) + ``contactqp.solve``
+     (``constrained-cg``, ``tol`` below);
+   * ``ContactMechanics``: ``FreeFFTElasticHalfSpace`` (non-periodic, the same Love kernel of
+     a uniformly loaded cell) + its ``constrained_conjugate_gradients`` (Polonsky-Keer);
+   * ``Tamaas``: periodic only. Its period is padded to ``2n x 2n`` points of the same spacing
+     (contact diameter a quarter of the period, the size of the padded FFT grids of the other
+     two); ``PolonskyKeerRey`` on its nodal spectral (Westergaard) kernel. The periodic images
+     and the nodal kernel make its answer differ from the non-periodic one by about 1e-3 in
+     the contact radius (printed): that is a different discrete problem, not a solver error.
+
+   Accuracy: load ``sum f / F``, contact radius ``a`` relative to Hertz's, measured two ways:
+   ``a_area = sqrt(cells in contact * dx^2 / pi)`` (quantised by the grid) and the moment
+   radius ``a_mom = sqrt(5/2 * sum(f r^2) / sum f)`` (Hertz's pressure gives ``a`` exactly;
+   not quantised, the one compared to 1e-4), and the peak pressure over Hertz's ``p0``.
+
+2. **Periodic rough surface**: a self-affine surface (Hurst 0.8, roll-off at 4 and cut-off at
+   ``n / 8`` wavelengths per period, rms slope 0.1, seed 1) generated here with numpy, the SAME
+   heights fed to both; mean pressures ``p / (E* h'_rms)`` of 0.01, 0.025 and 0.05 (about 2 to
+   10 % of contact). ``contactqp``: the periodic ``HalfSpaceOperator`` (spectral kernel
+   ``2 / (E* |q|)`` on forces per cell area) + ``SurfaceProblem(load=p L^2)``;
+   ``Tamaas``: ``PolonskyKeerRey`` (kernel ``2 / (E* |q|)`` on nodal pressures): the same
+   discrete operator, so the areas must agree to the solvers' tolerance.
+
+Time: ``first`` is the first call in a fresh process (operator/model construction and solve,
+imports excluded); ``best`` the best of the repeats in the same process (up to ``--repeat``,
+within a few seconds). ``MB`` is the subprocess's peak resident set (``ru_maxrss``) and
+``base`` its resident set after the imports, before the first call. The cost growth ``k`` is
+the least-squares slope of ``log(best time)`` on ``log(cells)`` over the sizes run.
+
+Run from the repository root (``make bench-scale`` installs the peers, the ``bench`` extra)::
+
+    .venv/bin/python benchmarks/bench_scale.py                  # Hertz 64..512, rough 512
+    .venv/bin/python benchmarks/bench_scale.py --large          # + Hertz 1024^2, rough 2048^2
+    .venv/bin/python benchmarks/bench_scale.py --sizes 64,128 --rough-sizes 256
+
+A peer that cannot be imported is reported and skipped; the others run.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_variable] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+YOUNG, POISSON = 210e9, 0.3
+E_STAR = YOUNG / (1.0 - POISSON**2)
+SIDE = 1e-3  # m, the grid's side
+RADIUS = 1e-2  # m, the sphere's
+CONTACTQP_TOL = 1e-8  # constrained-cg: gap on the contact / length scale
+TAMAAS_TOL = 1e-6  # PolonskyKeerRey relative error (1e-10: the same a_mom to 1e-6, 1.5-3x the time)
+CM_PENTOL = 1e-6  # ContactMechanics: penetration tolerance, times Hertz's approach
+CM_FORCETOL = 1e-6  # ContactMechanics: force outside the contact, times F / n^2
+ROUGH_LOADS = (0.01, 0.025, 0.05)  # p / (E* h'_rms)
+ROUGH_SLOPE = 0.1
+HERTZ_PEERS = ("contactqp", "tamaas", "contactmechanics")
+ROUGH_PEERS = ("contactqp", "tamaas")
+
+
+# --- the problems --------------------------------------------------------------------------
+
+
+def hertz_setup(n: int) -> dict:
+    dx = SIDE / n
+    a = n / 4 * dx
+    load = 4.0 * E_STAR * a**3 / (3.0 * RADIUS)
+    c = (np.arange(n) - (n - 1) / 2) * dx
+    X, Y = np.meshgrid(c, c)
+    r2 = X**2 + Y**2
+    return {"n": n, "dx": dx, "a": a, "load": load, "r2": r2, "s": r2 / (2 * RADIUS)}
+
+
+def rough_heights(n: int, seed: int = 1) -> tuple[np.ndarray, float]:
+    """A periodic self-affine surface (m) on ``n x n`` points of spacing ``SIDE / n``."""
+    dx = SIDE / n
+    rng = np.random.default_rng(seed)
+    qx = 2 * np.pi * np.fft.fftfreq(n, dx)
+    q = np.hypot(qx[None, :], qx[:, None])
+    ql = 2 * np.pi / SIDE
+    qr, qs = 4 * ql, n / 8 * ql
+    psd = np.where(q < qr, qr, q) ** (-2 * (1 + 0.8))
+    psd[(q > qs) | (q == 0)] = 0.0
+    spectrum = np.fft.fft2(rng.standard_normal((n, n))) * np.sqrt(psd)
+    h = np.fft.ifft2(spectrum).real
+    slope = np.sqrt(np.mean(np.abs(np.fft.ifft2(1j * qx[None, :] * np.fft.fft2(h))) ** 2) * 2)
+    return h * (ROUGH_SLOPE / slope), dx
+
+
+# --- the contenders (each runs in a worker subprocess) ---------------------------------------
+
+
+def _import_fft() -> None:
+    """Import pyFFTW (contactqp's FFT library when installed) before the clock starts: the
+    operators import it on first use, and that import (0.7 s, it pulls in dask) is an import,
+    excluded for every contender alike."""
+    try:
+        import pyfftw  # noqa: F401
+    except ImportError:
+        pass
+
+
+def run_hertz(name: str, n: int):
+    setup = hertz_setup(n)
+    dx, load, s = setup["dx"], setup["load"], setup["s"]
+    if name == "contactqp":
+        import contactqp as cq
+        from contactqp.compliance.fft_halfspace import HalfSpaceOperator
+        from contactqp.core.surface import SurfaceProblem
+
+        _import_fft()
+
+        def call():
+            W = HalfSpaceOperator(n, n, dx, dx, YOUNG, POISSON, workers=1)
+            result = cq.solve(SurfaceProblem(W, s.ravel(), load=load), tol=CONTACTQP_TOL)
+            assert result.success, result.message
+            return result.forces.reshape(n, n), result.iterations
+
+        tol = f"tol={CONTACTQP_TOL:g}"
+    elif name == "tamaas":
+        import tamaas as tm
+
+        tm.set_log_level(tm.LogLevel.error)
+        m = 2 * n
+        c = (np.arange(m) - (m - 1) / 2) * dx
+        XX, YY = np.meshgrid(c, c)
+        surface = -(XX**2 + YY**2) / (2 * RADIUS)
+        o = n // 2
+
+        def call():
+            model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [m * dx] * 2, [m, m])
+            model.E, model.nu = YOUNG, POISSON
+            solver = tm.PolonskyKeerRey(model, surface, TAMAAS_TOL)
+            solver.solve(load / (m * dx) ** 2)
+            p = np.array(model.traction)
+            return p[o : o + n, o : o + n] * dx * dx, -1
+
+        tol = f"tol={TAMAAS_TOL:g}"
+    else:
+        from ContactMechanics import FreeFFTElasticHalfSpace
+        from ContactMechanics.Optimization import constrained_conjugate_gradients
+
+        delta = setup["a"] ** 2 / RADIUS
+
+        def call():
+            substrate = FreeFFTElasticHalfSpace((n, n), E_STAR, (SIDE, SIDE))
+            out = constrained_conjugate_gradients(
+                substrate,
+                -s,
+                external_force=load,
+                pentol=CM_PENTOL * delta,
+                forcetol=CM_FORCETOL * load / n**2,
+                maxiter=20000,
+            )
+            assert out.success, out.message
+            return np.asarray(out.jac), int(out.nit)
+
+        tol = f"pentol={CM_PENTOL:g}*delta forcetol={CM_FORCETOL:g}*F/n^2"
+
+    def judge(forces):
+        f = np.asarray(forces)
+        r2, a, p0 = setup["r2"], setup["a"], 3 * load / (2 * np.pi * setup["a"] ** 2)
+        return {
+            "load": float(f.sum() / load),
+            "a_area": float(np.sqrt(np.sum(f > 1e-10 * f.max()) * dx * dx / np.pi) / a),
+            "a_mom": float(np.sqrt(2.5 * np.sum(f * r2) / np.sum(f)) / a),
+            "p_max": float(f.max() / (dx * dx) / p0),
+            "tol": tol,
+        }
+
+    return call, judge
+
+
+def run_rough(name: str, n: int, level: float):
+    h, dx = rough_heights(n)
+    pressure = level * E_STAR * ROUGH_SLOPE
+    load = pressure * SIDE**2
+    if name == "contactqp":
+        import contactqp as cq
+        from contactqp.compliance.fft_halfspace import HalfSpaceOperator
+        from contactqp.core.surface import SurfaceProblem
+
+        s = (h.max() - h).ravel()
+        _import_fft()
+
+        def call():
+            W = HalfSpaceOperator(n, n, dx, dx, YOUNG, POISSON, periodic=True, workers=1)
+            result = cq.solve(SurfaceProblem(W, s, load=load), tol=CONTACTQP_TOL)
+            assert result.success, result.message
+            return result.forces.reshape(n, n), result.iterations
+
+        tol = f"tol={CONTACTQP_TOL:g}"
+    else:
+        import tamaas as tm
+
+        tm.set_log_level(tm.LogLevel.error)
+
+        def call():
+            model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [SIDE, SIDE], [n, n])
+            model.E, model.nu = YOUNG, POISSON
+            solver = tm.PolonskyKeerRey(model, h, TAMAAS_TOL)
+            solver.solve(pressure)
+            return np.array(model.traction) * dx * dx, -1
+
+        tol = f"tol={TAMAAS_TOL:g}"
+
+    def judge(forces):
+        f = np.asarray(forces)
+        return {
+            "load": float(f.sum() / load),
+            "area": float(np.mean(f > 1e-10 * f.max())),
+            "tol": tol,
+        }
+
+    return call, judge
+
+
+def worker(case: str, name: str, n: int, level: float, repeat: int) -> dict:
+    try:
+        call, judge = run_hertz(name, n) if case == "hertz" else run_rough(name, n, level)
+    except ImportError as error:
+        return {"error": f"cannot import {name}: {error}"}
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    start = time.perf_counter()
+    forces, iterations = call()
+    first = time.perf_counter() - start
+    times = [first]
+    while len(times) < repeat and sum(times) < 3.0:
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return {
+        "first": first,
+        "best": min(times),
+        "runs": len(times),
+        "peak_mb": peak,
+        "base_mb": base,
+        "iterations": iterations,
+        **judge(forces),
+    }
+
+
+def measure(case: str, name: str, n: int, level: float, repeat: int, timeout: float) -> dict:
+    command = [sys.executable, __file__, "--worker", case, name, str(n), str(level), str(repeat)]
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"error": f"timed out after {timeout:g} s"}
+    lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
+    if done.returncode != 0 or not lines:
+        tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
+        return {"error": f"failed: {tail}"}
+    return json.loads(lines[-1])
+
+
+# --- the tables ----------------------------------------------------------------------------
+
+
+def _time(seconds: float) -> str:
+    return f"{seconds * 1e3:.0f} ms" if seconds < 10 else f"{seconds:.1f} s"
+
+
+def exponent(sizes: list[int], times: list[float]) -> float:
+    return float(np.polyfit(np.log(np.square(sizes)), np.log(times), 1)[0])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--sizes", default="64,128,256,512", help="Hertz grid sides")
+    parser.add_argument("--rough-sizes", default="512", help="rough-surface grid sides")
+    parser.add_argument("--large", action="store_true", help="add Hertz 1024 and rough 2048")
+    parser.add_argument("--repeat", type=int, default=3, help="runs per contender (best kept)")
+    parser.add_argument("--timeout", type=float, default=900.0, help="s per contender and size")
+    parser.add_argument(
+        "--rough-loads",
+        default=",".join(str(v) for v in ROUGH_LOADS),
+        help="rough-surface mean pressures p / (E* h'_rms)",
+    )
+    parser.add_argument("--skip-rough", action="store_true")
+    args = parser.parse_args()
+    sizes = [int(v) for v in args.sizes.split(",") if v]
+    rough_sizes = [int(v) for v in args.rough_sizes.split(",") if v]
+    rough_loads = [float(v) for v in args.rough_loads.split(",") if v]
+    if args.large:
+        sizes += [1024] if 1024 not in sizes else []
+        rough_sizes += [2048] if 2048 not in rough_sizes else []
+
+    print("one thread everywhere (OMP/OPENBLAS_NUM_THREADS=1, FFT workers 1)")
+    print(
+        "Non-periodic Hertz: rigid sphere on a steel half-space, a = n/4 cells; Tamaas on a "
+        "2n x 2n period (contact diameter 1/4 of it)"
+    )
+    print(
+        f"{'cells':>9} {'contender':>16} {'first':>9} {'best':>9} {'MB':>6} {'base':>5} "
+        f"{'it':>5} {'load/F':>10} {'a_mom/a':>9} {'a_area/a':>9} {'p_max/p0':>9}  tolerance"
+    )
+    hertz: dict[str, dict[int, dict]] = {name: {} for name in HERTZ_PEERS}
+    for n in sizes:
+        for name in HERTZ_PEERS:
+            row = measure("hertz", name, n, 0.0, args.repeat, args.timeout)
+            hertz[name][n] = row
+            if "error" in row:
+                print(f"{n * n:>9,} {name:>16}  skipped: {row['error']}")
+                continue
+            print(
+                f"{n * n:>9,} {name:>16} {_time(row['first']):>9} {_time(row['best']):>9} "
+                f"{row['peak_mb']:>6.0f} {row['base_mb']:>5.0f} {row['iterations']:>5} "
+                f"{row['load']:>10.7f} {row['a_mom']:>9.6f} {row['a_area']:>9.6f} "
+                f"{row['p_max']:>9.5f}  {row['tol']}"
+            )
+        own = hertz["contactqp"].get(n, {})
+        peers = {k: hertz[k][n] for k in HERTZ_PEERS[1:] if "error" not in hertz[k][n]}
+        if "error" not in own and peers:
+            parts = []
+            for k, row in peers.items():
+                differs = abs(own["a_mom"] / row["a_mom"] - 1)
+                parts.append(
+                    f"/{k} first {own['first'] / row['first']:.2f}x best "
+                    f"{own['best'] / row['best']:.2f}x, a_mom differs {differs:.1e}"
+                )
+            fastest = min(peers, key=lambda k: peers[k]["best"])
+            parts.append(f"faster peer {fastest}")
+            print(f"{'':>9} {'contactqp':>16}  " + "; ".join(parts))
+    print()
+    print("cost growth, time ~ N^k (best times, least squares over the sizes run):")
+    for name in HERTZ_PEERS:
+        ok = [n for n in sizes if "error" not in hertz[name][n]]
+        if len(ok) >= 2:
+            k = exponent(ok, [hertz[name][n]["best"] for n in ok])
+            print(f"  Hertz {name:>16}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2")
+    rough: dict[str, dict[tuple[int, float], dict]] = {name: {} for name in ROUGH_PEERS}
+    if not args.skip_rough:
+        print()
+        print(
+            "Periodic rough surface (Hurst 0.8, rms slope 0.1, the same heights for both), "
+            "p / (E* h'_rms) per row"
+        )
+        print(
+            f"{'cells':>9} {'p/E*h':>6} {'contender':>10} {'first':>9} {'best':>9} {'MB':>6} "
+            f"{'it':>5} {'load/P':>10} {'area':>9}  tolerance"
+        )
+        for n in rough_sizes:
+            for level in rough_loads:
+                for name in ROUGH_PEERS:
+                    row = measure("rough", name, n, level, args.repeat, args.timeout)
+                    rough[name][(n, level)] = row
+                    if "error" in row:
+                        print(f"{n * n:>9,} {level:>6} {name:>10}  skipped: {row['error']}")
+                        continue
+                    print(
+                        f"{n * n:>9,} {level:>6} {name:>10} {_time(row['first']):>9} "
+                        f"{_time(row['best']):>9} {row['peak_mb']:>6.0f} {row['iterations']:>5} "
+                        f"{row['load']:>10.7f} {row['area']:>9.6f}  {row['tol']}"
+                    )
+                own, peer = rough["contactqp"][(n, level)], rough["tamaas"][(n, level)]
+                if "error" not in own and "error" not in peer:
+                    print(
+                        f"{'':>9} {'':>6} {'cq/tamaas':>10} first "
+                        f"{own['first'] / peer['first']:.2f}x best "
+                        f"{own['best'] / peer['best']:.2f}x; area differs "
+                        f"{abs(own['area'] / peer['area'] - 1):.1e}, load "
+                        f"{abs(own['load'] / peer['load'] - 1):.1e}"
+                    )
+    print()
+    print("targets:")
+    for n in sizes:
+        own, tam = hertz["contactqp"][n], hertz["tamaas"][n]
+        if "error" not in own and "error" not in tam:
+            ratio = own["best"] / tam["best"]
+            met = "met" if ratio <= 1.0 else "NOT met"
+            print(f"  Hertz {n}^2: contactqp <= 1.0x Tamaas: {ratio:.2f}x ({met})")
+    if 1024 in sizes:
+        own = hertz["contactqp"][1024]
+        peers = [hertz[k][1024] for k in HERTZ_PEERS[1:] if "error" not in hertz[k][1024]]
+        if "error" not in own and peers:
+            best = min(row["best"] for row in peers)
+            ratio = own["best"] / best
+            ok = ratio <= 0.5 and own["peak_mb"] <= 1024
+            print(
+                f"  Hertz 1024^2: <= 0.5x the faster peer in <= 1 GB: {ratio:.2f}x, "
+                f"{own['peak_mb']:.0f} MB ({'met' if ok else 'NOT met'})"
+            )
+    for (n, level), own in rough["contactqp"].items():
+        peer = rough["tamaas"][(n, level)]
+        if "error" not in own and "error" not in peer:
+            ratio = own["best"] / peer["best"]
+            same = abs(own["area"] / peer["area"] - 1) <= 1e-3
+            ok = ratio <= 1.0 and same
+            print(
+                f"  rough {n}^2 p/E*h'={level}: same area to 1e-3 ({same}), "
+                f"{ratio:.2f}x Tamaas ({'met' if ok else 'NOT met'})"
+            )
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--worker":
+        _, _, case, name, n, level, repeat = sys.argv
+        print(json.dumps(worker(case, name, int(n), float(level), int(repeat))))
+    else:
+        main()
