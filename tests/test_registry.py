@@ -105,6 +105,7 @@ def test_every_problem_class_carries_its_kind():
         "global",
         "fastened",
         "surface",
+        "sliding-surface",
     }
 
 
