@@ -26,7 +26,7 @@ checks the decoupling through one product.
 Load history: the shift is measured from the unsheared pressed state, and the answer is the one
 of a *monotonic* shear from zero along a fixed direction (each point's slip keeps its direction,
 as in Cattaneo and Mindlin's theory), which a one-step solve from zero traction gives;
-:func:`~contactqp.methods.tangential_cg.shear_history` solves a sequence of growing shifts, each
+:func:`~contactqp.methods.tangential_fista.shear_history` solves a sequence of growing shifts, each
 warm-started from the previous. Unloading or reversed shear (Mindlin-Deresiewicz) needs the
 tractions of the previous state in the law and is not covered.
 
