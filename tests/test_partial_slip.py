@@ -147,3 +147,28 @@ def test_refuses_coupling_and_bad_input():
         shear_history(surface, full, MU, [(delta, 0.0), (0.5 * delta, 0.0)])
     with pytest.raises(InvalidInputError, match="monotonic shear"):
         shear_history(surface, full, MU, [(delta, 0.0), (delta, delta)])
+
+
+def test_fixed_force_finds_the_shift():
+    """At the force a shift gives, the shift comes back (to the solves' 1e-10), with the same
+    forces; an oblique force is carried exactly."""
+    surface, full, delta, a, x, y = sphere(32, 10, 0.5)
+    by_shift = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0)))
+    problem = SlidingSurfaceProblem(surface, full, MU, force=by_shift.tangential_force)
+    by_force = cq.solve(problem)
+    assert by_force.success
+    assert by_force.shift == pytest.approx([delta, 0.0], abs=1e-8 * delta)
+    assert np.max(np.abs(by_force.forces - by_shift.forces)) <= 1e-8 * by_shift.load
+    Q = np.array([0.3, -0.4]) * MU * by_shift.load
+    oblique = cq.solve(SlidingSurfaceProblem(surface, full, MU, force=Q))
+    assert oblique.success and oblique.certificate.natural_map <= 1e-8
+    assert oblique.tangential_force == pytest.approx(Q, rel=1e-12)
+    assert oblique.shift[0] > 0 > oblique.shift[1]
+    p, t = oblique.forces[:, 0], oblique.forces[:, 1:]
+    assert not certify_sliding(problem, t, p, oblique.approach, oblique.shift).passed  # load
+    with pytest.raises(InvalidInputError, match="friction limit"):
+        cq.solve(SlidingSurfaceProblem(surface, full, MU, force=(1.01 * MU * by_shift.load, 0)))
+    with pytest.raises(InvalidInputError, match="exactly one of shift"):
+        SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0), force=(1.0, 0.0))
+    with pytest.raises(InvalidInputError, match="exactly one of shift"):
+        SlidingSurfaceProblem(surface, full, MU)

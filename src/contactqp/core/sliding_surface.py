@@ -2,7 +2,8 @@
 
 A :class:`SlidingSurfaceProblem` adds a tangential step to a frictionless
 :class:`~contactqp.core.surface.SurfaceProblem`: the indenter, pressed as that problem says, is
-shifted rigidly by ``delta_T = (delta_x, delta_y)`` (m) along the surface, and each point ``i``
+shifted rigidly by ``delta_T = (delta_x, delta_y)`` (m) along the surface (given, or found so
+that the tangential forces add up to a given ``Q``), and each point ``i``
 in contact carries a tangential force ``t_i`` (N, on the elastic body) with Coulomb's law of
 friction ``mu_i`` on its normal force ``p_i``. With ``W`` the *full* compliance of the surface
 (three entries per point, ``(x, y, z)`` as :func:`~contactqp.compliance.influence_matrix`
@@ -81,9 +82,12 @@ class SlidingSurfaceProblem:
         are ``surface.compliance``. Reached through products only.
     mu : float or array_like, shape (m,)
         Friction coefficient(s), finite and >= 0.
-    shift : array_like, shape (2,)
+    shift : array_like, shape (2,), optional
         Rigid tangential displacement ``(delta_x, delta_y)`` of the indenter (m), from the
-        unsheared pressed state.
+        unsheared pressed state; the total tangential force is then an unknown.
+    force : array_like, shape (2,), optional
+        Total tangential force ``Q = (Q_x, Q_y)`` on the surface (N), below the friction limit
+        ``sum mu_i p_i``; the shift is then an unknown. Exactly one of ``shift`` and ``force``.
     certificate_tol : float
         Largest relative residual the certificate accepts.
 
@@ -94,15 +98,18 @@ class SlidingSurfaceProblem:
     surface : SurfaceProblem
     compliance : Operator
     mu : ndarray, shape (m,)
-    shift : ndarray, shape (2,)
+    shift, force : ndarray, shape (2,), or None
+        The one given; the other is None.
+    fixed : {"shift", "force"}
     certificate_tol : float
 
     Raises
     ------
     InvalidInputError
         ``surface`` not a SurfaceProblem, a compliance not of shape (3 m, 3 m), ``mu`` negative,
-        not finite or of the wrong size, ``shift`` not two finite numbers, or a periodic
-        surface (whose tangential mean displacement is free as well).
+        not finite or of the wrong size, not exactly one of ``shift`` and ``force``, either not
+        two finite numbers, or a periodic surface (whose tangential mean displacement is free
+        as well).
     """
 
     kind = "sliding-surface"
@@ -113,7 +120,8 @@ class SlidingSurfaceProblem:
         compliance,
         mu,
         *,
-        shift,
+        shift=None,
+        force=None,
         certificate_tol: float = CERTIFICATE_TOL,
     ):
         if not isinstance(surface, SurfaceProblem):
@@ -138,13 +146,23 @@ class SlidingSurfaceProblem:
             raise InvalidInputError(
                 f"mu must be a number >= 0 or an array of {m} numbers >= 0, got {mu!r}"
             )
-        delta = finite_array(shift, "shift", 1)
-        if delta.shape != (2,):
-            raise InvalidInputError(f"shift must be (delta_x, delta_y) in m, got {shift!r}")
+        if (shift is None) == (force is None):
+            raise InvalidInputError(
+                "give exactly one of shift (m) and force (total tangential force, N), "
+                f"got {'both' if shift is not None else 'neither'}"
+            )
+        given, name, what = (shift, "shift", "(delta_x, delta_y) in m")
+        if force is not None:
+            given, name, what = (force, "force", "(Q_x, Q_y) in N")
+        value = finite_array(given, name, 1)
+        if value.shape != (2,):
+            raise InvalidInputError(f"{name} must be {what}, got {given!r}")
         self.surface = surface
         self.compliance: Operator = operator
         self.mu: np.ndarray = mu_arr
-        self.shift: np.ndarray = delta
+        self.shift: np.ndarray | None = value if force is None else None
+        self.force: np.ndarray | None = value if force is not None else None
+        self.fixed = "shift" if force is None else "force"
         self.certificate_tol = positive_tolerance(certificate_tol, "certificate_tol")
 
     @property
@@ -164,6 +182,7 @@ class SlidingSurfaceProblem:
         tangential,
         normal,
         approach: float,
+        shift,
         *,
         method: str,
         converged: bool,
@@ -172,14 +191,16 @@ class SlidingSurfaceProblem:
         seconds: float,
         info: dict | None = None,
     ) -> SlidingSurfaceResult:
-        """Wrap a method's tangential forces ``(m, 2)``, normal forces ``(m,)`` (N) and approach
-        (m) in a certified :class:`SlidingSurfaceResult` (one product ``W f``)."""
+        """Wrap a method's tangential forces ``(m, 2)``, normal forces ``(m,)`` (N), approach
+        (m) and shift ``(2,)`` (m; the given one at a fixed shift) in a certified
+        :class:`SlidingSurfaceResult` (one product ``W f``)."""
         t = np.asarray(tangential, dtype=float).reshape(self.size, 2)
         p = np.asarray(normal, dtype=float)
         with np.errstate(all="ignore"):
             f = self.full_forces(t, p)
             u = np.asarray(self.compliance @ f, dtype=float)
-            certificate, slips, gaps, length = _certify(self, t, p, approach, u)
+            delta = np.asarray(shift, dtype=float)
+            certificate, slips, gaps, length = _certify(self, t, p, approach, delta, u)
         if not certificate.finite:
             status, success = CERTIFICATE_FAILED, False
             message = f"{message}; certificate failed: the answer holds NaN or inf"
@@ -219,15 +240,16 @@ class SlidingSurfaceProblem:
             info=dict(info or {}),
             approach=float(approach),
             load=float(np.sum(p)),
-            shift=self.shift.copy(),
+            shift=delta.copy(),
             tangential_force=t.sum(axis=0),
             slips=slips,
         )
 
     def __repr__(self) -> str:
+        given = np.asarray(self.shift if self.force is None else self.force)
         return (
             f"SlidingSurfaceProblem({type(self.compliance).__name__}, {self.size} points, "
-            f"shift={tuple(self.shift)!r})"
+            f"{self.fixed}={tuple(float(v) for v in given)!r})"
         )
 
 
@@ -240,8 +262,11 @@ class SlidingCertificate:
 
     Attributes
     ----------
-    penetration, force_sign, complementarity, equilibrium : float
-        The frictionless residuals (``equilibrium`` the normal load balance at a fixed load).
+    penetration, force_sign, complementarity : float
+        The frictionless residuals.
+    equilibrium : float
+        The load balances: ``|sum p - P| / P`` at a fixed load, ``|sum t - Q| / max(|Q|, F)``
+        at a fixed tangential force (the larger of the two).
     cone : float
         ``max(|t_i| - mu_i p_i, 0) / F``.
     stick : float
@@ -313,30 +338,33 @@ class SlidingCertificate:
 
 
 def certify_sliding(
-    problem: SlidingSurfaceProblem, tangential, normal, approach: float
+    problem: SlidingSurfaceProblem, tangential, normal, approach: float, shift=None
 ) -> SlidingCertificate:
-    """Check tangential forces ``(m, 2)``, normal forces ``(m,)`` (N) and an approach (m)
-    against a :class:`SlidingSurfaceProblem`, through one product ``W f``."""
+    """Check tangential forces ``(m, 2)``, normal forces ``(m,)`` (N), an approach (m) and a
+    shift ``(2,)`` (m; default the problem's, which a fixed force requires) against a
+    :class:`SlidingSurfaceProblem`, through one product ``W f``."""
     t = np.asarray(tangential, dtype=float).reshape(problem.size, 2)
     p = np.asarray(normal, dtype=float)
     if p.shape != (problem.size,):
         raise InvalidInputError(f"normal must have shape ({problem.size},), got {p.shape}")
     with np.errstate(all="ignore"):
         u = np.asarray(problem.compliance @ problem.full_forces(t, p), dtype=float)
-        return _certify(problem, t, p, approach, u)[0]
+        delta = problem.shift if shift is None else finite_array(shift, "shift", 1)
+        if delta is None or delta.shape != (2,):
+            raise InvalidInputError("shift must be (delta_x, delta_y) in m")
+        return _certify(problem, t, p, approach, delta, u)[0]
 
 
-def _certify(problem, t, p, approach, u):
+def _certify(problem, t, p, approach, shift, u):
     """``(certificate, slips (m, 2), gaps (m,), length)`` of forces and their product ``u``."""
     tol = problem.certificate_tol
     surface = problem.surface
     inf = np.inf
     U = u.reshape(-1, 3)
-    slips = U[:, :2] - problem.shift
+    slips = U[:, :2] - shift
     gaps = surface.gaps(-U[:, 2], approach)  # the normal forces sink the surface along -z
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p)) and np.isfinite(approach)) or (
-        not np.all(np.isfinite(u))
-    ):
+    finite = np.all(np.isfinite(t)) and np.all(np.isfinite(p)) and np.isfinite(approach)
+    if not (finite and np.all(np.isfinite(u)) and np.all(np.isfinite(shift))):
         nan = SlidingCertificate(inf, inf, inf, inf, inf, inf, inf, inf, tol)
         return nan, slips, gaps, 1.0
     tiny = np.finfo(float).tiny
@@ -344,7 +372,7 @@ def _certify(problem, t, p, approach, u):
     length = max(
         float(np.max(np.abs(u))),
         abs(approach - float(np.min(surface.separation))),
-        float(np.hypot(*problem.shift)),
+        float(np.hypot(*shift)),
         tiny,
     )
     bound = problem.mu * p
@@ -353,6 +381,10 @@ def _certify(problem, t, p, approach, u):
     balance = 0.0
     if surface.load is not None:
         balance = abs(float(np.sum(p)) - surface.load) / surface.load
+    if problem.force is not None:
+        Q = problem.force
+        miss = float(np.hypot(*(t.sum(axis=0) - Q)))
+        balance = max(balance, miss / max(float(np.hypot(*Q)), force))
     aligned = slip[:, None] * t + bound[:, None] * slips
     certificate = SlidingCertificate(
         penetration=max(0.0, float(np.max(-gaps))) / length,
@@ -362,20 +394,18 @@ def _certify(problem, t, p, approach, u):
         cone=max(0.0, float(np.max(size - bound))) / force,
         stick=float(np.max(slip * np.maximum(bound - size, 0.0))) / (force * length),
         alignment=float(np.max(np.hypot(aligned[:, 0], aligned[:, 1]))) / (force * length),
-        natural_map=_natural_map(problem, t, p, gaps, slips, approach, length),
+        natural_map=_natural_map(problem, t, p, gaps, slips, approach, shift, length),
         tol=tol,
     )
     return certificate, slips, gaps, length
 
 
-def _natural_map(problem, t, p, gaps, slips, approach, length) -> float:
+def _natural_map(problem, t, p, gaps, slips, approach, shift, length) -> float:
     """The per-contact natural-map error of the dense route, in dimensionless units."""
     scale_force = length / float(np.max(problem.compliance.diagonal()))
     r = np.column_stack([p, t]) / scale_force  # (N, T1, T2) per point
     v = np.column_stack([gaps, slips]) / length
-    q = np.column_stack(
-        [problem.surface.separation - approach, np.broadcast_to(-problem.shift, t.shape)]
-    )
+    q = np.column_stack([problem.surface.separation - approach, np.broadcast_to(-shift, t.shape)])
     q = q / length
     mu = problem.mu
     shifted = v.copy()
@@ -409,7 +439,7 @@ class SlidingSurfaceResult(ContactResult):
     load : float
         Total normal force (N).
     shift : ndarray, shape (2,)
-        The indenter's tangential shift (m).
+        The indenter's tangential shift (m): the given one, or found.
     tangential_force : ndarray, shape (2,)
         Total tangential force ``Q`` on the surface (N).
     slips : ndarray, shape (m, 2)

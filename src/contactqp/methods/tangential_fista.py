@@ -68,6 +68,43 @@ def _project(t: np.ndarray, bound: np.ndarray) -> np.ndarray:
     return t * scale[:, None]
 
 
+def _project_sum(
+    z: np.ndarray, bound: np.ndarray, force: np.ndarray, on: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(t, lam)``: the projection of ``z`` (m, 2) on the discs ``|t_i| <= bound_i`` with
+    ``sum t = force``, ``t_i = P_i(z_i + lam)`` on the points ``on`` (0 elsewhere), the 2-D
+    multiplier ``lam`` by damped Newton on the monotone ``sum_i P_i(z_i + lam) = force``."""
+    zc, b = z[on], bound[on]
+    lam = (force - zc.sum(axis=0)) / zc.shape[0]
+    scale = max(float(np.hypot(*force)), float(b.sum()))
+    for _ in range(100):
+        v = zc + lam
+        size = np.hypot(v[:, 0], v[:, 1])
+        miss = _project(v, b).sum(axis=0) - force
+        norm = float(np.hypot(*miss))
+        if norm <= 1e-14 * scale:
+            break
+        edge = size > b
+        c = b[edge] / size[edge]
+        n = v[edge] / size[edge, None]
+        jacobian = np.eye(2) * (np.count_nonzero(~edge) + c.sum())
+        jacobian -= np.einsum("i,ij,ik->jk", c, n, n)
+        try:
+            step = np.linalg.solve(jacobian, miss)
+        except np.linalg.LinAlgError:  # every point at its bound, the sum not turning
+            step = miss / max(float(np.count_nonzero(~edge)), 1.0)
+        a = 1.0
+        while a > 1e-10:  # backtrack on |sum - force|
+            trial = _project(zc + lam - a * step, b).sum(axis=0) - force
+            if float(np.hypot(*trial)) < norm:
+                break
+            a *= 0.5
+        lam = lam - a * step
+    t = np.zeros_like(z)
+    t[on] = _project(zc + lam, b)
+    return t, lam
+
+
 def _projected_slip(t: np.ndarray, w: np.ndarray, bound: np.ndarray, on: np.ndarray) -> float:
     """Largest norm of the slip that violates the law at ``t``: ``w`` inside a disc, on its
     bound ``w`` less its radial part when that part points inward against the force."""
@@ -190,17 +227,22 @@ def solve_tangential_fista(
     bound = problem.mu * np.maximum(p, 0.0)
     on = bound > 0.0
     cells = np.flatnonzero(on)
-    delta = problem.shift
+    force = problem.force
+    if force is not None and not float(np.hypot(*force)) < float(np.sum(bound)):
+        raise InvalidInputError(
+            f"force: |Q| = {float(np.hypot(*force)):.6g} N is not below the friction limit "
+            f"sum mu p = {float(np.sum(bound)):.6g} N (gross sliding has no fixed shift)"
+        )
+    delta = np.zeros(2) if problem.shift is None else problem.shift
     lowest = float(np.min(problem.surface.separation))
-    length = max(
-        float(np.max(np.abs(normal.displacements), initial=0.0)),
-        abs(approach - lowest),
-        float(np.hypot(*delta)),
-        _TINY,
-    )
+    base = max(float(np.max(np.abs(normal.displacements), initial=0.0)), abs(approach - lowest))
     t = np.zeros((m, 2))
     if r0 is not None:
-        t = _project(warm_start(np.ravel(r0), 2 * m).reshape(m, 2), bound)
+        t = warm_start(np.ravel(r0), 2 * m).reshape(m, 2)
+    if force is None:
+        t = _project(t, bound)
+    else:
+        t, lam = _project_sum(t, bound, force, on)
     iterations, converged, residual = 0, False, np.inf
     message = f"reached max_iter = {max_iter} iterations"
     info: dict = {"normal_iterations": normal.iterations}
@@ -218,7 +260,12 @@ def solve_tangential_fista(
         y, uy, theta = t.copy(), u.copy(), 1.0
         with np.errstate(over="ignore", invalid="ignore"):
             while True:
+                if force is not None:  # the shift: the displacement of the sticking points
+                    size = np.hypot(t[:, 0], t[:, 1])
+                    inside = on & (size < bound * (1.0 - 1e-9))
+                    delta = u[inside].mean(axis=0) if np.any(inside) else lam / step
                 w = u - delta
+                length = max(base, float(np.hypot(*delta)), _TINY)
                 residual = _projected_slip(t, w, bound, on) / length
                 if residual <= tol:
                     converged = True
@@ -230,8 +277,11 @@ def solve_tangential_fista(
                 if iterations >= max_iter:
                     break
                 iterations += 1
-                t_new = _project(y - step * (uy - delta), bound)
-                t_new[~on] = 0.0
+                if force is None:
+                    t_new = _project(y - step * (uy - delta), bound)
+                    t_new[~on] = 0.0
+                else:
+                    t_new, lam = _project_sum(y - step * uy, bound, force, on)
                 u_new = apply(t_new)
                 if float(np.sum((y - t_new) * (t_new - t))) > 0.0:  # restart (gradient test)
                     theta, beta = 1.0, 0.0
@@ -247,6 +297,7 @@ def solve_tangential_fista(
         t,
         p,
         approach,
+        delta,
         method="tangential-fista",
         converged=converged,
         message=message,
@@ -289,17 +340,19 @@ def shear_history(
         Shifts that are not parallel to the first nonzero one and growing.
     """
     results: list[SlidingSurfaceResult] = []
-    direction, previous = None, 0.0
+    direction: np.ndarray | None = None
+    previous = 0.0
     r0 = p0 = lipschitz = None
     for shift in shifts:
         problem = SlidingSurfaceProblem(surface, compliance, mu, shift=shift)
-        size = float(np.hypot(*problem.shift))
+        delta = np.asarray(problem.shift)
+        size = float(np.hypot(delta[0], delta[1]))
         if direction is None and size > 0.0:
-            direction = problem.shift / size
+            direction = delta / size
         if size > 0.0:
             assert direction is not None
-            along = float(problem.shift @ direction)
-            across = abs(float(problem.shift[0] * direction[1] - problem.shift[1] * direction[0]))
+            along = float(delta @ direction)
+            across = abs(float(delta[0] * direction[1] - delta[1] * direction[0]))
             if across > 1e-12 * size or along < previous:
                 raise InvalidInputError(
                     f"shifts must grow along one direction (a monotonic shear), got {shift!r} "
