@@ -5,8 +5,14 @@ A rigid sphere (radius ``R_s``) is pushed a depth ``d`` into an elastic half-spa
 tangentially by ``delta`` along x with the depth kept. The surface is cut into square cells of side
 ``h``, each with three unknowns: the normal reaction and the two tangential ones. Their flexibility
 is the half-space's (:func:`contactqp.compliance.influence_matrix`: Love, Cerruti); the contact is
-the local problem ``u = W r + q`` of :mod:`contactqp.core.local_problem`, one Coulomb cone per cell,
-solved by :func:`contactqp.methods.coulomb.solve_coulomb` (the Tresca fixed point of
+solved by default through operator products (``--solver tangential-fista``): the FFT half-space
+:class:`~contactqp.compliance.fft_halfspace.HalfSpaceOperator` (never formed), the normal problem
+:class:`~contactqp.core.surface.SurfaceProblem` at the depth ``d``, and the shear step
+:class:`~contactqp.core.sliding_surface.SlidingSurfaceProblem`, solved by
+:mod:`contactqp.methods.tangential_fista`. The dense route forms ``W``
+(:func:`contactqp.compliance.influence_matrix`) and solves the local problem ``u = W r + q`` of
+:mod:`contactqp.core.local_problem`, one Coulomb cone per cell, by
+:func:`contactqp.methods.coulomb.solve_coulomb` (``--solver coulomb``; the Tresca fixed point of
 :mod:`contactqp.methods.tresca` with ``--solver tresca``, a cross-check), with
 
 * normal: gap ``u_N = r^2 / (2 R_s) - d + sum_j R_zz r_N,j`` (a compressive reaction sinks the
@@ -40,11 +46,38 @@ import argparse
 import numpy as np
 
 import contactqp as cq
-from contactqp.compliance import grid, influence_matrix
+from contactqp.compliance import HalfSpaceOperator, grid, influence_matrix
 from contactqp.core.local_problem import LocalProblem
+from contactqp.core.sliding_surface import SlidingSurfaceProblem
 from contactqp.core.status import ContactStatus
+from contactqp.core.surface import SurfaceProblem
 
-SOLVERS = ("coulomb", "tresca")  # the exact method and its cross-check (contactqp methods)
+# through operator products; the dense exact method and its cross-check (contactqp methods)
+SOLVERS = ("tangential-fista", "coulomb", "tresca")
+
+
+def operator_solve(cells_per_radius, sphere_radius, cell, young, poisson, mu, delta):
+    """The same step through the FFT half-space: ``(forces (k, 3) normal first, statuses, x, y,
+    natural-map error, converged, seconds)``."""
+    a = cells_per_radius * cell
+    n = 2 * cells_per_radius + 6
+    x, y = grid(n, n, cell, cell)
+    normal = HalfSpaceOperator(n, n, cell, cell, young, poisson)
+    full = HalfSpaceOperator(n, n, cell, cell, young, poisson, components="full", coupling=False)
+    surface = SurfaceProblem(
+        normal, (x * x + y * y) / (2 * sphere_radius), approach=a * a / sphere_radius
+    )
+    solution = cq.solve(SlidingSurfaceProblem(surface, full, mu, shift=(delta, 0.0)))
+    certificate = solution.certificate
+    return (
+        solution.forces,
+        solution.contact_status,
+        x,
+        y,
+        certificate.natural_map,
+        solution.success,
+        solution.seconds,
+    )
 
 
 def contact_problem(cells_per_radius, sphere_radius, cell, young, poisson, mu, delta):
@@ -81,7 +114,7 @@ def run(
     cell: float = 1e-5,
     young: float = 210e9,
     poisson: float = 0.3,
-    solver: str = "coulomb",
+    solver: str = "tangential-fista",
 ) -> dict:
     """Solve the shear step for a target ``Q / (mu P) = ratio``; measured and theoretical values."""
     a = cells_per_radius * cell
@@ -89,22 +122,26 @@ def run(
     shear_modulus = young / (2 * (1 + poisson))
     load = 4 / 3 * e_star * a**3 / sphere_radius  # Hertz, d = a^2 / R_s
     delta = 3 * mu * load * (2 - poisson) / (16 * shear_modulus * a) * (1 - (1 - ratio) ** (2 / 3))
-    problem, _, force, x, y = contact_problem(
-        cells_per_radius, sphere_radius, cell, young, poisson, mu, delta
-    )
-    solution = cq.solve(problem, solver, tol=1e-8)
-    r = force * solution.forces.reshape(-1, 3)
+    args = (cells_per_radius, sphere_radius, cell, young, poisson, mu, delta)
+    if solver == "tangential-fista":
+        r, status, x, y, error, converged, seconds = operator_solve(*args)
+    else:
+        problem, _, force, x, y = contact_problem(*args)
+        solution = cq.solve(problem, solver, tol=1e-8)
+        r = force * solution.forces.reshape(-1, 3)
+        status = solution.contact_status
+        error, converged = solution.certificate.natural_map, solution.success
+        seconds = solution.seconds
     P, Q = float(r[:, 0].sum()), float(r[:, 1].sum())
     measured_ratio = Q / (mu * P)
-    status = solution.contact_status
     stick = status == ContactStatus.STICK
     area = cell * cell / np.pi
     stick_radius = float(np.sqrt(np.count_nonzero(stick) * area))
     contact_radius = float(np.sqrt(np.count_nonzero(status != ContactStatus.OPEN) * area))
     return {
-        "converged": bool(solution.success),
-        "error": float(solution.certificate.natural_map),
-        "seconds": float(solution.seconds),
+        "converged": bool(converged),
+        "error": float(error),
+        "seconds": float(seconds),
         "solver": solver,
         "cell": cell,
         "load": P,
@@ -127,7 +164,7 @@ def main(argv=None) -> dict:
     parser.add_argument("--ratio", type=float, default=0.5, help="target Q / (mu P), in (0, 1)")
     parser.add_argument("--mu", type=float, default=0.3)
     parser.add_argument("--poisson", type=float, default=0.3)
-    parser.add_argument("--solver", choices=SOLVERS, default="coulomb")
+    parser.add_argument("--solver", choices=SOLVERS, default=SOLVERS[0])
     args = parser.parse_args(argv)
     if args.cells < 1 or not 0 < args.ratio <= 1 or not args.mu > 0:
         parser.error("--cells must be >= 1, --ratio in (0, 1] and --mu > 0")

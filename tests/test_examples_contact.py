@@ -36,7 +36,9 @@ def test_hertz_example(cells, capsys):
     assert abs(out["radius"] - out["radius_theory"]) < 0.5 * out["cell"]
 
 
-@pytest.mark.parametrize("solver, ratio", [("coulomb", 0.5), ("tresca", 0.75)])
+@pytest.mark.parametrize(
+    "solver, ratio", [("tangential-fista", 0.5), ("coulomb", 0.5), ("tresca", 0.75)]
+)
 def test_cattaneo_mindlin_example(solver, ratio, capsys):
     """With 8 cells per contact radius: the shear force reached by Mindlin's displacement is the
     target within 1 % (measured 2e-3 at Q / mu P = 0.5: the discrete load and radius differ from

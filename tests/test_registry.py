@@ -106,6 +106,7 @@ def test_every_problem_class_carries_its_kind():
         "fastened",
         "surface",
         "local-batch",
+        "sliding-surface",
     }
 
 

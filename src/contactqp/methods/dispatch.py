@@ -76,19 +76,20 @@ def resolve(
 def solve(problem, method: str | None = None, **options):
     """Solve ``problem``, of any kind, with the named method (None: the kind's default).
 
-    ==========================================  ==================  ===========================
-    problem                                     default method      result
-    ==========================================  ==================  ===========================
-    :class:`~contactqp.ContactProblem`          ``active-set``      ContactResult
-    :class:`~contactqp.FrictionalProblem`       ``coulomb``         FrictionalResult
-    the same with ``facets``                    ``polygonal``       FrictionalResult
-    ``LocalProblem`` (FCLIB)                    ``coulomb``         LocalResult
-    ``GlobalProblem`` (FCLIB)                   ``coulomb``         LocalResult (certified on
-                                                                    the global equations)
-    ``FastenedProblem``                         ``lawson-hanson``   FastenedResult
-    ``SurfaceProblem``                          ``constrained-cg``  SurfaceResult
-    ``LocalBatch`` (many small local problems)  ``coulomb-batch``   LocalBatchResult
-    ==========================================  ==================  ===========================
+    ==========================================  ====================  ===========================
+    problem                                     default method        result
+    ==========================================  ====================  ===========================
+    :class:`~contactqp.ContactProblem`          ``active-set``        ContactResult
+    :class:`~contactqp.FrictionalProblem`       ``coulomb``           FrictionalResult
+    the same with ``facets``                    ``polygonal``         FrictionalResult
+    ``LocalProblem`` (FCLIB)                    ``coulomb``           LocalResult
+    ``GlobalProblem`` (FCLIB)                   ``coulomb``           LocalResult (certified on
+                                                                      the global equations)
+    ``FastenedProblem``                         ``lawson-hanson``     FastenedResult
+    ``SurfaceProblem``                          ``constrained-cg``    SurfaceResult
+    ``LocalBatch`` (many small local problems)  ``coulomb-batch``     LocalBatchResult
+    ``SlidingSurfaceProblem``                   ``tangential-fista``  SlidingSurfaceResult
+    ==========================================  ====================  ===========================
 
     ``mu = 0`` on every contact of a frictional, local or global problem: the default method
     (None or its name) is replaced by the frictionless route ``normal-qp`` (the box QP on the

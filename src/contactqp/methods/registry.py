@@ -16,6 +16,8 @@ A problem carries its kind as the attribute ``kind``:
 ``local-batch``           :class:`~contactqp.core.local_batch.LocalBatch` (many small local)
 ``fastened``              :class:`~contactqp.core.fastened.FastenedProblem`
 ``surface``               :class:`~contactqp.core.surface.SurfaceProblem` (through products)
+``sliding-surface``       :class:`~contactqp.core.sliding_surface.SlidingSurfaceProblem`
+                          (partial slip, through products)
 ========================  ===================================================================
 """
 
@@ -41,6 +43,8 @@ from .polygonal import solve_polygonal
 from .qp import DEFAULT_BACKEND, solve_qp
 from .surface_active_set import solve_surface_active_set
 from .surface_dual_active_set import MAX_CG, solve_dual_active_set
+from .tangential_fista import MAX_ITER as FISTA_MAX_ITER
+from .tangential_fista import solve_tangential_fista
 from .tresca import solve_tresca_fixed_point
 
 __all__ = [
@@ -381,6 +385,32 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 "primal-dual active set, each set's equations by CG through W's products only",
             ),
             Method(
+                "tangential-fista",
+                ("sliding-surface",),
+                solve_tangential_fista,
+                (
+                    Option(
+                        "r0",
+                        np.ndarray,
+                        None,
+                        "warm start: tangential forces of a smaller shift (N), (m, 2)",
+                    ),
+                    Option("p0", np.ndarray, None, "warm start: normal forces (N), (m,)"),
+                    Option("tol", float, 1e-10, "projected slip and normal gaps (relative)"),
+                    Option("max_iter", int, FISTA_MAX_ITER, "largest number of iterations"),
+                    Option(
+                        "lipschitz",
+                        float,
+                        None,
+                        "largest eigenvalue of W_TT on the contact (m/N); default: Lanczos",
+                    ),
+                ),
+                None,
+                "exact",
+                "the normal problem by constrained CG, then FISTA with restart on the friction "
+                "discs, through W's products only",
+            ),
+            Method(
                 "nnls",
                 ("fastened",),
                 solve_nnls,
@@ -414,6 +444,7 @@ KINDS: Mapping[str, Kind] = MappingProxyType(
             Kind("local-batch", "LocalBatch", "coulomb-batch"),
             Kind("fastened", "FastenedProblem", "lawson-hanson"),
             Kind("surface", "SurfaceProblem", "constrained-cg"),
+            Kind("sliding-surface", "SlidingSurfaceProblem", "tangential-fista"),
         )
     }
 )

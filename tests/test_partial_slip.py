@@ -1,0 +1,174 @@
+"""Partial slip through operators: Cattaneo-Mindlin, the dense Coulomb route, histories."""
+
+import numpy as np
+import pytest
+
+import contactqp as cq
+from contactqp.compliance import grid, influence_matrix
+from contactqp.compliance.fft_halfspace import HalfSpaceOperator
+from contactqp.core.local_problem import LocalProblem
+from contactqp.core.sliding_surface import SlidingSurfaceProblem, certify_sliding
+from contactqp.core.status import ContactStatus
+from contactqp.core.surface import SurfaceProblem
+from contactqp.errors import InvalidInputError, UnsupportedProblemError
+from contactqp.methods.tangential_fista import shear_history
+
+E, NU, MU, RS, H = 210e9, 0.3, 0.3, 5e-3, 1e-5
+E_STAR, G = E / (1 - NU**2), E / (2 * (1 + NU))
+
+
+def sphere(n, cells_per_radius, ratio, *, fixed="load"):
+    """A rigid sphere pressed to a contact radius of ``cells_per_radius`` cells, then shifted by
+    Mindlin's displacement for ``Q / (mu P) = ratio``."""
+    a = cells_per_radius * H
+    x, y = grid(n, n, H, H)
+    load = 4 / 3 * E_STAR * a**3 / RS
+    pressing = {"load": load} if fixed == "load" else {"approach": a * a / RS}
+    surface = SurfaceProblem(
+        HalfSpaceOperator(n, n, H, H, E, NU), (x * x + y * y) / (2 * RS), **pressing
+    )
+    full = HalfSpaceOperator(n, n, H, H, E, NU, components="full", coupling=False)
+    delta = 3 * MU * load * (2 - NU) / (16 * G * a) * (1 - (1 - ratio) ** (2 / 3))
+    return surface, full, delta, a, x, y
+
+
+@pytest.mark.parametrize(("n", "cells"), [(64, 24), (128, 40)])
+def test_cattaneo_mindlin_stick_radius_and_load(n, cells):
+    surface, full, delta, a, x, y = sphere(n, cells, 0.5)
+    result = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0)))
+    assert result.success and result.method == "tangential-fista"
+    assert result.certificate.natural_map <= 1e-8
+    P, (Qx, Qy) = result.load, result.tangential_force
+    ratio = Qx / (MU * P)
+    # Q against Mindlin's at this shift: the discretised contact (a to about 1/2 cell of
+    # 24-40) moves it by a few 1e-4 (measured 2e-4 at 128^2)
+    assert ratio == pytest.approx(0.5, abs=5e-3)
+    assert abs(Qy) <= 1e-10 * Qx  # symmetric about y = 0
+    # the stick zone: the disc of the same area as the sticking cells, known to half a cell
+    stick_radius = np.sqrt(np.count_nonzero(result.stick) * H * H / np.pi)
+    assert abs(stick_radius - a * (1 - ratio) ** (1 / 3)) <= 0.5 * H
+    # every sticking cell inside the theory's stick circle (to a cell's half-diagonal)
+    r = np.hypot(x, y)
+    assert r[result.stick].max() <= a * (1 - ratio) ** (1 / 3) + 0.71 * H
+    # the slipping cells' forces at the cone, along +x (the sphere moved along +x)
+    t = result.forces[result.slip, 1:]
+    bound = MU * result.forces[result.slip, 0]
+    assert np.allclose(np.hypot(t[:, 0], t[:, 1]), bound, rtol=1e-8)
+    assert np.all(t[:, 0] > 0)
+
+
+def test_agrees_with_the_dense_coulomb_route():
+    """The dense route (influence_matrix, LocalProblem, coulomb), as examples/cattaneo_mindlin.py
+    builds it, on the same 14 x 14 grid at a fixed approach."""
+    n, cells = 14, 4
+    surface, full, delta, a, x, y = sphere(n, cells, 0.6, fixed="approach")
+    result = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0)), tol=1e-12)
+    assert result.success
+    R = influence_matrix(x, y, H, H, E, NU, coupling=False)
+    order = (3 * np.arange(n * n)[:, None] + [2, 0, 1]).ravel()  # (N, T1, T2) = (-z, x, y)
+    sign = np.tile([-1.0, 1.0, 1.0], n * n)
+    W = R[np.ix_(order, order)] * np.outer(sign, sign)
+    q = np.zeros(3 * n * n)
+    q[0::3] = (x * x + y * y) / (2 * RS) - a * a / RS
+    q[1::3] = -delta
+    length = a * a / RS
+    force = length / W[0, 0]
+    dense = cq.solve(
+        LocalProblem(W * (force / length), q / length, np.full(n * n, MU), 3), "coulomb", tol=1e-12
+    )
+    assert dense.success
+    r = force * dense.forces.reshape(-1, 3)
+    scale = r[:, 0].max()
+    # both certified near 1e-10: forces agree far below the natural-map tolerance 1e-8
+    assert np.max(np.abs(result.forces - r)) <= 1e-7 * scale
+    stick = dense.contact_status == ContactStatus.STICK
+    assert np.array_equal(result.stick, stick)
+
+
+def test_history_warm_starts_and_matches_one_step():
+    surface, full, delta, a, x, y = sphere(48, 16, 0.8)
+    shifts = [(delta * k / 5, 0.0) for k in range(1, 6)]
+    history = shear_history(surface, full, MU, shifts)
+    assert all(r.success for r in history)
+    Q = [r.tangential_force[0] for r in history]
+    assert np.all(np.diff(Q) > 0)  # a growing shear
+    slips = [np.count_nonzero(r.slip) for r in history]
+    assert np.all(np.diff(slips) >= 0)  # the slip annulus only grows
+    one = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=shifts[-1]))
+    # the warm-started last increment is the one-step answer (both certified near 1e-10)
+    assert np.max(np.abs(one.forces - history[-1].forces)) <= 1e-7 * one.forces[:, 0].max()
+    assert history[-1].info["lipschitz"] == history[0].info["lipschitz"]  # computed once
+
+
+def test_gross_slip_carries_mu_p():
+    surface, full, delta, a, x, y = sphere(32, 10, 0.5)
+    result = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(0.0, -50 * delta)))
+    assert result.success
+    assert not np.any(result.stick)
+    t = result.forces[:, 1:]
+    # every cell at the cone: the force magnitudes add up to mu P
+    assert np.sum(np.hypot(t[:, 0], t[:, 1])) == pytest.approx(MU * result.load, rel=1e-12)
+    # along -y, up to the slight obliquity of the slip Cerruti's coupling of u_x and t_y gives
+    # for nu > 0 (measured 3e-7 here), symmetric about x = 0
+    Q = result.tangential_force
+    assert Q[1] == pytest.approx(-MU * result.load, rel=1e-5)
+    assert abs(Q[0]) <= 1e-12 * MU * result.load
+
+
+def test_certificate_catches_a_wrong_answer():
+    surface, full, delta, a, x, y = sphere(32, 10, 0.5)
+    problem = SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0))
+    result = cq.solve(problem)
+    p, t = result.forces[:, 0], result.forces[:, 1:]
+    assert certify_sliding(problem, t, p, result.approach).passed
+    assert not certify_sliding(problem, 0.98 * t, p, result.approach).passed  # stick cells slip
+    assert not certify_sliding(problem, 1.02 * t, p, result.approach).passed  # outside the cone
+    assert not certify_sliding(problem, t[:, ::-1], p, result.approach).passed  # misaligned
+    assert not certify_sliding(problem, t * np.nan, p, result.approach).finite
+
+
+def test_refuses_coupling_and_bad_input():
+    surface, full, delta, a, x, y = sphere(16, 5, 0.5)
+    coupled = HalfSpaceOperator(16, 16, H, H, E, NU, components="full")
+    with pytest.raises(UnsupportedProblemError, match="couples the normal and tangential"):
+        cq.solve(SlidingSurfaceProblem(surface, coupled, MU, shift=(delta, 0.0)))
+    other = HalfSpaceOperator(16, 16, H, H, 2 * E, NU, components="full", coupling=False)
+    with pytest.raises(InvalidInputError, match="normal .zz. entries"):
+        cq.solve(SlidingSurfaceProblem(surface, other, MU, shift=(delta, 0.0)))
+    with pytest.raises(InvalidInputError, match="compliance must have shape"):
+        SlidingSurfaceProblem(surface, surface.compliance, MU, shift=(delta, 0.0))
+    with pytest.raises(InvalidInputError, match="mu must be"):
+        SlidingSurfaceProblem(surface, full, -0.1, shift=(delta, 0.0))
+    with pytest.raises(InvalidInputError, match="shift must be"):
+        SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0, 0.0))
+    with pytest.raises(InvalidInputError, match="surface must be a SurfaceProblem"):
+        SlidingSurfaceProblem(None, full, MU, shift=(delta, 0.0))
+    with pytest.raises(InvalidInputError, match="monotonic shear"):
+        shear_history(surface, full, MU, [(delta, 0.0), (0.5 * delta, 0.0)])
+    with pytest.raises(InvalidInputError, match="monotonic shear"):
+        shear_history(surface, full, MU, [(delta, 0.0), (delta, delta)])
+
+
+def test_fixed_force_finds_the_shift():
+    """At the force a shift gives, the shift comes back (to the solves' 1e-10), with the same
+    forces; an oblique force is carried exactly."""
+    surface, full, delta, a, x, y = sphere(32, 10, 0.5)
+    by_shift = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0)))
+    problem = SlidingSurfaceProblem(surface, full, MU, force=by_shift.tangential_force)
+    by_force = cq.solve(problem)
+    assert by_force.success
+    assert by_force.shift == pytest.approx([delta, 0.0], abs=1e-8 * delta)
+    assert np.max(np.abs(by_force.forces - by_shift.forces)) <= 1e-8 * by_shift.load
+    Q = np.array([0.3, -0.4]) * MU * by_shift.load
+    oblique = cq.solve(SlidingSurfaceProblem(surface, full, MU, force=Q))
+    assert oblique.success and oblique.certificate.natural_map <= 1e-8
+    assert oblique.tangential_force == pytest.approx(Q, rel=1e-12)
+    assert oblique.shift[0] > 0 > oblique.shift[1]
+    p, t = oblique.forces[:, 0], oblique.forces[:, 1:]
+    assert not certify_sliding(problem, t, p, oblique.approach, oblique.shift).passed  # load
+    with pytest.raises(InvalidInputError, match="friction limit"):
+        cq.solve(SlidingSurfaceProblem(surface, full, MU, force=(1.01 * MU * by_shift.load, 0)))
+    with pytest.raises(InvalidInputError, match="exactly one of shift"):
+        SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0), force=(1.0, 0.0))
+    with pytest.raises(InvalidInputError, match="exactly one of shift"):
+        SlidingSurfaceProblem(surface, full, MU)
