@@ -52,7 +52,7 @@ test: lint docs $(STAMP_NASTRAN)
 	@$(BIN)/python -c "import numpy; print('main tests on numpy', numpy.__version__)"
 	$(BIN)/python -m pytest -q -m "not nastran"
 	@$(BIN_NASTRAN)/python -c "import numpy; print('NASTRAN tests on numpy', numpy.__version__)"
-	$(BIN_NASTRAN)/python -m pytest -q -m nastran tests/test_importers.py
+	$(BIN_NASTRAN)/python -m pytest -q -m nastran tests/test_importers.py tests/test_assembly_nastran.py
 
 # ruff (lint and format) and mypy, configured in pyproject.toml; the `test` extra brings them
 lint: $(STAMP_TEST)
