@@ -140,7 +140,7 @@ def test_the_ascii_grid_and_the_figures(tmp_path):
 @pytest.mark.parametrize(
     ("args", "needle"),
     [
-        (("--mu", "0.3"), "--mu: friction on rough surfaces"),
+        (("--mu", "0.3"), "--mu: contactqp rough solves frictionless contact only"),
         (("--mu", "-1"), "--mu must be a friction coefficient >= 0"),
         (("--surface", "FLAT", "--cell", "1e-6"), "the surface is flat"),
         (("--surface", "SURFACE", "--grid", "32"), "--grid shape a generated surface"),

@@ -132,8 +132,9 @@ def rough(
         raise InvalidInputError(f"--mu must be a friction coefficient >= 0, got {mu!r}")
     if mu:
         raise UnsupportedProblemError(
-            "--mu: friction on rough surfaces needs a matrix-free frictional method, which "
-            "this version does not have; leave out --mu for the frictionless contact"
+            "--mu: contactqp rough solves frictionless contact only (the matrix-free partial "
+            "slip of contactqp.core.sliding_surface is not wired to rough surfaces yet); "
+            "leave out --mu"
         )
     generated = {
         "--grid": grid,
