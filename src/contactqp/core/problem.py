@@ -42,7 +42,7 @@ from .contact import Constraints, LocalFrames, assemble_constraints, local_frame
 from .friction import FrictionLaw
 from .local_problem import LocalProblem
 from .model import MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance, real_array
-from .result import CERTIFICATE_FAILED, NOT_CONVERGED, SUCCESS, ContactResult, FrictionalResult
+from .result import ContactResult, FrictionalResult, verdict
 from .status import ContactStatus
 
 __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "LocalForm"]
@@ -835,37 +835,14 @@ def _refuse_open_cohesion(law: FrictionLaw, gaps: np.ndarray) -> None:
 
 
 def _verdict(converged: bool, certificate, message: str, model) -> tuple[int, bool, str]:
-    """``(status, success, message)``: 0 solved, 1 not converged, 2 certificate failed.
-
-    A failed certificate on a model that was symmetrised to be solved says so: the certificate
-    judges the matrix as given, so its asymmetry bounds the equilibrium residual attainable.
-    """
-    if not certificate.finite:
-        return (
-            CERTIFICATE_FAILED,
-            False,
-            (
-                f"{message}; certificate failed: the answer holds "
-                f"NaN or inf (overflow or a failed solve)"
-            ),
+    """:func:`~contactqp.core.result.verdict`, saying when the model was symmetrised to be
+    solved: the certificate judges the matrix as given, so its asymmetry bounds the equilibrium
+    residual attainable."""
+    note = ""
+    if model.asymmetry > 0.0 and certificate.equilibrium > certificate.tol:
+        note = (
+            f"; the model's matrix was solved as its symmetric part (relative asymmetry "
+            f"{model.asymmetry:.1e} as given), which limits the equilibrium residual "
+            f"on the matrix as given"
         )
-    if not converged:
-        return NOT_CONVERGED, False, message
-    if not certificate.passed:
-        note = ""
-        if model.asymmetry > 0.0 and certificate.equilibrium > certificate.tol:
-            note = (
-                f"; the model's matrix was solved as its symmetric part (relative asymmetry "
-                f"{model.asymmetry:.1e} as given), which limits the equilibrium residual "
-                f"on the matrix as given"
-            )
-        return (
-            CERTIFICATE_FAILED,
-            False,
-            (
-                f"{message}; certificate failed (worst relative "
-                f"residual {certificate.worst:.2e} > "
-                f"{certificate.tol:.0e}){note}"
-            ),
-        )
-    return SUCCESS, True, message
+    return verdict(converged, certificate, message, note)

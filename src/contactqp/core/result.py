@@ -33,11 +33,44 @@ __all__ = [
     "SUCCESS",
     "NOT_CONVERGED",
     "CERTIFICATE_FAILED",
+    "verdict",
 ]
 
 #: Values of :attr:`ContactResult.status`: solved, the method did not converge, the certificate
 #: (or, for an assembly, the fastener closure) failed.
 SUCCESS, NOT_CONVERGED, CERTIFICATE_FAILED = 0, 1, 2
+
+
+def verdict(converged: bool, certificate, message: str, note: str = "") -> tuple[int, bool, str]:
+    """``(status, success, message)`` of an answer from its method's word and its certificate.
+
+    Parameters
+    ----------
+    converged : bool
+        Whether the method says it converged.
+    certificate
+        Any certificate of :mod:`contactqp.core.certificate` (or one with the same ``finite``,
+        ``passed``, ``worst`` and ``tol``).
+    message : str
+        The method's message; the certificate's failure is appended to it.
+    note : str, optional
+        Appended to a failed certificate's message (for example why the residual is bounded).
+
+    Returns
+    -------
+    tuple of (int, bool, str)
+        :data:`SUCCESS`, :data:`NOT_CONVERGED` or :data:`CERTIFICATE_FAILED`; whether that is
+        success; the message.
+    """
+    if not certificate.finite:
+        failure = "the answer holds NaN or inf (overflow or a failed solve)"
+        return CERTIFICATE_FAILED, False, f"{message}; certificate failed: {failure}"
+    if not converged:
+        return NOT_CONVERGED, False, message
+    if not certificate.passed:
+        worst = f"worst relative residual {certificate.worst:.2e} > {certificate.tol:.0e}"
+        return CERTIFICATE_FAILED, False, f"{message}; certificate failed ({worst}){note}"
+    return SUCCESS, True, message
 
 
 def _figure(value) -> str:

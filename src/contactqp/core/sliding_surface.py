@@ -51,7 +51,7 @@ from .certificate import CERTIFICATE_TOL
 from .local_problem import CONTACT_FLOOR, projection_on_cones
 from .model import finite_array, positive_tolerance
 from .operators import Operator, as_operator
-from .result import CERTIFICATE_FAILED, NOT_CONVERGED, SUCCESS, ContactResult
+from .result import ContactResult, verdict
 from .status import ContactStatus
 from .surface import SurfaceProblem
 
@@ -201,19 +201,7 @@ class SlidingSurfaceProblem:
             u = np.asarray(self.compliance @ f, dtype=float)
             delta = np.asarray(shift, dtype=float)
             certificate, slips, gaps, length = _certify(self, t, p, approach, delta, u)
-        if not certificate.finite:
-            status, success = CERTIFICATE_FAILED, False
-            message = f"{message}; certificate failed: the answer holds NaN or inf"
-        elif not converged:
-            status, success = NOT_CONVERGED, False
-        elif not certificate.passed:
-            status, success = CERTIFICATE_FAILED, False
-            message = (
-                f"{message}; certificate failed (worst relative residual "
-                f"{certificate.worst:.2e} > {certificate.tol:.0e})"
-            )
-        else:
-            status, success = SUCCESS, True
+        status, success, message = verdict(converged, certificate, message)
         peak = float(np.max(np.abs(p), initial=0.0))
         closed = p > 1e-10 * peak
         slipping = np.hypot(slips[:, 0], slips[:, 1]) > SLIP_RTOL * length

@@ -34,7 +34,7 @@ from ..errors import InvalidInputError
 from .certificate import CERTIFICATE_TOL, Certificate
 from .model import finite_array, positive_tolerance
 from .operators import Operator, as_operator
-from .result import CERTIFICATE_FAILED, NOT_CONVERGED, SUCCESS, ContactResult
+from .result import ContactResult, verdict
 from .status import ContactStatus
 
 __all__ = ["SurfaceProblem", "SurfaceResult", "certify_surface", "CONTACT_RTOL"]
@@ -172,19 +172,7 @@ class SurfaceProblem:
             gaps = self.gaps(displacements, approach)
             energy = 0.5 * float(r @ displacements)
             peak = float(np.max(np.abs(r), initial=0.0))
-        if not certificate.finite:
-            status, success = CERTIFICATE_FAILED, False
-            message = f"{message}; certificate failed: the answer holds NaN or inf"
-        elif not converged:
-            status, success = NOT_CONVERGED, False
-        elif not certificate.passed:
-            status, success = CERTIFICATE_FAILED, False
-            message = (
-                f"{message}; certificate failed (worst relative residual "
-                f"{certificate.worst:.2e} > {certificate.tol:.0e})"
-            )
-        else:
-            status, success = SUCCESS, True
+        status, success, message = verdict(converged, certificate, message)
         closed = r > CONTACT_RTOL * peak
         return SurfaceResult(
             displacements=displacements,
