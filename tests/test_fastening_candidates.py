@@ -63,6 +63,10 @@ def test_the_candidate_path_equals_the_dense_route(parts, kind, monkeypatch):
     shear = assembly.load_vector("upper", np.arange(k), [80.0, 20.0, 0.0])
     steps = [("shear", shear), ("unloaded", np.zeros_like(shear))]
     lazy = assembly.sequence(gaps, load_steps=steps)
+    # each stage's W' was read where the candidates asked, and its certificate needs no W:
+    # no restriction of the assembly's W was gathered
+    restrictions = assembly.base_problem._restrictions.values()
+    assert restrictions and not any(kept.local().formed for kept in restrictions)
     monkeypatch.setattr(sequence_module, "ACTIVE_SET_MIN", 10**9)  # the dense route only
     dense = _assembly(built, assembly_parts, kind).sequence(gaps, load_steps=steps)
     assert lazy.success and dense.success

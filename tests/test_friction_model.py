@@ -6,6 +6,8 @@ displacements recomputed from U = R (P + H^T r); single-contact solutions enumer
 two solver routes (Coulomb Newton and Tresca fixed point).
 """
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -13,6 +15,7 @@ from hypothesis import strategies as st
 
 import contactqp as cq
 from contactqp.core.contact import local_frames, tangent_basis
+from contactqp.core.local_problem import natural_map_error
 
 
 def one_node(stiffness=None, coords=(0.0, 0.0), flexibility=None):
@@ -584,3 +587,61 @@ def test_cohesion_on_a_gapped_contact_is_refused():
         cq.FrictionalProblem(
             model, [0.0, 0.0], [cq.GapObstacle([0], [1e-3], [1.0, 0.0])], mu=0.5, cohesion=10.0
         )
+
+
+# ------------------------------------------------- the certificate's natural map without W
+
+
+def _dense_natural_map(problem, result):
+    """The FCLIB natural-map error with ``u~ = W~ r~ + q~`` formed from ``W`` (the dense way)."""
+    step = problem.step()
+    scaled = (result.forces.reshape(-1) + step.apex_shift) / step.force_unit
+    return natural_map_error(step.fclib, scaled, per_contact=True)
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+@pytest.mark.parametrize("kwargs", [{}, {"cohesion": 0.4}])
+def test_the_certificate_reads_u_from_the_displacements_as_w_r_plus_q(seed, kwargs):
+    # u = W r + q = H U + w - (0, (H U_prev)_T) for U = R (P + H^T r): the certificate reads
+    # the right-hand side, the dense measure the left; they agree to rounding, at a solution
+    # and at a wrong answer alike (1e-9 relative: the errors differ by ~1e-15 of the scale)
+    problem = coupled_problem(seed, mu=0.5)
+    if kwargs:  # cohesion needs closed contacts: the floor raised above the nodes
+        raised = cq.PlaneObstacle(point=[0.0, 0.1], normal=[0.0, -1.0])
+        problem = cq.FrictionalProblem(problem.model, problem.loads, [raised], 0.5, **kwargs)
+    good = cq.solve(problem)
+    assert good.success
+    later = problem.with_loads(1.3 * problem.loads, previous=good)  # slips from a state
+    for case in (problem, later):
+        result = cq.solve(case)
+        assert result.success
+        r = result.forces.copy()
+        r[:, 1] += 0.05 * np.max(np.abs(r))
+        with warnings.catch_warnings():  # a wrong answer may pull a cohesive contact open
+            warnings.simplefilter("ignore", cq.ContactWarning)
+            wrong = case.make_result(
+                r.ravel(), method="test", converged=True, message="", iterations=0, seconds=0.0
+            )
+        for answer in (result, wrong):
+            dense = _dense_natural_map(case, answer)
+            assert answer.certificate.natural_map == pytest.approx(dense, rel=1e-9, abs=1e-15)
+        assert wrong.certificate.natural_map > 1e-4
+
+
+def test_a_restricted_problem_is_certified_without_forming_its_w():
+    problem = coupled_problem(4)
+    kept = problem.restricted([2, 0])
+    result = cq.solve(kept)  # the dense method forms its W...
+    assert result.success and kept.local().formed
+    again = problem.restricted([2, 0], loads=2 * problem.loads)
+    assert again.local().formed  # the block gathered once is shared by the same contacts'
+    fresh = problem.with_gaps(problem.constraints.gaps).restricted([1])
+    certified = fresh.make_result(
+        np.zeros(2), method="test", converged=True, message="", iterations=0, seconds=0.0
+    )
+    assert not fresh.local().formed  # ...the certificate does not
+    assert certified.certificate.natural_map == pytest.approx(
+        _dense_natural_map(fresh, certified), rel=1e-9, abs=1e-15
+    )
+    np.testing.assert_allclose(fresh.local().diagonal(), np.diag(fresh.local().W), rtol=0)
+    np.testing.assert_allclose(fresh.local().W, problem.local().W[2:4, 2:4], rtol=0, atol=0)

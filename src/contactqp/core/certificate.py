@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .local_problem import CONTACT_FLOOR, AccuracyLimits, natural_map_error
+from .local_problem import CONTACT_FLOOR, AccuracyLimits, cone_residual
 
 __all__ = [
     "CERTIFICATE_TOL",
@@ -186,7 +186,7 @@ def contact_scales(problem, local_displacements, forces, step) -> tuple[float, n
     """
     k, d = problem.n_contacts, problem.dim
     free = step.q_apex.reshape(k, d)
-    compliance = float(np.max(np.abs(step.local.W.diagonal()), initial=0.0))
+    compliance = step.compliance
     # the floor left when no contact carries force: what the loads (and the previous state)
     # do at the contacts, without the initial gaps (a 1 m gap is no force of 1 m / W)
     loaded = step.q_apex - problem.local().offset
@@ -389,24 +389,31 @@ def _certify_friction(problem, U, r, step, tol) -> FrictionCertificate:
         ),
         dissipation=_worst(np.abs(law.dissipation_gap(R, slip)) / (force * length)),
         equilibrium=_equilibrium(problem.model, U, P + H.T @ r, global_force, global_length),
-        natural_map=_finite_or_inf(
-            natural_map_error(step.fclib, *_fclib_candidate(step, r), per_contact=True)
-        ),
+        natural_map=_finite_or_inf(_fclib_natural_map(problem, step, r, HU)),
         exact_cone=law.facets is None or d == 2,  # in 2-D every polygon is the exact cone
         tol=tol,
     )
 
 
-def _fclib_candidate(step, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(r~, W~ r~ + q~)`` of ``step``'s FCLIB problem for local forces ``r``; its ``W~``
-    (``H R H^T`` scaled, symmetric) read on the rows under nonzero forces only when they are
-    few (an assembly's stage loads a few of its contacts)."""
+def _fclib_natural_map(problem, step, r: np.ndarray, HU: np.ndarray) -> float:
+    """:func:`~contactqp.core.local_problem.natural_map_error` (``per_contact=True``) of the
+    step's FCLIB problem at ``r~ = (r + apex_shift) / force_unit``, with its ``u~ = W~ r~ + q~``
+    read from the displacements: ``u = W r + q = H U + w - (0, (H U_prev)_T)`` for
+    ``U = R (P + H^T r)``, which the equilibrium residual checks, and ``u~ = u / L``. No ``W`` is
+    formed (an assembly's stages are restricted forms whose ``W`` is gathered only on use)."""
+    k, d = problem.n_contacts, problem.dim
+    u = HU + problem.local().offset.reshape(k, d)
+    u[:, 1:] -= step.tangential
     scaled = (r + step.apex_shift) / step.force_unit
-    W, q = step.fclib.W, step.fclib.q
-    support = np.flatnonzero(scaled)
-    if not isinstance(W, np.ndarray) or 4 * support.size >= scaled.size:
-        return scaled, np.asarray(W @ scaled).ravel() + q
-    return scaled, scaled[support] @ W[support] + q
+    return cone_residual(
+        step.q_apex / step.length,
+        problem.law.mu,
+        d,
+        scaled,
+        u.reshape(-1) / step.length,
+        scaled,
+        per_contact=True,
+    )[1]
 
 
 def _worst(relative) -> float:

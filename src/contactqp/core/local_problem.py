@@ -50,6 +50,7 @@ __all__ = [
     "check_positive_semidefinite",
     "small_semidefinite",
     "column_products",
+    "cone_residual",
     "condense_global",
     "contact_status",
     "contact_status_unchecked",
@@ -1011,16 +1012,33 @@ def natural_map_residual(
     that, unlike the ratio, does not fall when ``r`` grows without bound (on a problem with no
     solution): solvers accept steps on it.
     """
-    d = problem.dim
-    R = (r + problem.apex_shift).reshape(-1, d)
+    return cone_residual(
+        problem.q, problem.mu, problem.dim, r + problem.apex_shift, u, r, per_contact=per_contact
+    )
+
+
+def cone_residual(
+    q: np.ndarray,
+    mu: np.ndarray,
+    dim: int,
+    shifted: np.ndarray,
+    u: np.ndarray,
+    r: np.ndarray,
+    *,
+    per_contact: bool = False,
+) -> tuple[float, float]:
+    """``(residual, error)`` of :func:`natural_map_residual` from the arrays it reads: ``q``,
+    ``mu``, ``dim``, the reactions from the apex ``shifted`` (``r + apex_shift``), ``u`` and
+    ``r`` (float arrays of shape (m,), unchecked), without the problem's ``W``: for a caller
+    that has ``u`` already (a certificate, from the returned displacements)."""
+    d = dim
+    R = shifted.reshape(-1, d)
     squares = np.empty(R.shape[0])
-    residual = math.sqrt(kernels.natural_map_rows(R, u.reshape(-1, d), problem.mu, squares))
-    scale = math.sqrt(max(problem.q @ problem.q, r @ r, u @ u)) or 1.0
+    residual = math.sqrt(kernels.natural_map_rows(R, u.reshape(-1, d), mu, squares))
+    scale = math.sqrt(max(q @ q, r @ r, u @ u)) or 1.0
     error = residual / scale
     if per_contact and squares.size:
-        own = np.maximum.reduce(
-            [_row_squares(problem.q, d), _row_squares(r, d), _row_squares(u, d)]
-        )
+        own = np.maximum.reduce([_row_squares(q, d), _row_squares(r, d), _row_squares(u, d)])
         floor = (CONTACT_FLOOR * scale) ** 2
         error = max(error, math.sqrt(np.max(squares / np.maximum(own, floor))))
     return residual, error

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import warnings
 
 import numpy as np
@@ -39,7 +40,7 @@ import scipy.sparse
 from ..errors import ContactWarning, InvalidInputError
 from .certificate import CERTIFICATE_TOL, certify, certify_friction, contact_scales
 from .contact import Constraints, LocalFrames, assemble_constraints, local_frames
-from .friction import FrictionLaw
+from .friction import FrictionLaw, apex_distance
 from .local_problem import LocalProblem
 from .model import MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance, real_array
 from .result import ContactResult, FrictionalResult, verdict
@@ -342,13 +343,50 @@ class ContactProblem:
         return f"ContactProblem({self.model!r}, {self.n_constraints} constraints)"
 
 
+class _Delassus:
+    """``W``, or the block of a larger ``W`` on some of its rows and columns, formed on first
+    use and then kept; shared by the :class:`LocalForm` copies of one contact set.
+
+    A restricted form's block is gathered only when a method or a user asks for the matrix:
+    its certificate needs only the diagonal, which is read from the full one. Gathering a
+    block of a few thousand rows touches fresh memory, the larger part of a fastening stage's
+    cost when it is done on every stage.
+    """
+
+    def __init__(self, full: np.ndarray, rows: np.ndarray | None = None):
+        self._full, self._rows = full, rows
+        self._matrix: np.ndarray | None = full if rows is None else None
+        self._diagonal: np.ndarray | None = None
+
+    def block(self, rows: np.ndarray) -> _Delassus:
+        """The block on ``rows`` (indices into this one's rows), of the same full ``W``."""
+        return _Delassus(self._full, rows if self._rows is None else self._rows[rows])
+
+    @property
+    def matrix(self) -> np.ndarray:
+        if self._matrix is None:
+            assert self._rows is not None
+            # two gathers: faster than ix_
+            self._matrix = self._full.take(self._rows, axis=0).take(self._rows, axis=1)
+        return self._matrix
+
+    @property
+    def formed(self) -> bool:
+        return self._matrix is not None
+
+    @property
+    def diagonal(self) -> np.ndarray:
+        if self._diagonal is None:
+            diagonal = np.diagonal(self._full)
+            self._diagonal = diagonal.copy() if self._rows is None else diagonal[self._rows]
+        return self._diagonal
+
+
 class LocalForm:
     """The local (FCLIB) form ``u = W r + q`` of a frictional problem; see the module notes.
 
     Attributes
     ----------
-    W : ndarray, shape (d k, d k)
-        ``H R H^T`` (m/N), contact by contact, normal first.
     offset : ndarray, shape (d k,)
         ``w``: the initial gaps in the normal slots, zeros in the tangential ones (m).
     operator : scipy.sparse.csr_matrix, shape (d k, n)
@@ -358,13 +396,29 @@ class LocalForm:
     def __init__(self, model: ReducedModel, constraints: Constraints, frames: LocalFrames):
         H = frames.operator
         self.operator = H
-        self._influence, self.W = _delassus(model, H)
+        self._influence, W = _delassus(model, H)
+        self._delassus = _Delassus(W)
         self._columns: np.ndarray | None = None  # a restricted form's columns of _influence
         self.offset = np.zeros(H.shape[0])
         self.offset[:: frames.dim] = constraints.gaps
         self.dim = frames.dim
         self._model = model
-        self._templates: dict[int, tuple[FrictionLaw, LocalProblem]] = {}
+        self._templates: dict[tuple[str, int], tuple[FrictionLaw, LocalProblem]] = {}
+
+    @property
+    def W(self) -> np.ndarray:
+        """``H R H^T`` (m/N, shape (d k, d k)), contact by contact, normal first; a restricted
+        form's is gathered on first use."""
+        return self._delassus.matrix
+
+    def diagonal(self) -> np.ndarray:
+        """The diagonal of :attr:`W` (m/N), without forming a restricted form's ``W``."""
+        return self._delassus.diagonal
+
+    @property
+    def formed(self) -> bool:
+        """True once :attr:`W` is held in memory (always for an unrestricted form)."""
+        return self._delassus.formed
 
     @property
     def influence(self) -> np.ndarray:
@@ -375,15 +429,16 @@ class LocalForm:
 
     def restricted(self, contacts: np.ndarray, dim: int, gaps: np.ndarray) -> LocalForm:
         """The form of the contacts ``contacts`` (indices) only, on initial gaps ``gaps``
-        (m, one per kept contact): rows and blocks of this one, its influence shared."""
+        (m, one per kept contact): rows and blocks of this one, its influence shared and its
+        ``W`` gathered when first used."""
         rows = (dim * np.asarray(contacts, dtype=int)[:, None] + np.arange(dim)).ravel()
         twin = copy.copy(self)
         twin.operator = self.operator[rows]
         twin._columns = rows if self._columns is None else self._columns[rows]
-        twin.W = self.W.take(rows, axis=0).take(rows, axis=1)  # two gathers: faster than ix_
+        twin._delassus = self._delassus.block(rows)
         twin.offset = np.zeros(len(rows))
         twin.offset[::dim] = gaps
-        twin._templates = {}  # its W is new: no shared FCLIB problem
+        twin._templates = {}  # its W is new: no shared local problem
         return twin
 
     def free_displacements(self, loads: np.ndarray) -> np.ndarray:
@@ -408,55 +463,77 @@ class LocalForm:
         columns = used if self._columns is None else self._columns[used]
         return free + forces[used] @ self._influence.T[columns]  # rows of (R H^T)^T
 
+    def local_template(self, law: FrictionLaw) -> LocalProblem:
+        """``W`` as a :class:`LocalProblem` with ``law``'s ``mu`` and cohesion (q zero),
+        validated once per law: each step's local problem is its ``with_q``."""
+        return self._template("local", law)
+
     def fclib_template(self, law: FrictionLaw) -> LocalProblem:
         """``W / max diag(W)`` as a :class:`LocalProblem` with ``law``'s ``mu`` (q zero),
         scaled and validated once per law: each step's FCLIB problem is its ``with_q``."""
-        cached = self._templates.get(id(law))
+        return self._template("fclib", law)
+
+    def _template(self, view: str, law: FrictionLaw) -> LocalProblem:
+        cached = self._templates.get((view, id(law)))
         if cached is None or cached[0] is not law:
-            w = float(np.max(self.W.diagonal()))
-            problem = LocalProblem(self.W / w, np.zeros(self.W.shape[0]), law.mu, self.dim)
-            cached = self._templates[id(law)] = (law, problem)
+            zeros = np.zeros(self.operator.shape[0])
+            if view == "local":
+                problem = LocalProblem(self.W, zeros, law.mu, self.dim, cohesion=law.cohesion)
+            else:
+                problem = LocalProblem(self.W / np.max(self.diagonal()), zeros, law.mu, self.dim)
+            cached = self._templates[view, id(law)] = (law, problem)
         return cached[1]
 
 
 class FrictionStep:
     """One increment of a :class:`FrictionalProblem`: its local problem in three views.
 
+    The two :class:`LocalProblem` views (:attr:`local`, :attr:`fclib`) are made when first
+    read: the certificate needs neither, so a result built from a method's forces never forms
+    ``W`` for them.
+
     Attributes
     ----------
     tangential : ndarray, shape (k, d - 1)
         ``(H U_prev)_T`` (m), the origin of the step's slips.
-    local : LocalProblem
-        The step in the model's units (m, N), with the law's cohesion.
+    q : ndarray, shape (d k,)
+        ``H R P + w - (0, (H U_prev)_T)`` (m): the step's ``q`` in the model's units.
     apex_shift : ndarray, shape (d k,)
         Forces from the cones' apices: ``r~ = r + apex_shift`` (N).
     q_apex : ndarray, shape (d k,)
         ``q - W apex_shift`` (m): the local displacements the loads cause with the apex forces
         applied.
-    fclib : LocalProblem
-        The dimensionless FCLIB problem the solvers receive: cones translated to their apices
-        (no cohesion left), ``W / w`` and ``q~ / L`` with ``w`` the largest diagonal of ``W`` and
-        ``L`` the largest ``|q~|``, so that a natural-map error weighs forces and displacements
-        alike.
+    compliance : float
+        ``w``, the largest diagonal entry of ``W`` (m/N).
+    length : float
+        ``L``, the largest ``|q~|`` (m; 1 when ``q~`` is zero).
     force_unit : float
         ``L / w`` (N): ``r = force_unit r_fclib - apex_shift``.
     """
 
-    def __init__(
-        self, tangential: np.ndarray, local: LocalProblem, fclib: LocalProblem | None = None
-    ):
-        self.tangential, self.local = tangential, local
-        self.apex_shift = local.apex_shift
-        W = local.W
-        self.q_apex = local.q - W @ self.apex_shift if np.any(self.apex_shift) else local.q
-        w = float(np.max(W.diagonal()))
-        length = float(np.max(np.abs(self.q_apex))) or 1.0
-        if fclib is None:  # else a problem with W / w, mu and dim of this step (its q replaced)
-            # scipy-stubs type csr_matrix / float as any spmatrix format; it is CSR at runtime
-            scaled: scipy.sparse.csr_matrix | np.ndarray = W / w  # type: ignore[assignment]
-            fclib = LocalProblem(scaled, self.q_apex, local.mu, local.dim)
-        self.fclib = fclib.with_q(self.q_apex / length)
-        self.force_unit = length / w
+    def __init__(self, tangential: np.ndarray, q: np.ndarray, law: FrictionLaw, form: LocalForm):
+        self.tangential, self.q = tangential, q
+        self._law, self._form = law, form
+        shift = np.zeros((law.mu.shape[0], form.dim))
+        if law.cohesion.any():
+            shift[:, 0] = apex_distance(law.mu, law.cohesion)
+        self.apex_shift = shift.reshape(-1)
+        self.q_apex = q - form.W @ self.apex_shift if law.cohesion.any() else q
+        self.compliance = float(np.max(form.diagonal()))
+        self.length = float(np.max(np.abs(self.q_apex))) or 1.0
+        self.force_unit = self.length / self.compliance
+
+    @functools.cached_property
+    def local(self) -> LocalProblem:
+        """The step in the model's units (m, N), with the law's cohesion."""
+        return self._form.local_template(self._law).with_q(self.q)
+
+    @functools.cached_property
+    def fclib(self) -> LocalProblem:
+        """The dimensionless FCLIB problem the solvers receive: cones translated to their
+        apices (no cohesion left), ``W / w`` and ``q~ / L``, so that a natural-map error weighs
+        forces and displacements alike."""
+        return self._form.fclib_template(self._law).with_q(self.q_apex / self.length)
 
 
 class FrictionalProblem:
@@ -544,8 +621,6 @@ class FrictionalProblem:
         self.certificate_tol = float(certificate_tol)
         self._local: LocalForm | None = None
         self._free_displacements: np.ndarray | None = None
-        # validated once, shared with the with_loads twins (same W and law; q replaced)
-        self._templates: dict[str, LocalProblem] = {}
         # restrictions to contact sets (restricted), shared with the with_loads twins
         self._restrictions: dict[bytes, FrictionalProblem] = {}
         self.previous = previous
@@ -672,7 +747,6 @@ class FrictionalProblem:
             law.mu[kept], law.cohesion[kept], law.facets, n_contacts=int(kept.size)
         )
         cached._local = self.local().restricted(kept, d, constraints.gaps)
-        cached._templates = {}  # W and the law are new: no shared local problem
         cached._restrictions = {}
         cached._free_displacements = None
         cached.previous = None
@@ -714,14 +788,7 @@ class FrictionalProblem:
         form = self.local()
         q = (form.operator @ self._free() + form.offset).reshape(self.n_contacts, self.dim)
         q[:, 1:] -= tangential
-        template = self._templates.get("local")
-        if template is None:
-            template = self._templates["local"] = LocalProblem(
-                form.W, q.reshape(-1), self.law.mu, self.dim, cohesion=self.law.cohesion
-            )
-        return FrictionStep(
-            tangential, template.with_q(q.reshape(-1)), form.fclib_template(self.law)
-        )
+        return FrictionStep(tangential, q.reshape(-1), self.law, form)
 
     def _free(self) -> np.ndarray:
         """``R P`` (m) of this problem's loads, computed once."""
