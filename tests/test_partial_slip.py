@@ -57,32 +57,74 @@ def test_cattaneo_mindlin_stick_radius_and_load(n, cells):
     assert np.all(t[:, 0] > 0)
 
 
-def test_agrees_with_the_dense_coulomb_route():
-    """The dense route (influence_matrix, LocalProblem, coulomb), as examples/cattaneo_mindlin.py
-    builds it, on the same 14 x 14 grid at a fixed approach."""
-    n, cells = 14, 4
-    surface, full, delta, a, x, y = sphere(n, cells, 0.6, fixed="approach")
-    result = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0)), tol=1e-12)
-    assert result.success
-    R = influence_matrix(x, y, H, H, E, NU, coupling=False)
-    order = (3 * np.arange(n * n)[:, None] + [2, 0, 1]).ravel()  # (N, T1, T2) = (-z, x, y)
-    sign = np.tile([-1.0, 1.0, 1.0], n * n)
+def dense_partial_slip(x, y, a, delta, coupling):
+    """The dense route's answer (influence_matrix, LocalProblem, coulomb), as
+    examples/cattaneo_mindlin.py builds it, at a fixed approach: ``(forces (m, 3), statuses)``."""
+    n2 = x.size
+    R = influence_matrix(x, y, H, H, E, NU, coupling=coupling)
+    order = (3 * np.arange(n2)[:, None] + [2, 0, 1]).ravel()  # (N, T1, T2) = (-z, x, y)
+    sign = np.tile([-1.0, 1.0, 1.0], n2)
     W = R[np.ix_(order, order)] * np.outer(sign, sign)
-    q = np.zeros(3 * n * n)
+    q = np.zeros(3 * n2)
     q[0::3] = (x * x + y * y) / (2 * RS) - a * a / RS
     q[1::3] = -delta
     length = a * a / RS
     force = length / W[0, 0]
     dense = cq.solve(
-        LocalProblem(W * (force / length), q / length, np.full(n * n, MU), 3), "coulomb", tol=1e-12
+        LocalProblem(W * (force / length), q / length, np.full(n2, MU), 3), "coulomb", tol=1e-12
     )
     assert dense.success
-    r = force * dense.forces.reshape(-1, 3)
+    return force * dense.forces.reshape(-1, 3), dense.contact_status
+
+
+def test_agrees_with_the_dense_coulomb_route():
+    """The dense route on the same 14 x 14 grid at a fixed approach."""
+    n, cells = 14, 4
+    surface, full, delta, a, x, y = sphere(n, cells, 0.6, fixed="approach")
+    result = cq.solve(SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0)), tol=1e-12)
+    assert result.success and result.info["rounds"] == 1 and not result.info["coupled"]
+    r, status = dense_partial_slip(x, y, a, delta, coupling=False)
     scale = r[:, 0].max()
     # both certified near 1e-10: forces agree far below the natural-map tolerance 1e-8
     assert np.max(np.abs(result.forces - r)) <= 1e-7 * scale
-    stick = dense.contact_status == ContactStatus.STICK
-    assert np.array_equal(result.stick, stick)
+    assert np.array_equal(result.stick, status == ContactStatus.STICK)
+
+
+@pytest.mark.parametrize("ratio", [0.6, 0.0])
+def test_a_coupled_compliance_agrees_with_the_dense_coulomb_route(ratio):
+    """With the (1 - 2 nu) coupling (nu = 0.3), pressing and shifting in one increment: the
+    normal and tangential solves alternate until they agree, and the answer is the dense route's
+    on the coupled W (both to 1e-12). At zero shift this is Spence's frictional indentation:
+    a sticking centre, an annulus slipping radially, no net tangential force."""
+    n, cells = 14, 4
+    surface, _, delta, a, x, y = sphere(n, cells, ratio, fixed="approach")
+    coupled = HalfSpaceOperator(n, n, H, H, E, NU, components="full")
+    problem = SlidingSurfaceProblem(surface, coupled, MU, shift=(delta, 0.0))
+    result = cq.solve(problem, tol=1e-12)
+    assert result.success and result.info["coupled"] and result.info["rounds"] > 1
+    assert result.certificate.natural_map <= 1e-10
+    r, status = dense_partial_slip(x, y, a, delta, coupling=True)
+    scale = r[:, 0].max()
+    assert np.max(np.abs(result.forces - r)) <= 1e-9 * scale
+    assert np.array_equal(result.contact_status, status)
+    assert np.any(result.stick) and np.any(result.slip)
+    # the coupling matters: the uncoupled answer differs far beyond the solvers' accuracy
+    uncoupled, _ = dense_partial_slip(x, y, a, delta, coupling=False)
+    assert np.max(np.abs(uncoupled - r)) > 1e-3 * scale
+    if ratio == 0.0:
+        t = result.forces[:, 1:]
+        assert np.max(np.abs(result.tangential_force)) <= 1e-9 * MU * result.load
+        radial = (t[:, 0] * x + t[:, 1] * y)[result.slip]
+        assert np.all(np.sign(radial) == np.sign(radial[0]))  # one sense all around
+        # mostly radial: a square grid is not axisymmetric, and the circumferential part it
+        # leaves is measured below 1 % of the radial one here
+        tangential = (t[:, 1] * x - t[:, 0] * y)[result.slip]
+        assert np.max(np.abs(tangential)) <= 0.05 * np.max(np.abs(radial))
+    # the certificate judges the coupled problem: the uncoupled solve's answer fails it
+    plain = HalfSpaceOperator(n, n, H, H, E, NU, components="full", coupling=False)
+    wrong = cq.solve(SlidingSurfaceProblem(surface, plain, MU, shift=(delta, 0.0)), tol=1e-12)
+    p, t = wrong.forces[:, 0], wrong.forces[:, 1:]
+    assert not certify_sliding(problem, t, p, wrong.approach).passed
 
 
 def test_history_warm_starts_and_matches_one_step():
@@ -127,11 +169,15 @@ def test_certificate_catches_a_wrong_answer():
     assert not certify_sliding(problem, t * np.nan, p, result.approach).finite
 
 
-def test_refuses_coupling_and_bad_input():
+def test_refuses_a_coupled_history_and_bad_input():
     surface, full, delta, a, x, y = sphere(16, 5, 0.5)
     coupled = HalfSpaceOperator(16, 16, H, H, E, NU, components="full")
     with pytest.raises(UnsupportedProblemError, match="couples the normal and tangential"):
-        cq.solve(SlidingSurfaceProblem(surface, coupled, MU, shift=(delta, 0.0)))
+        shear_history(surface, coupled, MU, [(0.5 * delta, 0.0), (delta, 0.0)])
+    with pytest.raises(InvalidInputError, match="max_outer must be"):
+        cq.solve(SlidingSurfaceProblem(surface, coupled, MU, shift=(delta, 0.0)), max_outer=0)
+    stopped = cq.solve(SlidingSurfaceProblem(surface, coupled, MU, shift=(delta, 0.0)), max_outer=2)
+    assert not stopped.success and "did not settle in max_outer = 2" in stopped.message
     other = HalfSpaceOperator(16, 16, H, H, 2 * E, NU, components="full", coupling=False)
     with pytest.raises(InvalidInputError, match="normal .zz. entries"):
         cq.solve(SlidingSurfaceProblem(surface, other, MU, shift=(delta, 0.0)))

@@ -16,20 +16,29 @@ orders them, ``z`` the outward normal) and the slip of the surface against the i
     |t_i| < \\mu_i p_i \\Rightarrow w_i = 0 \\ \\text{(stick)}, \\qquad
     w_i \\ne 0 \\Rightarrow t_i = -\\mu_i p_i\\, w_i / |w_i| \\ \\text{(slip)}.
 
-Scope: the normal and tangential problems decouple (no ``(1 - 2 nu)`` coupling in ``W``:
+Coupling: when the normal and tangential problems decouple (no ``(1 - 2 nu)`` terms in ``W``:
 elastically similar bodies, an incompressible body, or
-:class:`~contactqp.compliance.fft_halfspace.HalfSpaceOperator` with ``coupling=False``). The
-normal forces are then those of the frictionless problem whatever the shear, the tangential
-problem is Tresca's with the bound ``mu p``, and its answer is exactly Coulomb's. A coupled
-compliance is refused (:class:`~contactqp.errors.UnsupportedProblemError`) by the method, which
-checks the decoupling through one product.
+:class:`~contactqp.compliance.fft_halfspace.HalfSpaceOperator` with ``coupling=False``), the
+normal forces are those of the frictionless problem whatever the shear, the tangential problem
+is Tresca's with the bound ``mu p``, and its answer is exactly Coulomb's. With a coupled ``W``
+(``coupling=True``, a rigid indenter on one elastic body of ``nu < 1/2``) the tangential forces
+move the surface normally and the normal forces move it tangentially: the gap and the slip
+above are then those of the full product ``W f``, and the method solves the normal and the
+tangential problems in turn until they agree.
 
-Load history: the shift is measured from the unsheared pressed state, and the answer is the one
-of a *monotonic* shear from zero along a fixed direction (each point's slip keeps its direction,
-as in Cattaneo and Mindlin's theory), which a one-step solve from zero traction gives;
-:func:`~contactqp.methods.tangential_fista.shear_history` solves a sequence of growing shifts, each
-warm-started from the previous. Unloading or reversed shear (Mindlin-Deresiewicz) needs the
-tractions of the previous state in the law and is not covered.
+Load history: the shift is measured from the unloaded state and the problem is one
+increment, the Coulomb law acting on its slip. Without coupling the pressing causes no
+tangential traction, so this is the answer of a press followed by a *monotonic* shear from
+zero along a fixed direction (each point's slip keeps its direction, as in Cattaneo and
+Mindlin's theory); :func:`~contactqp.methods.tangential_fista.shear_history` solves a sequence
+of growing shifts, each warm-started from the previous. With coupling, the pressing itself
+makes frictional tractions (Spence's problem), and one increment presses and shifts together,
+proportionally: the answer of a monotonic pressing at zero shift (Spence's problem is
+self-similar, so the one-step and the incremental answers agree), or of a pressing and a
+shift growing in proportion; a press followed by a shear would need the pressed state's
+tractions in the law and is not covered (:func:`~contactqp.methods.tangential_fista.shear_history`
+refuses a coupled compliance). Unloading or reversed shear (Mindlin-Deresiewicz) is not covered
+either.
 
 :func:`certify_sliding` judges an answer through one product of ``W`` with the returned forces
 (:class:`SlidingCertificate`): the frictionless residuals of
@@ -78,13 +87,14 @@ class SlidingSurfaceProblem:
         approach the pressing).
     compliance : Operator, ndarray or scipy.sparse matrix, shape (3 m, 3 m)
         The full compliance ``W`` (m/N), three entries per point in ``(x, y, z)`` order (e.g.
-        ``HalfSpaceOperator(..., components="full", coupling=False)``); its ``zz`` entries
-        are ``surface.compliance``. Reached through products only.
+        ``HalfSpaceOperator(..., components="full")``, coupled or with ``coupling=False``); its
+        ``zz`` entries are ``surface.compliance``. Reached through products only.
     mu : float or array_like, shape (m,)
         Friction coefficient(s), finite and >= 0.
     shift : array_like, shape (2,), optional
         Rigid tangential displacement ``(delta_x, delta_y)`` of the indenter (m), from the
-        unsheared pressed state; the total tangential force is then an unknown.
+        unloaded state (see the module notes); the total tangential force is then an
+        unknown.
     force : array_like, shape (2,), optional
         Total tangential force ``Q = (Q_x, Q_y)`` on the surface (N), below the friction limit
         ``sum mu_i p_i``; the shift is then an unknown. Exactly one of ``shift`` and ``force``.

@@ -44,6 +44,7 @@ from .qp import DEFAULT_BACKEND, solve_qp
 from .surface_active_set import solve_surface_active_set
 from .surface_dual_active_set import MAX_CG, solve_dual_active_set
 from .tangential_fista import MAX_ITER as FISTA_MAX_ITER
+from .tangential_fista import MAX_OUTER as FISTA_MAX_OUTER
 from .tangential_fista import solve_tangential_fista
 from .tresca import solve_tresca_fixed_point
 
@@ -404,11 +405,17 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                         None,
                         "largest eigenvalue of W_TT on the contact (m/N); default: Lanczos",
                     ),
+                    Option(
+                        "max_outer",
+                        int,
+                        FISTA_MAX_OUTER,
+                        "largest number of normal-then-tangential rounds of a coupled compliance",
+                    ),
                 ),
                 None,
                 "exact",
                 "the normal problem by constrained CG, then FISTA with restart on the friction "
-                "discs, through W's products only",
+                "discs (in turn until a coupled compliance settles), through W's products only",
             ),
             Method(
                 "nnls",

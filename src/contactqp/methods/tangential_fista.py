@@ -24,6 +24,18 @@ gradient converges for any convex set at the rate ``O(sqrt(kappa) log(1/eps))`` 
 the restart), with one product per iteration (the displacements of the extrapolated point are
 the same combination of the last two products). Every product is through the operator.
 
+Coupling: with a coupled compliance (the ``(1 - 2 nu)`` terms of a rigid indenter on one
+elastic body) the normal forces ``p`` add the tangential displacements ``W_Tz (-p)`` to the
+slip, and the tangential forces add ``-(W_zT t)`` to the gaps. The two problems are then solved
+in turn, each warm-started from its previous answer (a block Gauss-Seidel on the two fields,
+the Panagiotopoulos process of Kalker's algorithms [K1990]_): the normal problem with the
+separation ``s - W_zT t`` of the last tangential forces, then the tangential one with the
+bound ``mu p`` and the slip offset of the new ``p``, until the
+normal displacements of the tangential forces change by less than ``tol`` of the length scale
+between two rounds (each round's tangential solve is converged at its own ``p``, so the answer
+then meets both laws to ``tol``). The certificate judges the coupled problem through the full
+product. Measured on a steel half-space (``nu = 0.3``, ``mu = 0.3``): 9 to 10 rounds.
+
 The iteration stops when the projected slip vanishes at the current forces: inside a disc the
 slip, on its bound the slip's part that is not directed against the force (with the outward
 radial part when the slip points outward), relative to the certificate's length scale, below
@@ -35,12 +47,14 @@ References
    inverse problems", SIAM J. Imaging Sci. 2(1), 183-202, 2009.
 .. [OC2015] B. O'Donoghue, E. Candes, "Adaptive restart for accelerated gradient schemes",
    Found. Comput. Math. 15, 715-732, 2015.
+.. [K1990] J. J. Kalker, *Three-dimensional elastic bodies in rolling contact*, Kluwer, 1990.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse.linalg import LinearOperator, eigsh
@@ -51,10 +65,12 @@ from ..core.surface import SurfaceProblem
 from ..errors import InvalidInputError, UnsupportedProblemError
 from .constrained_cg import solve_constrained_cg
 
-__all__ = ["solve_tangential_fista", "shear_history", "MAX_ITER", "COUPLING_RTOL"]
+__all__ = ["solve_tangential_fista", "shear_history", "MAX_ITER", "MAX_OUTER", "COUPLING_RTOL"]
 
 #: Default budget of iterations.
 MAX_ITER = 20000
+#: Default budget of rounds (normal, then tangential solve) of a coupled problem.
+MAX_OUTER = 50
 #: The compliance couples the normal and tangential problems when the tangential displacements
 #: of the normal forces exceed this fraction of their normal displacements.
 COUPLING_RTOL = 1e-12
@@ -140,18 +156,100 @@ def _lipschitz(apply, cells: np.ndarray) -> tuple[float, int]:
 
 
 class _Tangential:
-    """``t (m, 2) -> (W_TT t) (m, 2)`` through the full operator."""
+    """Products of the full operator: ``t (m, 2) -> (W_TT t) (m, 2)`` for the iteration, and
+    the cross terms of a coupled compliance."""
 
     def __init__(self, problem: SlidingSurfaceProblem):
         self.W = problem.compliance
         self.size = problem.size
         self.products = 0
 
-    def __call__(self, t: np.ndarray) -> np.ndarray:
+    def full(self, t: np.ndarray, p: np.ndarray | None = None) -> np.ndarray:
+        """``W f`` (m, 3) of tangential forces ``t`` (m, 2) and normal forces ``p`` (m,)."""
         f = np.zeros((self.size, 3))
         f[:, :2] = t
+        if p is not None:
+            f[:, 2] = -p
         self.products += 1
-        return np.asarray(self.W @ f.ravel()).reshape(-1, 3)[:, :2]
+        return np.asarray(self.W @ f.ravel()).reshape(-1, 3)
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        return self.full(t)[:, :2]
+
+
+def _normal_offsets(apply: _Tangential, p: np.ndarray, sink: np.ndarray) -> np.ndarray:
+    """The tangential displacements (m, 2) of the normal forces ``p``: zeros for an uncoupled
+    compliance (below :data:`COUPLING_RTOL` of their normal displacements ``sink``, the surface
+    problem's ``W p``), checked against ``sink``."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        check = apply.full(np.zeros((apply.size, 2)), p)
+    largest = max(float(np.max(np.abs(check[:, 2]), initial=0.0)), _TINY)
+    mismatch = float(np.max(np.abs(check[:, 2] + sink), initial=0.0))
+    if mismatch > 1e-9 * largest:
+        raise InvalidInputError(
+            "compliance: its normal (zz) entries are not the surface problem's compliance "
+            f"(normal displacements differ by {mismatch / largest:.1e} relative)"
+        )
+    if float(np.max(np.abs(check[:, :2]), initial=0.0)) <= COUPLING_RTOL * largest:
+        return np.zeros((apply.size, 2))
+    return check[:, :2].copy()
+
+
+@dataclass
+class _Run:
+    """The state of one FISTA run on the discs at fixed normal forces."""
+
+    t: np.ndarray
+    delta: np.ndarray
+    iterations: int = 0
+    converged: bool = False
+    residual: float = np.inf
+    message: str = ""
+
+
+def _fista(apply, t, bound, on, offset, force, delta, lam, step, tol, max_iter, base) -> _Run:
+    """FISTA with adaptive restart on the discs ``|t_i| <= bound_i`` (see the module notes):
+    the slip is ``W_TT t + offset - delta``, ``offset`` the tangential displacements of the
+    normal forces (zero without coupling); at a fixed ``force`` the shift ``delta`` is the mean
+    displacement of the sticking points and ``lam`` the multiplier of the force."""
+    run = _Run(t, delta, message=f"reached max_iter = {max_iter} iterations")
+    u = apply(t) + offset
+    y, uy, theta = t.copy(), u.copy(), 1.0
+    with np.errstate(over="ignore", invalid="ignore"):
+        while True:
+            if force is not None:  # the shift: the displacement of the sticking points
+                size = np.hypot(t[:, 0], t[:, 1])
+                inside = on & (size < bound * (1.0 - 1e-9))
+                delta = u[inside].mean(axis=0) if np.any(inside) else lam / step
+            length = max(base, float(np.hypot(*delta)), _TINY)
+            run.residual = _projected_slip(t, u - delta, bound, on) / length
+            run.t, run.delta = t, delta
+            if run.residual <= tol:
+                run.converged = True
+                run.message = (
+                    f"converged in {run.iterations} iterations (residual {run.residual:.1e})"
+                )
+                return run
+            if not np.isfinite(run.residual):
+                run.message = f"diverged after {run.iterations} iterations (non-finite slips)"
+                return run
+            if run.iterations >= max_iter:
+                return run
+            run.iterations += 1
+            if force is None:
+                t_new = _project(y - step * (uy - delta), bound)
+                t_new[~on] = 0.0
+            else:
+                t_new, lam = _project_sum(y - step * uy, bound, force, on)
+            u_new = apply(t_new) + offset
+            if float(np.sum((y - t_new) * (t_new - t))) > 0.0:  # restart (gradient test)
+                theta, beta = 1.0, 0.0
+            else:
+                theta_new = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * theta * theta))
+                beta, theta = (theta - 1.0) / theta_new, theta_new
+            y = t_new + beta * (t_new - t)
+            uy = u_new + beta * (u_new - u)
+            t, u = t_new, u_new
 
 
 def solve_tangential_fista(
@@ -162,9 +260,12 @@ def solve_tangential_fista(
     tol: float = 1e-10,
     max_iter: int = MAX_ITER,
     lipschitz: float | None = None,
+    max_outer: int = MAX_OUTER,
 ) -> SlidingSurfaceResult:
     """Solve a :class:`~contactqp.core.sliding_surface.SlidingSurfaceProblem`: the normal
-    problem by constrained conjugate gradients, then the tangential one by FISTA on the discs.
+    problem by constrained conjugate gradients, then the tangential one by FISTA on the discs;
+    with a coupled compliance, the two in turn until the coupling settles (see the module
+    notes).
 
     Parameters
     ----------
@@ -176,123 +277,132 @@ def solve_tangential_fista(
         Warm start of the normal forces (N).
     tol : float
         Largest projected slip (see the module notes) and largest gap of the normal solve,
-        relative to the length scale of the certificate.
+        relative to the length scale of the certificate; with coupling, also the largest
+        change of the normal displacements the tangential forces cause between two rounds.
     max_iter : int
-        Largest number of FISTA iterations.
+        Largest number of FISTA iterations (over all rounds).
     lipschitz : float, optional
         ``L`` (m/N), an upper bound of ``W_TT``'s largest eigenvalue on the contact; default:
-        computed (Lanczos). ``info["lipschitz"]`` of a result on the same contact can be
-        passed on.
+        computed (Lanczos), and again when a round of a coupled problem brings new points into
+        contact. ``info["lipschitz"]`` of a result on the same contact can be passed on.
+    max_outer : int
+        Largest number of rounds (normal solve, then tangential) of a coupled problem.
 
     Returns
     -------
     SlidingSurfaceResult
-        Certified through one more product ``W f``.
+        Certified through one more product ``W f``; ``info["rounds"]`` holds the rounds.
 
     Raises
     ------
-    UnsupportedProblemError
-        The compliance couples the normal and tangential problems (the tangential displacement
-        of the normal forces exceeds :data:`COUPLING_RTOL` of their normal displacement).
     InvalidInputError
-        Bad ``tol``, ``max_iter``, ``lipschitz`` or warm starts; a full compliance whose normal
-        block is not the surface's compliance.
+        Bad ``tol``, ``max_iter``, ``max_outer``, ``lipschitz`` or warm starts; a full
+        compliance whose normal block is not the surface's compliance; a fixed force not below
+        the friction limit of the frictionless pressure.
     """
     tol = positive_tolerance(tol)
     max_iter = iteration_cap(max_iter)
-    if lipschitz is not None:
-        lipschitz = positive_tolerance(lipschitz, "lipschitz")
+    max_outer = iteration_cap(max_outer, "max_outer")
+    given_lipschitz = None if lipschitz is None else positive_tolerance(lipschitz, "lipschitz")
     start = time.perf_counter()
     m = problem.size
-    normal = solve_constrained_cg(problem.surface, r0=p0, tol=tol)
+    surface = problem.surface
+    normal = solve_constrained_cg(surface, r0=p0, tol=tol)
     p, approach = normal.forces, normal.approach
     apply = _Tangential(problem)
-    with np.errstate(over="ignore", invalid="ignore"):
-        check = np.asarray(problem.compliance @ problem.full_forces(np.zeros((m, 2)), p))
-        apply.products += 1
-        check = check.reshape(-1, 3)
-        sink = float(np.max(np.abs(check[:, 2]), initial=0.0))
-        if float(np.max(np.abs(check[:, :2]), initial=0.0)) > COUPLING_RTOL * sink:
-            raise UnsupportedProblemError(
-                "the compliance couples the normal and tangential problems (the normal forces "
-                "move the surface tangentially); use an uncoupled compliance "
-                "(HalfSpaceOperator(..., coupling=False): elastically similar bodies)"
-            )
-        mismatch = float(np.max(np.abs(check[:, 2] + normal.displacements), initial=0.0))
-        if mismatch > 1e-9 * max(sink, _TINY):
-            raise InvalidInputError(
-                "compliance: its normal (zz) entries are not the surface problem's compliance "
-                f"(normal displacements differ by {mismatch / max(sink, _TINY):.1e} relative)"
-            )
-    bound = problem.mu * np.maximum(p, 0.0)
-    on = bound > 0.0
-    cells = np.flatnonzero(on)
+    offset = _normal_offsets(apply, p, normal.displacements)
+    coupled = bool(np.any(offset))
     force = problem.force
+    bound = problem.mu * np.maximum(p, 0.0)
     if force is not None and not float(np.hypot(*force)) < float(np.sum(bound)):
         raise InvalidInputError(
             f"force: |Q| = {float(np.hypot(*force)):.6g} N is not below the friction limit "
             f"sum mu p = {float(np.sum(bound)):.6g} N (gross sliding has no fixed shift)"
         )
-    delta = np.zeros(2) if problem.shift is None else problem.shift
-    lowest = float(np.min(problem.surface.separation))
-    base = max(float(np.max(np.abs(normal.displacements), initial=0.0)), abs(approach - lowest))
     t = np.zeros((m, 2))
     if r0 is not None:
         t = warm_start(np.ravel(r0), 2 * m).reshape(m, 2)
-    if force is None:
-        t = _project(t, bound)
-    else:
-        t, lam = _project_sum(t, bound, force, on)
-    iterations, converged, residual = 0, False, np.inf
-    message = f"reached max_iter = {max_iter} iterations"
-    info: dict = {"normal_iterations": normal.iterations}
-    if not normal.success:
-        message = f"the normal problem failed: {normal.message}"
-    elif cells.size == 0:  # nothing in contact carries friction: no tangential force
-        t[:] = 0.0
-        converged, message = True, "no point carries friction: no tangential force"
-    else:
-        if lipschitz is None:
-            lipschitz, spent = _lipschitz(apply, cells)
+    delta = np.zeros(2) if problem.shift is None else problem.shift
+    lowest = float(np.min(surface.separation))
+    info: dict = {"normal_iterations": normal.iterations, "normal_products": 0, "rounds": 0}
+    lipschitz, measured_on = given_lipschitz, np.zeros(m, dtype=bool)
+    sink = np.zeros(m)  # the normal displacements of the tangential forces (coupled only)
+    iterations, converged, residual, message = 0, False, np.inf, ""
+    for rounds in range(1, max_outer + 1):
+        info["rounds"] = rounds
+        info["normal_products"] += normal.info["products"]
+        bound = problem.mu * np.maximum(p, 0.0)
+        on = bound > 0.0
+        base = max(float(np.max(np.abs(normal.displacements), initial=0.0)), abs(approach - lowest))
+        lam = np.zeros(2)
+        if force is None:
+            t = _project(t, bound)
+        elif float(np.hypot(*force)) < float(np.sum(bound)):
+            t, lam = _project_sum(t, bound, force, on)
+        else:  # the coupling moved the pressure: the force is past its friction limit
+            converged = False
+            message = f"round {rounds}: |Q| is past the friction limit sum mu p of the pressure"
+            break
+        if not normal.success:
+            converged, message = False, f"the normal problem failed: {normal.message}"
+            break
+        if not np.any(on):  # nothing in contact carries friction: no tangential force
+            t[:] = 0.0
+            converged, message = True, "no point carries friction: no tangential force"
+            break
+        if given_lipschitz is None and np.any(on & ~measured_on):
+            lipschitz, spent = _lipschitz(apply, np.flatnonzero(on))
             apply.products += spent
-        step = 1.0 / lipschitz
-        u = apply(t)
-        y, uy, theta = t.copy(), u.copy(), 1.0
-        with np.errstate(over="ignore", invalid="ignore"):
-            while True:
-                if force is not None:  # the shift: the displacement of the sticking points
-                    size = np.hypot(t[:, 0], t[:, 1])
-                    inside = on & (size < bound * (1.0 - 1e-9))
-                    delta = u[inside].mean(axis=0) if np.any(inside) else lam / step
-                w = u - delta
-                length = max(base, float(np.hypot(*delta)), _TINY)
-                residual = _projected_slip(t, w, bound, on) / length
-                if residual <= tol:
-                    converged = True
-                    message = f"converged in {iterations} iterations (residual {residual:.1e})"
-                    break
-                if not np.isfinite(residual):
-                    message = f"diverged after {iterations} iterations (non-finite slips)"
-                    break
-                if iterations >= max_iter:
-                    break
-                iterations += 1
-                if force is None:
-                    t_new = _project(y - step * (uy - delta), bound)
-                    t_new[~on] = 0.0
-                else:
-                    t_new, lam = _project_sum(y - step * uy, bound, force, on)
-                u_new = apply(t_new)
-                if float(np.sum((y - t_new) * (t_new - t))) > 0.0:  # restart (gradient test)
-                    theta, beta = 1.0, 0.0
-                else:
-                    theta_new = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * theta * theta))
-                    beta, theta = (theta - 1.0) / theta_new, theta_new
-                y = t_new + beta * (t_new - t)
-                uy = u_new + beta * (u_new - u)
-                t, u = t_new, u_new
+            measured_on = on
+        assert lipschitz is not None
+        run = _fista(
+            apply,
+            t,
+            bound,
+            on,
+            offset,
+            force,
+            delta,
+            lam,
+            1.0 / lipschitz,
+            tol,
+            max_iter - iterations,
+            base,
+        )
+        t, delta, residual, message = run.t, run.delta, run.residual, run.message
+        iterations += run.iterations
+        converged = run.converged
+        if not (coupled and converged):
+            break
+        # the normal displacements of the new tangential forces: settled, or the next round
+        new_sink = -apply.full(t)[:, 2]
+        length = max(base, float(np.hypot(*delta)), _TINY)
+        change = float(np.max(np.abs(new_sink - sink))) / length
+        sink = new_sink
+        if change <= tol:
+            message = f"{message}; coupling settled in {rounds} rounds (change {change:.1e})"
+            break
+        if rounds == max_outer:
+            converged = False
+            message = (
+                f"the normal-tangential coupling did not settle in max_outer = {max_outer} "
+                f"rounds (change {change:.1e})"
+            )
+            break
+        pressed = SurfaceProblem(
+            surface.compliance,
+            surface.separation + sink,
+            load=surface.load,
+            approach=surface.approach,
+            certificate_tol=surface.certificate_tol,
+        )
+        normal = solve_constrained_cg(pressed, r0=p, tol=tol)
+        p, approach = normal.forces, normal.approach
+        info["normal_iterations"] += normal.iterations
+        offset = _normal_offsets(apply, p, normal.displacements)
+    if lipschitz is not None:
         info["lipschitz"] = lipschitz
-    info.update(residual=residual, products=apply.products, normal_products=normal.info["products"])
+    info.update(residual=residual, products=apply.products, coupled=coupled)
     return problem.make_result(
         t,
         p,
@@ -338,6 +448,10 @@ def shear_history(
     ------
     InvalidInputError
         Shifts that are not parallel to the first nonzero one and growing.
+    UnsupportedProblemError
+        A coupled compliance: its pressing makes frictional tractions that the shear then
+        starts from, a state the one-increment problems do not carry (see
+        :mod:`contactqp.core.sliding_surface`).
     """
     results: list[SlidingSurfaceResult] = []
     direction: np.ndarray | None = None
@@ -360,6 +474,13 @@ def shear_history(
                 )
             previous = along
         result = solve_tangential_fista(problem, r0=r0, p0=p0, lipschitz=lipschitz, **options)
+        if result.info["coupled"]:
+            raise UnsupportedProblemError(
+                "shear_history: the compliance couples the normal and tangential problems, so "
+                "the pressing leaves frictional tractions the shear starts from, which one "
+                "increment per shift does not carry; solve one SlidingSurfaceProblem (pressing "
+                "and shift together) or use an uncoupled compliance (coupling=False)"
+            )
         results.append(result)
         r0, p0 = result.forces[:, 1:], result.forces[:, 0]
         lipschitz = result.info.get("lipschitz", lipschitz)
