@@ -100,7 +100,7 @@ import numbers
 import numpy as np
 import scipy.fft
 
-from ..core.operators import Operator
+from ..core.operators import Coarsening, Operator
 from ..errors import InvalidInputError
 from ._fft import transforms
 from .halfspace import _cell_kernels, _finite_float, _material, _normal_kernel, _positive_length
@@ -420,6 +420,8 @@ class HalfSpaceOperator(_LatticeOperator):
         self.periodic = periodic
         self.grid_shape = (nx, ny)
         self.cell = (dx, dy)
+        self._moduli = (E, nu)
+        self._requested = (_workers(workers), fft)
         full = components == "full"
         pairs = _FULL_PAIRS if full else (((0, 1.0),),)
         parity = _FULL_PARITY if full else ((0, 0),)
@@ -437,6 +439,91 @@ class HalfSpaceOperator(_LatticeOperator):
         else:
             tables = [_normal_kernel(X, Y, dx, dy, E, nu)]
         super().__init__(cells, pairs, parity, _workers(workers), fft, tables=tables)
+
+    def coarsening(self) -> Coarsening | None:
+        """The same half-space on cells twice as large (2 x 2 cells merged): for
+        ``components="normal"`` with an even number of cells, at least :data:`COARSEST` per
+        side after merging, along each axis; else None."""
+        nx, ny = self.grid_shape
+        if self.components != "normal" or nx % 2 or ny % 2 or min(nx, ny) < 2 * COARSEST:
+            return None
+        (dx, dy), (E, nu), (workers, fft) = self.cell, self._moduli, self._requested
+        coarse = HalfSpaceOperator(
+            nx // 2, ny // 2, 2 * dx, 2 * dy, E, nu,
+            periodic=self.periodic, workers=workers, fft=fft,
+        )  # fmt: skip
+
+        def restrict(values: np.ndarray) -> np.ndarray:
+            return values.reshape(ny // 2, 2, nx // 2, 2).mean(axis=(1, 3)).ravel()
+
+        def prolong(forces: np.ndarray) -> np.ndarray:
+            shared = forces.reshape(ny // 2, nx // 2) / 4.0
+            return np.repeat(np.repeat(shared, 2, axis=0), 2, axis=1).ravel()
+
+        return Coarsening(coarse, restrict, prolong)
+
+    def preconditioner(self):
+        """For ``components="normal"``: the inverse of the periodic kernel,
+        ``E* |q| dx dy / 2`` (Westergaard's), applied by FFT on the whole period (periodic)
+        or on the smallest box of cells around the contact, taken as periodic (non-periodic:
+        there it approximates the inverse away from the box's edges). Else None."""
+        if self.components != "normal":
+            return None
+        E, nu = self._moduli
+        nx, ny = self.grid_shape
+        return _SpectralInverse((ny, nx), self.cell, E / (1.0 - nu * nu), self.periodic)
+
+
+#: Fewest cells per side of the coarsest lattice of :meth:`HalfSpaceOperator.coarsening`.
+COARSEST = 16
+
+
+class _SpectralInverse:
+    """``M(x, on)``: the half-space's inverse periodic kernel on the contact's box."""
+
+    def __init__(self, cells: tuple[int, int], cell: tuple[float, float], E_star, periodic):
+        self._cells = cells
+        self._cell = cell
+        self._E_star = float(E_star)
+        self._periodic = periodic
+        self._kernels: dict[tuple[int, int], np.ndarray] = {}
+
+    def _kernel(self, shape: tuple[int, int]) -> np.ndarray:
+        kernel = self._kernels.get(shape)
+        if kernel is None:
+            dx, dy = self._cell
+            qy = 2.0 * np.pi * scipy.fft.fftfreq(shape[0], dy)[:, None]
+            qx = 2.0 * np.pi * scipy.fft.rfftfreq(shape[1], dx)[None, :]
+            q = np.hypot(qx, qy)
+            q.flat[0] = np.min(q[q > 0], initial=1.0 / max(dx, dy))  # definite on the mean
+            kernel = 0.5 * self._E_star * dx * dy * q
+            if len(self._kernels) >= 8:
+                self._kernels.clear()
+            self._kernels[shape] = kernel
+        return kernel
+
+    def __call__(self, x: np.ndarray, on: np.ndarray) -> np.ndarray:
+        field = np.where(on, x, 0.0).reshape(self._cells)
+        mask = on.reshape(self._cells)
+        out = np.zeros(self._cells)
+        if self._periodic:
+            box: tuple[slice, ...] = (slice(None), slice(None))
+            shape = self._cells
+        else:
+            rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+            if rows.size == 0:
+                return out.ravel()
+            box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+            shape = (
+                scipy.fft.next_fast_len(int(rows[-1] + 1 - rows[0]), real=True),
+                scipy.fft.next_fast_len(int(cols[-1] + 1 - cols[0]), real=True),
+            )
+        part = field[box]
+        spectrum = scipy.fft.rfft2(part, s=shape)
+        spectrum *= self._kernel(shape)
+        inverse = scipy.fft.irfft2(spectrum, s=shape, overwrite_x=True)
+        out[box] = inverse[: part.shape[0], : part.shape[1]]
+        return out.ravel()
 
 
 def _half_space_spectra(nx, ny, dx, dy, E, nu, full: bool, coupling: bool) -> list[np.ndarray]:

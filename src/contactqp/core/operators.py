@@ -7,7 +7,12 @@ A method asks its matrix only for what it needs:
 * dense blocks ``W[rows][:, cols]`` on index sets (the normal block, a free set),
 * the Cholesky factor of a principal block (:meth:`Operator.cholesky`), cached on the operator
   so that a check and the method that needs the factor share one factorisation,
-* ``shape``.
+* ``shape``;
+
+and, where the operator's physics gives them (an FFT half-space does), two aids of iterative
+methods: :meth:`Operator.coarsening` (the same body on a coarser lattice, for a start from a
+coarse solve) and :meth:`Operator.preconditioner` (an approximate inverse of its principal
+blocks). Both are None by default, and a method runs without them.
 
 :func:`as_operator` wraps a numpy array (:class:`DenseOperator`) or a scipy.sparse matrix
 (:class:`SparseOperator`) and passes an :class:`Operator` through unchanged, so a method written
@@ -22,6 +27,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +39,7 @@ from ..errors import InvalidInputError, NotPositiveDefiniteError, UnsupportedPro
 
 __all__ = [
     "BlockFactor",
+    "Coarsening",
     "DenseOperator",
     "Operator",
     "PSD_SHIFT",
@@ -108,6 +115,27 @@ def _cholesky(block: np.ndarray) -> np.ndarray:
     return scipy.linalg.cholesky(block.T, lower=False, overwrite_a=True, check_finite=False).T
 
 
+@dataclass(frozen=True)
+class Coarsening:
+    """``W`` of the same body on a coarser lattice, and the maps between the two lattices.
+
+    Attributes
+    ----------
+    operator : Operator
+        The coarse ``W``.
+    restrict : callable
+        Values at the fine points (a separation, m), shape (n,), to the coarse points: their
+        mean over the points merged into each.
+    prolong : callable
+        Forces at the coarse points (N) to the fine points: each shared evenly among the
+        points merged into it, so the total is kept.
+    """
+
+    operator: Operator
+    restrict: Callable[[np.ndarray], np.ndarray]
+    prolong: Callable[[np.ndarray], np.ndarray]
+
+
 class Operator(ABC):
     """``W`` as a method sees it (see the module notes); subclasses implement three methods.
 
@@ -164,6 +192,16 @@ class Operator(ABC):
             if count
             else np.zeros((0, size, size))
         )
+
+    def coarsening(self) -> Coarsening | None:
+        """The same body on a coarser lattice, or None (the default: no lattice known)."""
+        return None
+
+    def preconditioner(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+        """``M(x, on)``: a symmetric positive definite approximation of
+        ``W[on][:, on]^-1 x[on]`` for a vector ``x`` and a boolean mask ``on`` (its entries off
+        ``on`` are not used), or None (the default: none known)."""
+        return None
 
     def cholesky(self, index) -> BlockFactor:
         """The Cholesky factor of the principal block on ``index`` (cached: shared by callers).

@@ -346,10 +346,23 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                         "tol", float, 1e-10, "gap on the contact, penetration off it (relative)"
                     ),
                     Option("max_iter", int, CG_MAX_ITER, "largest number of iterations"),
+                    Option(
+                        "precondition",
+                        bool,
+                        True,
+                        "precondition by the operator's approximate inverse, if it has one",
+                    ),
+                    Option(
+                        "multilevel",
+                        bool,
+                        True,
+                        "without r0, start from solves on the operator's coarser lattices",
+                    ),
                 ),
                 None,
                 "exact",
-                "Polonsky and Keer's constrained conjugate gradient, through W's products only",
+                "Polonsky and Keer's constrained conjugate gradient (preconditioned, nested "
+                "from coarse lattices where the operator allows), through W's products only",
             ),
             Method(
                 "surface-active-set",
