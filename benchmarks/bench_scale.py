@@ -109,10 +109,13 @@ def rough_heights(n: int, seed: int = 1) -> tuple[np.ndarray, float]:
 # --- the contenders (each runs in a worker subprocess) ---------------------------------------
 
 
-def _import_fft() -> None:
-    """Import pyFFTW (contactqp's FFT library when installed) before the clock starts: the
-    operators import it on first use, and that import (0.7 s, it pulls in dask) is an import,
-    excluded for every contender alike."""
+def _import_lazy() -> None:
+    """Import before the clock starts what contactqp imports on first use: pyFFTW (its FFT
+    library when installed; 0.7 s, it pulls in dask) and the method registry that the first
+    ``contactqp.solve`` loads (about 70 ms: every method module). Imports are excluded for
+    every contender alike."""
+    import contactqp.methods.registry  # noqa: F401
+
     try:
         import pyfftw  # noqa: F401
     except ImportError:
@@ -127,7 +130,7 @@ def run_hertz(name: str, n: int):
         from contactqp.compliance.fft_halfspace import HalfSpaceOperator
         from contactqp.core.surface import SurfaceProblem
 
-        _import_fft()
+        _import_lazy()
 
         def call():
             W = HalfSpaceOperator(n, n, dx, dx, YOUNG, POISSON, workers=1)
@@ -200,7 +203,7 @@ def run_rough(name: str, n: int, level: float):
         from contactqp.core.surface import SurfaceProblem
 
         s = (h.max() - h).ravel()
-        _import_fft()
+        _import_lazy()
 
         def call():
             W = HalfSpaceOperator(n, n, dx, dx, YOUNG, POISSON, periodic=True, workers=1)

@@ -40,10 +40,10 @@ grow as the square root of the cells across the contact (the condition number of
   (a nested iteration). The finest solve then starts with its contact nearly found.
 
 Measured on Hertz's problem (one thread, tol ``1e-8``): from 64 x 64 to 1024 x 1024 cells the
-iterations of the finest solve go from 27, 36, 48, 63, 85 without the aids to about 11 with
-both, and at 1024 x 1024 the time from 29 s to about 3 s; on a periodic rough surface of
-512 x 512 cells the preconditioner alone halves the products (131 to 39 iterations at 11 %
-contact).
+iterations of the finest solve go from 27, 36, 48, 63, 85 without the aids to 9 to 12 with
+both, and at 1024 x 1024 the time from 29 s to 2.3 s (``benchmarks/bench_scale.py``). On a
+periodic rough surface of 512 x 512 cells at 11 % contact: 131 iterations without the aids, 39
+preconditioned, 30 with both.
 
 References
 ----------
