@@ -100,6 +100,7 @@ import numbers
 import numpy as np
 import scipy.fft
 
+from ..core.model import true_or_false
 from ..core.operators import Coarsening, Operator
 from ..errors import InvalidInputError
 from ._fft import transforms
@@ -122,12 +123,6 @@ def _count(value, name: str) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise InvalidInputError(f"{name} must be a positive integer, got {value!r}")
     return int(value)
-
-
-def _flag(value, name: str) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise InvalidInputError(f"{name} must be True or False, got {value!r}")
-    return bool(value)
 
 
 def _workers(value) -> int | None:
@@ -414,8 +409,8 @@ class HalfSpaceOperator(_LatticeOperator):
         E, nu = _material(young, poisson)
         if components not in ("normal", "full"):
             raise InvalidInputError(f'components must be "normal" or "full", got {components!r}')
-        coupling = _flag(coupling, "coupling")
-        periodic = _flag(periodic, "periodic")
+        coupling = true_or_false(coupling, "coupling")
+        periodic = true_or_false(periodic, "periodic")
         self.components = components
         self.periodic = periodic
         self.grid_shape = (nx, ny)
@@ -615,7 +610,7 @@ class HalfPlaneOperator(_LatticeOperator):
         n = _count(n, "n")
         dx = _positive_length(dx, "dx")
         E, nu = _material(young, poisson)
-        periodic = _flag(periodic, "periodic")
+        periodic = true_or_false(periodic, "periodic")
         E_star = E / (1.0 - nu * nu)
         self.periodic = periodic
         pairs = (((0, 1.0),),)

@@ -32,6 +32,7 @@ __all__ = [
     "real_array",
     "positive_tolerance",
     "iteration_cap",
+    "true_or_false",
     "MAX_MAGNITUDE",
 ]
 
@@ -114,6 +115,13 @@ def iteration_cap(value: object, name: str = "max_iter") -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise InvalidInputError(f"{name} must be an integer >= 1, got {value!r}")
     return int(value)
+
+
+def true_or_false(value: object, name: str) -> bool:
+    """``value`` as a bool, refused unless a Python or numpy bool."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidInputError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 #: Side of the square tiles that the O(n^2) checks of :func:`checked_matrix` read at a time.

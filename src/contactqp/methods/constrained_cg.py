@@ -62,9 +62,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.model import iteration_cap, positive_tolerance, true_or_false, warm_start
 from ..core.surface import SurfaceProblem, SurfaceResult
-from ..errors import InvalidInputError
 
 __all__ = ["solve_constrained_cg", "MAX_ITER", "COARSE_TOL"]
 
@@ -221,12 +220,6 @@ def _coarse_start(problem: SurfaceProblem, max_iter: int, precondition: bool, le
     return coarsening.prolong(run.forces)
 
 
-def _flag(value, name: str) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise InvalidInputError(f"{name} must be True or False, got {value!r}")
-    return bool(value)
-
-
 def solve_constrained_cg(
     problem: SurfaceProblem,
     *,
@@ -274,8 +267,8 @@ def solve_constrained_cg(
     """
     tol = positive_tolerance(tol)
     max_iter = iteration_cap(max_iter)
-    precondition = _flag(precondition, "precondition")
-    multilevel = _flag(multilevel, "multilevel")
+    precondition = true_or_false(precondition, "precondition")
+    multilevel = true_or_false(multilevel, "multilevel")
     start = time.perf_counter()
     levels: list[dict] = []
     if r0 is None and multilevel:
