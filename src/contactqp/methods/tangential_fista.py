@@ -85,13 +85,18 @@ def _project(t: np.ndarray, bound: np.ndarray) -> np.ndarray:
 
 
 def _project_sum(
-    z: np.ndarray, bound: np.ndarray, force: np.ndarray, on: np.ndarray
+    z: np.ndarray,
+    bound: np.ndarray,
+    force: np.ndarray,
+    on: np.ndarray,
+    lam0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(t, lam)``: the projection of ``z`` (m, 2) on the discs ``|t_i| <= bound_i`` with
     ``sum t = force``, ``t_i = P_i(z_i + lam)`` on the points ``on`` (0 elsewhere), the 2-D
-    multiplier ``lam`` by damped Newton on the monotone ``sum_i P_i(z_i + lam) = force``."""
+    multiplier ``lam`` by damped Newton on the monotone ``sum_i P_i(z_i + lam) = force``,
+    from ``lam0`` (the previous iteration's) or the mean shift that meets the force."""
     zc, b = z[on], bound[on]
-    lam = (force - zc.sum(axis=0)) / zc.shape[0]
+    lam = (force - zc.sum(axis=0)) / zc.shape[0] if lam0 is None else lam0.copy()
     scale = max(float(np.hypot(*force)), float(b.sum()))
     for _ in range(100):
         v = zc + lam
@@ -240,7 +245,7 @@ def _fista(apply, t, bound, on, offset, force, delta, lam, step, tol, max_iter, 
                 t_new = _project(y - step * (uy - delta), bound)
                 t_new[~on] = 0.0
             else:
-                t_new, lam = _project_sum(y - step * uy, bound, force, on)
+                t_new, lam = _project_sum(y - step * uy, bound, force, on, lam)
             u_new = apply(t_new) + offset
             if float(np.sum((y - t_new) * (t_new - t))) > 0.0:  # restart (gradient test)
                 theta, beta = 1.0, 0.0
