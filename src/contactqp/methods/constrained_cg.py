@@ -110,7 +110,7 @@ class _Run:
     products: int
 
 
-def _iterate(problem: SurfaceProblem, r0, tol: float, max_iter: int, precondition) -> _Run:
+def _iterate(problem: SurfaceProblem, r0, tol: float, max_iter: int, preconditioner) -> _Run:
     """Constrained (preconditioned) conjugate gradients from ``r0`` (see the module notes)."""
     W, s = problem.compliance, problem.separation
     load, fixed_load = problem.load, problem.load is not None
@@ -149,10 +149,10 @@ def _iterate(problem: SurfaceProblem, r0, tol: float, max_iter: int, preconditio
             if iterations >= max_iter:
                 break
             iterations += 1
-            if precondition is None:
+            if preconditioner is None:
                 z = gc
             else:  # M g on the contact, of zero sum at a fixed load
-                z = precondition(gc, contact) * on
+                z = preconditioner(gc, contact) * on
                 if fixed_load:
                     z -= on * (float(z @ on) / count)
             G = float(gc @ z)
