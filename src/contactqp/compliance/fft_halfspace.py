@@ -43,6 +43,25 @@ Periodic (the grid is one period of the surface, as for rough surfaces)
 
 The half-plane (:class:`HalfPlaneOperator`) is the same in one dimension, in plane strain.
 
+An elastic layer on a rigid base (periodic, normal component)
+    ``thickness=h`` replaces the half-space by a layer of thickness ``h`` on a rigid base,
+    ``base="bonded"`` (no displacement at the interface) or ``"frictionless"`` (no normal
+    displacement, no shear). A traction mode of a periodic surface is a plane-strain problem in
+    the plane of ``q`` and the normal; its Airy stress function
+    ``((A + B z) cosh qz + (C + D z) sinh qz) cos qx`` meets the four boundary conditions, and
+    the surface displacement is the half-space's times (``t = |q| h``, ``kappa = 3 - 4 nu``)
+
+    .. math::
+
+        \\text{bonded: } \\frac{\\kappa \\sinh(2t) / 2 - t}
+            {\\kappa \\sinh^2 t + t^2 + 4 (1 - \\nu)^2}, \\qquad
+        \\text{frictionless: } \\frac{2 \\sinh^2 t}{2 t + \\sinh(2 t)}
+
+    (derived symbolically for this module; both tend to 1 as ``t`` grows, and as ``t -> 0``
+    to the thin layer's ``h (1 + nu)(1 - 2 nu) / ((1 - nu) E)`` per unit pressure, the
+    oedometric compliance, when bonded, and to ``(1 - nu^2) h / E`` when frictionless).
+    Non-periodic grids and the tangential components of a layer are not implemented (refused).
+
 Two bodies in contact
     The normal flexibility depends on the material through ``E* = E / (1 - nu^2)`` only. For
     two elastic bodies ``1 / E* = (1 - nu1^2) / E1 + (1 - nu2^2) / E2``
@@ -354,6 +373,11 @@ class HalfSpaceOperator(_LatticeOperator):
         True: the grid is one period of a periodic surface (the spectral Westergaard kernel,
         displacements of zero mean; see the module notes). False: a finite grid on an infinite
         half-space (the dense matrix's kernel, zero padding).
+    thickness : float, optional
+        An elastic layer of this thickness (m) on a rigid base instead of the half-space
+        (periodic, ``components="normal"`` only; see the module notes).
+    base : {"bonded", "frictionless"}
+        The layer's interface with the rigid base.
     workers : int or None
         Threads of the FFTs (None: one; negative: counted back from the CPU count, as
         :mod:`scipy.fft` does).
@@ -401,6 +425,8 @@ class HalfSpaceOperator(_LatticeOperator):
         components: str = "normal",
         coupling: bool = True,
         periodic: bool = False,
+        thickness: float | None = None,
+        base: str = "bonded",
         workers: int | None = None,
         fft: str | None = None,
     ):
@@ -411,10 +437,13 @@ class HalfSpaceOperator(_LatticeOperator):
             raise InvalidInputError(f'components must be "normal" or "full", got {components!r}')
         coupling = true_or_false(coupling, "coupling")
         periodic = true_or_false(periodic, "periodic")
+        layer = _layer(thickness, base, components, periodic)
         self.components = components
         self.periodic = periodic
         self.grid_shape = (nx, ny)
         self.cell = (dx, dy)
+        #: ``(thickness, base)`` of the layer, or None for the half-space.
+        self.layer = layer
         self._moduli = (E, nu)
         self._requested = (_workers(workers), fft)
         full = components == "full"
@@ -423,6 +452,8 @@ class HalfSpaceOperator(_LatticeOperator):
         cells = (ny, nx)
         if periodic:
             spectra = _half_space_spectra(nx, ny, dx, dy, E, nu, full, coupling)
+            if layer is not None:
+                spectra[0] = spectra[0] * _layer_factor(_wavenumbers(nx, ny, dx, dy), nu, *layer)
             super().__init__(cells, pairs, parity, _workers(workers), fft, spectra=spectra)
             return
         X = (np.arange(nx) * dx)[None, :]
@@ -443,9 +474,10 @@ class HalfSpaceOperator(_LatticeOperator):
         if self.components != "normal" or nx % 2 or ny % 2 or min(nx, ny) < 2 * COARSEST:
             return None
         (dx, dy), (E, nu), (workers, fft) = self.cell, self._moduli, self._requested
+        thickness, base = self.layer if self.layer is not None else (None, "bonded")
         coarse = HalfSpaceOperator(
-            nx // 2, ny // 2, 2 * dx, 2 * dy, E, nu,
-            periodic=self.periodic, workers=workers, fft=fft,
+            nx // 2, ny // 2, 2 * dx, 2 * dy, E, nu, periodic=self.periodic,
+            thickness=thickness, base=base, workers=workers, fft=fft,
         )  # fmt: skip
 
         def restrict(values: np.ndarray) -> np.ndarray:
@@ -459,14 +491,16 @@ class HalfSpaceOperator(_LatticeOperator):
 
     def preconditioner(self):
         """For ``components="normal"``: the inverse of the periodic kernel,
-        ``E* |q| dx dy / 2`` (Westergaard's), applied by FFT on the whole period (periodic)
-        or on the smallest box of cells around the contact, taken as periodic (non-periodic:
-        there it approximates the inverse away from the box's edges). Else None."""
+        ``E* |q| dx dy / 2`` (Westergaard's; over the layer's factor with a layer), applied
+        by FFT on the whole period (periodic) or on the smallest box of cells around the
+        contact, taken as periodic (non-periodic: there it approximates the inverse away from
+        the box's edges). Else None."""
         if self.components != "normal":
             return None
         E, nu = self._moduli
         nx, ny = self.grid_shape
-        return _SpectralInverse((ny, nx), self.cell, E / (1.0 - nu * nu), self.periodic)
+        layer = None if self.layer is None else (nu, *self.layer)
+        return _SpectralInverse((ny, nx), self.cell, E / (1.0 - nu * nu), self.periodic, layer)
 
 
 #: Fewest cells per side of the coarsest lattice of :meth:`HalfSpaceOperator.coarsening`.
@@ -476,11 +510,12 @@ COARSEST = 16
 class _SpectralInverse:
     """``M(x, on)``: the half-space's inverse periodic kernel on the contact's box."""
 
-    def __init__(self, cells: tuple[int, int], cell: tuple[float, float], E_star, periodic):
+    def __init__(self, cells: tuple[int, int], cell: tuple[float, float], E_star, periodic, layer):
         self._cells = cells
         self._cell = cell
         self._E_star = float(E_star)
         self._periodic = periodic
+        self._layer = layer  # (nu, thickness, base) or None
         self._kernels: dict[tuple[int, int], np.ndarray] = {}
 
     def _kernel(self, shape: tuple[int, int]) -> np.ndarray:
@@ -492,6 +527,8 @@ class _SpectralInverse:
             q = np.hypot(qx, qy)
             q.flat[0] = np.min(q[q > 0], initial=1.0 / max(dx, dy))  # definite on the mean
             kernel = 0.5 * self._E_star * dx * dy * q
+            if self._layer is not None:
+                kernel /= _layer_factor(q, *self._layer)
             if len(self._kernels) >= 8:
                 self._kernels.clear()
             self._kernels[shape] = kernel
@@ -521,11 +558,52 @@ class _SpectralInverse:
         return out.ravel()
 
 
+_TINY = np.finfo(float).tiny
+#: The layer factors are 1 to rounding beyond this ``|q| h`` (they differ by ~t^2 exp(-2 t)).
+_THICK = 25.0
+
+
+def _layer(thickness, base, components: str, periodic: bool) -> tuple[float, str] | None:
+    """``(thickness, base)`` checked, or None for the half-space."""
+    if thickness is None:
+        return None
+    thickness = _positive_length(thickness, "thickness")
+    if base not in ("bonded", "frictionless"):
+        raise InvalidInputError(f'base must be "bonded" or "frictionless", got {base!r}')
+    if not periodic or components != "normal":
+        raise InvalidInputError(
+            "thickness: an elastic layer is implemented for periodic grids and the normal "
+            'component only (periodic=True, components="normal")'
+        )
+    return thickness, base
+
+
+def _wavenumbers(nx: int, ny: int, dx: float, dy: float) -> np.ndarray:
+    """``|q|`` on the ``rfftn`` grid of a ``(ny, nx)`` lattice (rad/m)."""
+    qx = 2.0 * np.pi * scipy.fft.rfftfreq(nx, dx)[None, :]
+    qy = 2.0 * np.pi * scipy.fft.fftfreq(ny, dy)[:, None]
+    return np.hypot(qx, qy)
+
+
+def _layer_factor(q: np.ndarray, nu: float, thickness: float, base: str) -> np.ndarray:
+    """The layer's normal surface compliance over the half-space's, per wavenumber ``q`` (see
+    the module notes); at ``q = 0`` its limit 0."""
+    t = np.minimum(q * thickness, _THICK)
+    if base == "frictionless":
+        factor = 2.0 * np.sinh(t) ** 2 / np.maximum(2.0 * t + np.sinh(2.0 * t), _TINY)
+    else:
+        kappa = 3.0 - 4.0 * nu
+        factor = (0.5 * kappa * np.sinh(2.0 * t) - t) / (
+            kappa * np.sinh(t) ** 2 + t * t + 4.0 * (1.0 - nu) ** 2
+        )
+    return np.where(q * thickness >= _THICK, 1.0, factor)
+
+
 def _half_space_spectra(nx, ny, dx, dy, E, nu, full: bool, coupling: bool) -> list[np.ndarray]:
     """The periodic kernels on the ``rfftn`` grid of a ``(ny, nx)`` lattice, per unit force."""
     qx = 2.0 * np.pi * scipy.fft.rfftfreq(nx, dx)[None, :]
     qy = 2.0 * np.pi * scipy.fft.fftfreq(ny, dy)[:, None]
-    q = np.hypot(qx, qy)
+    q = _wavenumbers(nx, ny, dx, dy)
     inverse = np.divide(1.0, q, out=np.zeros_like(q), where=q > 0)  # the mean mode: 0
     G = E / (2.0 * (1.0 + nu))
     scale = 1.0 / (G * dx * dy)
