@@ -248,13 +248,18 @@ class _LatticeOperator(Operator):
         else:
             spectra = self._spectra
         fields = x.reshape(self._cells + (c,) + columns)
-        forward = [engine.forward(fields[lattice + (b,)]) for b in range(c)]
+        # a component that is zero everywhere (the normal forces of a tangential product) is
+        # not transformed, nor is an output that only such components would reach
+        forward = [
+            engine.forward(field) if np.any(field) else None
+            for field in (fields[lattice + (b,)] for b in range(c))
+        ]
         out = np.empty(self._cells + (c,) + columns)
         for a in range(c):
             total = None
             for b in range(c):
                 kernel = spectra[self._kind[a, b]]
-                if kernel is None:
+                if kernel is None or forward[b] is None:
                     continue
                 term = kernel * forward[b]
                 if total is None:
