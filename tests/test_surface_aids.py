@@ -103,11 +103,21 @@ def test_the_coarsening_is_the_operator_of_the_merged_cells():
     [
         HalfSpaceOperator(30, 31, CELL, CELL, E, NU),  # an odd side
         HalfSpaceOperator(24, 24, CELL, CELL, E, NU),  # 12 cells after merging: too few
-        HalfSpaceOperator(32, 32, CELL, CELL, E, NU, components="full"),
     ],
 )
 def test_no_coarsening_where_none_is_exact(W):
     assert W.coarsening() is None
+
+
+def test_the_full_coarsening_merges_each_component_apart():
+    W = HalfSpaceOperator(32, 32, CELL, CELL, E, NU, components="full")
+    coarse = W.coarsening()
+    direct = HalfSpaceOperator(16, 16, 2 * CELL, 2 * CELL, E, NU, components="full")
+    f = np.random.default_rng(5).standard_normal(3 * 256)
+    assert np.allclose(coarse.operator @ f, direct @ f, rtol=1e-13, atol=0)
+    forces = coarse.prolong(f).reshape(-1, 3)
+    assert np.allclose(forces.sum(axis=0), f.reshape(-1, 3).sum(axis=0), rtol=1e-13)
+    assert np.allclose(coarse.restrict(forces.ravel()) * 4, f, rtol=1e-14, atol=0)
 
 
 def test_a_dense_compliance_runs_without_the_aids():

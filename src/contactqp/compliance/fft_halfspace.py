@@ -450,6 +450,7 @@ class HalfSpaceOperator(_LatticeOperator):
         #: ``(thickness, base)`` of the layer, or None for the half-space.
         self.layer = layer
         self._moduli = (E, nu)
+        self._coupling = coupling
         self._requested = (_workers(workers), fft)
         full = components == "full"
         pairs = _FULL_PAIRS if full else (((0, 1.0),),)
@@ -472,24 +473,26 @@ class HalfSpaceOperator(_LatticeOperator):
         super().__init__(cells, pairs, parity, _workers(workers), fft, tables=tables)
 
     def coarsening(self) -> Coarsening | None:
-        """The same half-space on cells twice as large (2 x 2 cells merged): for
-        ``components="normal"`` with an even number of cells, at least :data:`COARSEST` per
-        side after merging, along each axis; else None."""
+        """The same half-space on cells twice as large (2 x 2 cells merged, each component
+        apart), for an even number of cells, at least :data:`COARSEST` per side after merging,
+        along each axis; else None."""
         nx, ny = self.grid_shape
-        if self.components != "normal" or nx % 2 or ny % 2 or min(nx, ny) < 2 * COARSEST:
+        if nx % 2 or ny % 2 or min(nx, ny) < 2 * COARSEST:
             return None
         (dx, dy), (E, nu), (workers, fft) = self.cell, self._moduli, self._requested
         thickness, base = self.layer if self.layer is not None else (None, "bonded")
         coarse = HalfSpaceOperator(
-            nx // 2, ny // 2, 2 * dx, 2 * dy, E, nu, periodic=self.periodic,
-            thickness=thickness, base=base, workers=workers, fft=fft,
+            nx // 2, ny // 2, 2 * dx, 2 * dy, E, nu, components=self.components,
+            coupling=self._coupling, periodic=self.periodic, thickness=thickness, base=base,
+            workers=workers, fft=fft,
         )  # fmt: skip
+        c = self._components
 
         def restrict(values: np.ndarray) -> np.ndarray:
-            return values.reshape(ny // 2, 2, nx // 2, 2).mean(axis=(1, 3)).ravel()
+            return values.reshape(ny // 2, 2, nx // 2, 2, c).mean(axis=(1, 3)).ravel()
 
         def prolong(forces: np.ndarray) -> np.ndarray:
-            shared = forces.reshape(ny // 2, nx // 2) / 4.0
+            shared = forces.reshape(ny // 2, nx // 2, c) / 4.0
             return np.repeat(np.repeat(shared, 2, axis=0), 2, axis=1).ravel()
 
         return Coarsening(coarse, restrict, prolong)

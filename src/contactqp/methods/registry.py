@@ -424,6 +424,12 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                         FISTA_MAX_OUTER,
                         "largest number of normal-then-tangential rounds of a coupled compliance",
                     ),
+                    Option(
+                        "multilevel",
+                        bool,
+                        True,
+                        "without warm starts, start from solves on coarser lattices",
+                    ),
                 ),
                 None,
                 "exact",

@@ -36,6 +36,14 @@ between two rounds (each round's tangential solve is converged at its own ``p``,
 then meets both laws to ``tol``). The certificate judges the coupled problem through the full
 product. Measured on a steel half-space (``nu = 0.3``, ``mu = 0.3``): 9 to 10 rounds.
 
+Multilevel start: without warm starts, when both compliances have coarser lattices
+(:meth:`~contactqp.core.operators.Operator.coarsening`: an FFT half-space of an even number
+of cells), the problem is first solved on cells merged 2 x 2 (the separation and ``mu``
+averaged, the same load and shift or force; to :data:`COARSE_TOL`), coarsest first, and its
+forces, shared among the merged cells, start the finer solve. Measured on Cattaneo-Mindlin at
+128 x 128 (``Q = mu P / 2``): 337 FISTA iterations from the unsheared state, 216 from the coarse
+start.
+
 The iteration stops when the projected slip vanishes at the current forces: inside a disc the
 slip, on its bound the slip's part that is not directed against the force (with the outward
 radial part when the slip points outward), relative to the certificate's length scale, below
@@ -59,18 +67,27 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse.linalg import LinearOperator, eigsh
 
-from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.model import iteration_cap, positive_tolerance, true_or_false, warm_start
 from ..core.sliding_surface import SlidingSurfaceProblem, SlidingSurfaceResult
 from ..core.surface import SurfaceProblem
 from ..errors import InvalidInputError, UnsupportedProblemError
 from .constrained_cg import solve_constrained_cg
 
-__all__ = ["solve_tangential_fista", "shear_history", "MAX_ITER", "MAX_OUTER", "COUPLING_RTOL"]
+__all__ = [
+    "solve_tangential_fista",
+    "shear_history",
+    "MAX_ITER",
+    "MAX_OUTER",
+    "COUPLING_RTOL",
+    "COARSE_TOL",
+]
 
 #: Default budget of iterations.
 MAX_ITER = 20000
 #: Default budget of rounds (normal, then tangential solve) of a coupled problem.
 MAX_OUTER = 50
+#: Tolerance of the coarse solves of the multilevel start (only a start of the finer one).
+COARSE_TOL = 1e-8
 #: The compliance couples the normal and tangential problems when the tangential displacements
 #: of the normal forces exceed this fraction of their normal displacements.
 COUPLING_RTOL = 1e-12
@@ -80,7 +97,7 @@ _TINY = np.finfo(float).tiny
 def _project(t: np.ndarray, bound: np.ndarray) -> np.ndarray:
     """Each row of ``t`` (m, 2) projected on its disc of radius ``bound``."""
     size = np.hypot(t[:, 0], t[:, 1])
-    scale = np.where(size > bound, bound / np.maximum(size, _TINY), 1.0)
+    scale = np.divide(bound, size, out=np.ones_like(size), where=size > bound)
     return t * scale[:, None]
 
 
@@ -257,6 +274,38 @@ def _fista(apply, t, bound, on, offset, force, delta, lam, step, tol, max_iter, 
             t, u = t_new, u_new
 
 
+def _coarse_start(problem: SlidingSurfaceProblem, max_iter: int, max_outer: int, levels: list):
+    """``(t, p)`` for ``problem`` from the solve on its coarser lattices, or None (no coarser
+    lattice, or a coarse solve that gives no usable forces); each level's points and
+    iterations are appended to ``levels``, coarsest first."""
+    surface = problem.surface
+    normal, full = surface.compliance.coarsening(), problem.compliance.coarsening()
+    if normal is None or full is None:
+        return None
+    try:
+        coarse = SlidingSurfaceProblem(
+            SurfaceProblem(
+                normal.operator,
+                normal.restrict(surface.separation),
+                load=surface.load,
+                approach=surface.approach,
+            ),
+            full.operator,
+            normal.restrict(problem.mu),
+            shift=problem.shift,
+            force=problem.force,
+        )
+        result = _solve(coarse, None, None, COARSE_TOL, max_iter, None, max_outer, True, levels)
+    except InvalidInputError:  # e.g. a force past the coarse pressure's friction limit
+        return None
+    levels.append({"points": coarse.size, "iterations": result.iterations})
+    forces = result.forces
+    if not np.all(np.isfinite(forces)) or not np.any(forces[:, 0] > 0):
+        return None
+    f = full.prolong(np.column_stack([forces[:, 1:], forces[:, 0]]).ravel()).reshape(-1, 3)
+    return f[:, :2], f[:, 2]
+
+
 def solve_tangential_fista(
     problem: SlidingSurfaceProblem,
     *,
@@ -266,6 +315,7 @@ def solve_tangential_fista(
     max_iter: int = MAX_ITER,
     lipschitz: float | None = None,
     max_outer: int = MAX_OUTER,
+    multilevel: bool = True,
 ) -> SlidingSurfaceResult:
     """Solve a :class:`~contactqp.core.sliding_surface.SlidingSurfaceProblem`: the normal
     problem by constrained conjugate gradients, then the tangential one by FISTA on the discs;
@@ -292,11 +342,15 @@ def solve_tangential_fista(
         contact. ``info["lipschitz"]`` of a result on the same contact can be passed on.
     max_outer : int
         Largest number of rounds (normal solve, then tangential) of a coupled problem.
+    multilevel : bool
+        Without ``r0`` and ``p0``, start from the solves on the compliances' coarser
+        lattices, when they have them (see the module notes).
 
     Returns
     -------
     SlidingSurfaceResult
-        Certified through one more product ``W f``; ``info["rounds"]`` holds the rounds.
+        Certified through one more product ``W f``; ``info["rounds"]`` holds the rounds,
+        ``info["levels"]`` the coarse solves' points and iterations, coarsest first.
 
     Raises
     ------
@@ -309,9 +363,30 @@ def solve_tangential_fista(
     max_iter = iteration_cap(max_iter)
     max_outer = iteration_cap(max_outer, "max_outer")
     given_lipschitz = None if lipschitz is None else positive_tolerance(lipschitz, "lipschitz")
+    multilevel = true_or_false(multilevel, "multilevel")
+    return _solve(problem, r0, p0, tol, max_iter, given_lipschitz, max_outer, multilevel, [])
+
+
+def _solve(
+    problem: SlidingSurfaceProblem,
+    r0,
+    p0,
+    tol: float,
+    max_iter: int,
+    given_lipschitz: float | None,
+    max_outer: int,
+    multilevel: bool,
+    levels: list,
+) -> SlidingSurfaceResult:
+    """:func:`solve_tangential_fista` on checked options; the coarse solves append to
+    ``levels``."""
     start = time.perf_counter()
     m = problem.size
     surface = problem.surface
+    if multilevel and r0 is None and p0 is None:
+        nested = _coarse_start(problem, max_iter, max_outer, levels)
+        if nested is not None:
+            r0, p0 = nested
     normal = solve_constrained_cg(surface, r0=p0, tol=tol)
     p, approach = normal.forces, normal.approach
     apply = _Tangential(problem)
@@ -329,7 +404,12 @@ def solve_tangential_fista(
         t = warm_start(np.ravel(r0), 2 * m).reshape(m, 2)
     delta = np.zeros(2) if problem.shift is None else problem.shift
     lowest = float(np.min(surface.separation))
-    info: dict = {"normal_iterations": normal.iterations, "normal_products": 0, "rounds": 0}
+    info: dict = {
+        "normal_iterations": normal.iterations,
+        "normal_products": 0,
+        "rounds": 0,
+        "levels": levels,
+    }
     lipschitz, measured_on = given_lipschitz, np.zeros(m, dtype=bool)
     sink = np.zeros(m)  # the normal displacements of the tangential forces (coupled only)
     iterations, converged, residual, message = 0, False, np.inf, ""
