@@ -33,7 +33,7 @@ from functools import cache
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import NotPositiveDefiniteError, RigidBodyModeError
+from ..errors import NotPositiveDefiniteError, RigidBodyModeError, UnsupportedProblemError
 from ..optional import require
 from .condensation import factorize
 
@@ -57,6 +57,8 @@ def _library() -> ctypes.CDLL | None:
             continue
         library.pardiso.restype = None
         library.pardiso_getdiag.restype = None
+        # 32-bit integers (LP64), whatever MKL_INTERFACE_LAYER says: the binding passes int32
+        library.MKL_Set_Interface_Layer(0)
         return library
     return None
 
@@ -93,6 +95,8 @@ class PardisoCholesky:
         ``K`` singular (a vanishing pivot) or indefinite.
     MissingDependencyError
         MKL is not installed.
+    UnsupportedProblemError
+        ``K`` has 2**31 stored entries or more (Pardiso's 32-bit interface).
     """
 
     def __init__(
@@ -103,8 +107,10 @@ class PardisoCholesky:
             require("mkl_rt", "the Pardiso factorisation", "sparse", distribution="mkl")
         self._library = library
         self.n = n = K.shape[0]
-        if n >= 2**31 or K.nnz >= 2**31:  # Pardiso's 32-bit interface
-            raise NotImplementedError("Pardiso's 32-bit interface: at most 2**31 entries")
+        if K.nnz >= 2**31:  # the 32-bit interface
+            raise UnsupportedProblemError(
+                f"the Pardiso factorisation takes fewer than 2**31 stored entries, got {K.nnz}"
+            )
         upper = sp.triu(K, format="csr")
         upper.sort_indices()
         self._data = np.ascontiguousarray(upper.data, dtype=float)

@@ -40,7 +40,7 @@ factoriser                                          factor   solve    nnz       
 ==================================================  =======  =======  =========  =======
 MKL Pardiso (``mkl`` wheel, through ctypes), METIS  8.1 s    0.11 s   101 M (L)  2.34 GB
 SuperLU on a METIS ordering (pymetis)               30 s     0.21 s   190 M      2.74 GB
-CHOLMOD of the ``cholespy`` wheel (reference BLAS)  73 s     0.16 s   \-         2.34 GB
+CHOLMOD of the ``cholespy`` wheel (reference BLAS)  73 s     0.16 s   n/a        2.34 GB
 Pardiso, partial solve (contact freedoms last)      45 s     0.06 s   214 M (L)  3.30 GB*
 SuperLU, minimum degree: the fallback               240 s    1.5 s**  516 M      11.6 GB
 ==================================================  =======  =======  =========  =======
@@ -170,7 +170,7 @@ class SparseDelassusOperator(Operator):
             self._lu = factorize(
                 K, labels=labels, pivot_rtol=pivot_rtol, symmetry_rtol=symmetry_rtol
             )
-        self.factorizer: str = factorizer
+        self.factorizer = factorizer
         self.factor_nnz = int(self._lu.nnz)
         self._diagonal: np.ndarray | None = None
         self._diagonal_blocks: dict[int, np.ndarray] = {}
