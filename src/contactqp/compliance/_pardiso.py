@@ -27,6 +27,7 @@ import glob
 import os
 import sys
 import threading
+import weakref
 from collections.abc import Sequence
 from functools import cache
 
@@ -72,6 +73,31 @@ def _int(value: int):
     return ctypes.byref(ctypes.c_int32(value))
 
 
+def _pardiso(library, handle, iparm, phase: int, matrix, order, b, x) -> int:
+    """One call of ``pardiso`` (type 2) on ``matrix = (data, indptr, indices)``: its error."""
+    data, indptr, indices = matrix
+    error = ctypes.c_int32(0)
+    library.pardiso(
+        handle.ctypes.data_as(_HANDLE),
+        _int(1),  # maxfct
+        _int(1),  # mnum
+        _int(_REAL_SPD),
+        _int(phase),
+        _int(indptr.size - 1),
+        data.ctypes.data_as(_DOUBLE),
+        indptr.ctypes.data_as(_INT),
+        indices.ctypes.data_as(_INT),
+        order.ctypes.data_as(_INT),
+        _int(1 if b.ndim == 1 else b.shape[1]),
+        iparm.ctypes.data_as(_INT),
+        _int(0),  # no messages
+        b.ctypes.data_as(_DOUBLE),
+        x.ctypes.data_as(_DOUBLE),
+        ctypes.byref(error),
+    )
+    return int(error.value)
+
+
 class PardisoCholesky:
     """``K = L L^T`` by MKL Pardiso, for ``K`` checked symmetric with a positive diagonal.
 
@@ -113,9 +139,11 @@ class PardisoCholesky:
             )
         upper = sp.triu(K, format="csr")
         upper.sort_indices()
-        self._data = np.ascontiguousarray(upper.data, dtype=float)
-        self._indptr = upper.indptr.astype(np.int32)
-        self._indices = upper.indices.astype(np.int32)
+        self._matrix = (
+            np.ascontiguousarray(upper.data, dtype=float),
+            upper.indptr.astype(np.int32),
+            upper.indices.astype(np.int32),
+        )
         self._handle = np.zeros(64, dtype=np.int64)
         self._iparm = np.zeros(64, dtype=np.int32)
         # 1-based numbering of the manual: iparm(1) = 1 own values, (2) = 2 METIS ordering,
@@ -125,39 +153,37 @@ class PardisoCholesky:
             self._iparm[position - 1] = value
         self._order = np.zeros(n, dtype=np.int32)
         self._lock = threading.Lock()
-        self._factored = False
+        empty = np.zeros(1)
+        # Pardiso's memory is released with the object, or at exit before the modules go
+        self._release = weakref.finalize(
+            self,
+            _pardiso,
+            library,
+            self._handle,
+            self._iparm,
+            -1,
+            self._matrix,
+            self._order,
+            empty,
+            empty,
+        )
         error = self._call(12, np.zeros(n), np.zeros(n))  # analysis and factorisation
-        if error == -4:  # a pivot <= 0: SuperLU names the freedom and the kind
-            self._release()
-            self._diagnose(K, labels, pivot_rtol)
         if error:
             self._release()
+            if error == -4:  # a pivot <= 0: SuperLU names the freedom and the kind
+                self._diagnose(K, labels, pivot_rtol)
             raise RuntimeError(f"MKL Pardiso failed with error {error}")
-        self._factored = True
         self.nnz = int(self._iparm[17])
-        self._check_pivots(K.diagonal(), labels, pivot_rtol)
+        try:
+            self._check_pivots(K.diagonal(), labels, pivot_rtol)
+        except RigidBodyModeError:
+            self._release()
+            raise
 
     def _call(self, phase: int, b: np.ndarray, x: np.ndarray) -> int:
-        error = ctypes.c_int32(0)
-        self._library.pardiso(  # type: ignore[union-attr]
-            self._handle.ctypes.data_as(_HANDLE),
-            _int(1),  # maxfct
-            _int(1),  # mnum
-            _int(_REAL_SPD),
-            _int(phase),
-            _int(self.n),
-            self._data.ctypes.data_as(_DOUBLE),
-            self._indptr.ctypes.data_as(_INT),
-            self._indices.ctypes.data_as(_INT),
-            self._order.ctypes.data_as(_INT),
-            _int(1 if b.ndim == 1 else b.shape[1]),
-            self._iparm.ctypes.data_as(_INT),
-            _int(0),  # no messages
-            b.ctypes.data_as(_DOUBLE),
-            x.ctypes.data_as(_DOUBLE),
-            ctypes.byref(error),
+        return _pardiso(
+            self._library, self._handle, self._iparm, phase, self._matrix, self._order, b, x
         )
-        return int(error.value)
 
     def _diagnose(self, K, labels, pivot_rtol: float):
         factorize(K, labels=labels, pivot_rtol=pivot_rtol, symmetry_rtol=np.inf)
@@ -197,13 +223,3 @@ class PardisoCholesky:
         if error:
             raise RuntimeError(f"MKL Pardiso's solve failed with error {error}")
         return x
-
-    def _release(self) -> None:
-        if self._handle.any():
-            empty = np.zeros(1)
-            self._call(-1, empty, empty)
-            self._handle[:] = 0
-
-    def __del__(self) -> None:
-        if getattr(self, "_handle", None) is not None and getattr(self, "_library", None):
-            self._release()
