@@ -11,7 +11,10 @@ For each size the script times, in one process:
 
 * ``assemble``: the stiffness by scikit-fem and the fixations;
 * ``factor``: :class:`~contactqp.compliance.sparse_compliance.SparseComplianceOperator` (one
-  SuperLU factorisation, with the singularity checks of ``factorize``), and its factor's size;
+  sparse factorisation, ``--factorizer``: MKL Pardiso's Cholesky by default when MKL is
+  installed, or SuperLU; both with the singularity checks of ``factorize``), and its factor's
+  size;
+* ``product``: one product ``W x`` (one solve with the factor, a pair of triangular solves);
 * ``solve``: the :class:`~contactqp.core.surface.SurfaceProblem` through the operator, by each
   ``--methods`` entry (default ``constrained-cg,dual-active-set``), and the number of products;
 * ``dense``: up to ``--dense-max`` contact nodes, the dense route: the flexibility ``R`` by
@@ -83,7 +86,9 @@ class CountingFactor:
         return self.factor.solve(rhs)
 
 
-def run(cells: int, methods: list[str], dense_max: int, tol: float) -> dict:
+def run(
+    cells: int, methods: list[str], dense_max: int, tol: float, factorizer: str | None = None
+) -> dict:
     K, freedoms, s, assemble = build(cells)
     row: dict = {"cells": cells, "N": K.shape[0], "m": freedoms.size, "assemble": assemble}
     print(
@@ -92,12 +97,12 @@ def run(cells: int, methods: list[str], dense_max: int, tol: float) -> dict:
         flush=True,
     )
     start, cpu = time.perf_counter(), time.process_time()
-    W = SparseComplianceOperator(K, freedoms)
+    W = SparseComplianceOperator(K, freedoms, factorizer=factorizer)
     row["factor"] = time.perf_counter() - start
     row["factor cpu"] = time.process_time() - cpu
     print(
-        f"  factor {row['factor']:.2f} s (CPU {row['factor cpu']:.2f} s), "
-        f"nnz(L+U) = {W.factor_nnz / 1e6:.1f} M, "
+        f"  factor ({W.factorizer}) {row['factor']:.2f} s (CPU {row['factor cpu']:.2f} s), "
+        f"nnz({'L' if W.factorizer == 'pardiso' else 'L+U'}) = {W.factor_nnz / 1e6:.1f} M, "
         f"peak {peak_mb():.0f} MB",
         flush=True,
     )
@@ -160,14 +165,24 @@ def main(argv=None) -> None:
     parser.add_argument("--methods", default="constrained-cg,dual-active-set")
     parser.add_argument("--dense-max", type=int, default=2500, help="largest m for the dense route")
     parser.add_argument("--tol", type=float, default=1e-10)
+    parser.add_argument(
+        "--factorizer",
+        choices=["pardiso", "superlu"],
+        default=None,
+        help="the operator's factorisation (default: pardiso when MKL is installed)",
+    )
     args = parser.parse_args(argv)
     print(
         f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, "
+        f"MKL_NUM_THREADS={os.environ.get('MKL_NUM_THREADS', 'unset')}, "
         f"block 1 x 1 x {LAYERS}/c m, c x c x {LAYERS} hexahedra as tetrahedra",
         flush=True,
     )
     methods = [m for m in args.methods.split(",") if m]
-    rows = [run(int(c), methods, args.dense_max, args.tol) for c in args.sizes.split(",")]
+    rows = [
+        run(int(c), methods, args.dense_max, args.tol, args.factorizer)
+        for c in args.sizes.split(",")
+    ]
     print(f"\n{'N':>8} {'m':>6} {'assemble':>9} {'factor':>8} {'product':>8}", end="")
     for method in methods + ["dense"]:
         print(f" {method:>16}", end="")

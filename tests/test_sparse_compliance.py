@@ -16,14 +16,25 @@ import pytest
 import scipy.sparse as sp
 
 import contactqp as cq
-from contactqp.compliance import grid, normal_influence
+from contactqp.compliance import _pardiso, grid, normal_influence
 from contactqp.compliance.sparse_compliance import (
+    FACTORIZERS,
     SparseComplianceOperator,
     SparseDelassusOperator,
 )
-from contactqp.errors import InvalidInputError, RigidBodyModeError, UnsupportedProblemError
+from contactqp.errors import (
+    InvalidInputError,
+    MissingDependencyError,
+    NotPositiveDefiniteError,
+    RigidBodyModeError,
+    UnsupportedProblemError,
+)
 
 fem = pytest.importorskip("contactqp.compliance.fem")
+
+# both factorisations; Pardiso needs MKL (the `sparse` extra, part of `test`): said, not silent
+needs_mkl = pytest.mark.skipif(not _pardiso.pardiso_installed(), reason="MKL is not installed")
+FACTORIZER = [pytest.param(f, marks=needs_mkl) if f == "pardiso" else f for f in FACTORIZERS]
 
 E, NU = 70e9, 0.3
 
@@ -52,10 +63,12 @@ def close(actual, expected, scale):
 # --- truths: products, diagonal, blocks ----------------------------------------------------
 
 
+@pytest.mark.parametrize("factorizer", FACTORIZER)
 @pytest.mark.parametrize("components", [None, [2]])
-def test_compliance_equals_the_dense_flexibility_of_the_same_model(components):
+def test_compliance_equals_the_dense_flexibility_of_the_same_model(components, factorizer):
     model, top = slab()
-    W = SparseComplianceOperator.of_model(model, top, components=components)
+    W = SparseComplianceOperator.of_model(model, top, components=components, factorizer=factorizer)
+    assert W.factorizer == factorizer
     R = model.reduced_model(top, components=components).flexibility  # static condensation
     axes = [0, 1, 2] if components is None else components
     _, chosen, inverse = dense_truth(model, top, axes)
@@ -103,7 +116,8 @@ def test_blocks_on_every_kind_of_selection_equal_the_dense_ones():
         _ = W.matrix
 
 
-def test_delassus_operator_equals_A_inv_K_At():
+@pytest.mark.parametrize("factorizer", FACTORIZER)
+def test_delassus_operator_equals_A_inv_K_At(factorizer):
     model, top = slab(cell="tet")
     free, K = model.free_stiffness()
     n = K.shape[0]
@@ -116,7 +130,7 @@ def test_delassus_operator_equals_A_inv_K_At():
     A = sp.csr_matrix((normals.ravel(), (rows, chosen)), shape=(top.size, n))
     pair = sp.csr_matrix(([1.0, -1.0], ([0, 0], [chosen[2], chosen[5]])), shape=(1, n))
     A = sp.vstack([A, pair]).tocsr()
-    W = SparseDelassusOperator(K, A)
+    W = SparseDelassusOperator(K, A, factorizer=factorizer)
     truth = A @ inverse @ A.T.toarray()
     scale = np.abs(truth).max()
     x = rng.standard_normal(A.shape[0])
@@ -124,6 +138,48 @@ def test_delassus_operator_equals_A_inv_K_At():
     close(W.diagonal(), np.diag(truth), scale)
     close(W.block([0, 3, A.shape[0] - 1], None), truth[[0, 3, A.shape[0] - 1]], scale)
     assert W.factor_nnz > K.nnz // 2
+    X = rng.standard_normal((A.shape[0], 3))  # several columns, in C order: solved together
+    close(W @ X, truth @ X, scale * np.abs(X).sum(axis=0).max())
+
+
+@needs_mkl
+def test_pardiso_is_the_default_and_its_failures_are_named():
+    model, top = slab(3, 3, 1)
+    free, K = model.free_stiffness()
+    assert SparseComplianceOperator(K, [0, 1]).factorizer == "pardiso"
+    labels = [f"dof {i}" for i in range(K.shape[0])]
+    # no fixation: rigid-body modes, a vanishing pivot (found by Pardiso's pivots or, where a
+    # rounded pivot is <= 0, by SuperLU's diagnosis)
+    with pytest.raises(RigidBodyModeError, match="rigid-body"):
+        SparseComplianceOperator(model.stiffness, [0], factorizer="pardiso")
+    chain = sp.diags([-np.ones(49), np.r_[1.0, 2.0 * np.ones(48), 1.0], -np.ones(49)], [-1, 0, 1])
+    with pytest.raises(RigidBodyModeError, match="rigid-body"):  # a free chain of springs
+        SparseComplianceOperator(chain.tocsc(), [0], factorizer="pardiso")
+    # one mechanism in a fixed model: a freedom tied to nothing but a spring of another
+    # freedom's stiffness turned negative
+    indefinite = K.tolil()
+    indefinite[0, 0] = -indefinite[0, 0]
+    with pytest.raises(NotPositiveDefiniteError, match="dof 0"):
+        SparseComplianceOperator(indefinite.tocsc(), [1], labels=labels, factorizer="pardiso")
+    # positive diagonal, negative eigenvalue: Pardiso stops at a pivot <= 0, SuperLU names it
+    coupled = sp.csc_matrix(np.array([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]]))
+    with pytest.raises(NotPositiveDefiniteError, match="pivot"):
+        SparseComplianceOperator(coupled, [0, 2], factorizer="pardiso")
+    with pytest.raises(InvalidInputError, match="not symmetric"):
+        SparseComplianceOperator(
+            K + sp.csc_matrix(([1e3 * K.max()], ([0], [1])), K.shape), [0], factorizer="pardiso"
+        )
+
+
+def test_without_mkl_superlu_is_the_default_and_pardiso_names_the_extra(monkeypatch):
+    model, top = slab(3, 3, 1)
+    free, K = model.free_stiffness()
+    monkeypatch.setattr(_pardiso, "_library", lambda: None)
+    assert SparseComplianceOperator(K, [0, 1]).factorizer == "superlu"
+    with pytest.raises(MissingDependencyError, match=r"contactqp\[sparse\]"):
+        SparseComplianceOperator(K, [0, 1], factorizer="pardiso")
+    with pytest.raises(InvalidInputError, match="factorizer must be"):
+        SparseComplianceOperator(K, [0, 1], factorizer="cholmod")
 
 
 # --- bad input ------------------------------------------------------------------------------
@@ -157,10 +213,10 @@ def test_bad_input_is_named():
 # --- contact through the operator ------------------------------------------------------------
 
 
-def pressed(shape: str, cell: str = "hex"):
+def pressed(shape: str, cell: str = "hex", factorizer: str | None = None):
     """The top face of a slab under a rigid indenter: ``(operator, R, s, approach)``."""
     model, top = slab(10, 8, 3, cell=cell)
-    W = SparseComplianceOperator.of_model(model, top, components=[2])
+    W = SparseComplianceOperator.of_model(model, top, components=[2], factorizer=factorizer)
     R = model.reduced_model(top, components=[2]).flexibility
     x, y = model.mesh.p[0, top] - 0.5, model.mesh.p[1, top] - 0.4
     approach = 4e-6
@@ -171,6 +227,7 @@ def pressed(shape: str, cell: str = "hex"):
     return W, R, s, approach
 
 
+@pytest.mark.parametrize("factorizer", FACTORIZER)
 @pytest.mark.parametrize(
     "shape, method, cell",
     [
@@ -180,8 +237,8 @@ def pressed(shape: str, cell: str = "hex"):
         ("flat", "dual-active-set", "tet"),
     ],
 )
-def test_a_solve_through_the_operator_equals_the_dense_solve(shape, method, cell):
-    W, R, s, approach = pressed(shape, cell)
+def test_a_solve_through_the_operator_equals_the_dense_solve(shape, method, cell, factorizer):
+    W, R, s, approach = pressed(shape, cell, factorizer)
     result = cq.solve(cq.SurfaceProblem(W, s, approach=approach), method, tol=1e-12)
     assert result.success, result.message
     # the dense route: the condensed R as a reduced model, gaps s - delta, no loads

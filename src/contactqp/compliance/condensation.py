@@ -76,6 +76,45 @@ def _checked_freedoms(freedoms, n: int) -> np.ndarray:
     return idx
 
 
+def _checked_symmetric(
+    stiffness, labels: Sequence[str] | None, symmetry_rtol: float
+) -> tuple[sp.csc_matrix, np.ndarray]:
+    """The checks before a factorisation of :func:`factorize`: ``(K, diagonal of K)``.
+
+    Raises :class:`RigidBodyModeError` (a zero diagonal entry), :class:`NotPositiveDefiniteError`
+    (a negative one) or :class:`InvalidInputError` (bad labels, ``K`` not symmetric).
+    """
+    K = _checked_stiffness(stiffness)
+    if labels is not None and len(labels) != K.shape[0]:
+        raise InvalidInputError(f"labels must name the {K.shape[0]} freedoms, got {len(labels)}")
+    diagonal = K.diagonal()
+
+    def label(freedom: int) -> str:
+        return labels[freedom] if labels is not None else f"freedom {freedom}"
+
+    if np.any(diagonal <= 0):
+        freedom = int(np.argmin(diagonal))
+        if diagonal[freedom] == 0:
+            raise RigidBodyModeError(
+                f"the stiffness matrix is singular: {label(freedom)} has no "
+                "stiffness (unconnected), fix or remove it"
+            )
+        raise NotPositiveDefiniteError(
+            f"stiffness is not positive definite: negative diagonal "
+            f"{diagonal[freedom]:.3g} at {label(freedom)}"
+        )
+    scale = sp.diags(1.0 / np.sqrt(diagonal))
+    asymmetry = (scale @ abs(K - K.T) @ scale).tocoo()
+    if asymmetry.nnz and asymmetry.data.max() > symmetry_rtol:
+        worst = int(np.argmax(asymmetry.data))
+        i, j = int(asymmetry.row[worst]), int(asymmetry.col[worst])
+        raise InvalidInputError(
+            f"the stiffness is not symmetric: |K_ij - K_ji| / sqrt(K_ii K_jj) = "
+            f"{asymmetry.data[worst]:.3g} > {symmetry_rtol:g} between {label(i)} and {label(j)}"
+        )
+    return K, diagonal
+
+
 def factorize(
     stiffness: ArrayLike | sp.spmatrix | sp.sparray,
     *,
@@ -112,34 +151,11 @@ def factorize(
     InvalidInputError
         The stiffness is not symmetric.
     """
-    K = _checked_stiffness(stiffness)
-    if labels is not None and len(labels) != K.shape[0]:
-        raise InvalidInputError(f"labels must name the {K.shape[0]} freedoms, got {len(labels)}")
-    diagonal = K.diagonal()
+    K, diagonal = _checked_symmetric(stiffness, labels, symmetry_rtol)
 
     def label(freedom: int) -> str:
         return labels[freedom] if labels is not None else f"freedom {freedom}"
 
-    if np.any(diagonal <= 0):
-        freedom = int(np.argmin(diagonal))
-        if diagonal[freedom] == 0:
-            raise RigidBodyModeError(
-                f"the stiffness matrix is singular: {label(freedom)} has no "
-                "stiffness (unconnected), fix or remove it"
-            )
-        raise NotPositiveDefiniteError(
-            f"stiffness is not positive definite: negative diagonal "
-            f"{diagonal[freedom]:.3g} at {label(freedom)}"
-        )
-    scale = sp.diags(1.0 / np.sqrt(diagonal))
-    asymmetry = (scale @ abs(K - K.T) @ scale).tocoo()
-    if asymmetry.nnz and asymmetry.data.max() > symmetry_rtol:
-        worst = int(np.argmax(asymmetry.data))
-        i, j = int(asymmetry.row[worst]), int(asymmetry.col[worst])
-        raise InvalidInputError(
-            f"the stiffness is not symmetric: |K_ij - K_ji| / sqrt(K_ii K_jj) = "
-            f"{asymmetry.data[worst]:.3g} > {symmetry_rtol:g} between {label(i)} and {label(j)}"
-        )
     try:
         lu = spla.splu(
             K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}

@@ -11,12 +11,15 @@ and a sparse ``A`` (m x n), the Delassus operator is
 
 and the compliance of chosen freedoms ``c`` is the case ``A = I[c, :]``, ``W = (K^{-1})[c, c]``
 (the flexibility ``R`` that :func:`~contactqp.compliance.condensation.condense` forms). Neither
-operator forms ``W``: ``K`` is factorised once, at construction, by
-:func:`~contactqp.compliance.condensation.factorize` (SuperLU in symmetric mode, a symmetric
-fill-reducing ordering, no pivoting, with its checks for singular and indefinite stiffnesses),
-and each product ``W x`` is one pair of triangular solves with that factor between the
-scatter ``A^T x`` (for the compliance: ``x`` written into a zero vector at ``c``) and the
-gather ``A z`` (``z[c]``).
+operator forms ``W``: ``K`` is factorised once, at construction, and each product ``W x`` is
+one pair of triangular solves with that factor between the scatter ``A^T x`` (for the
+compliance: ``x`` written into a zero vector at ``c``) and the gather ``A z`` (``z[c]``). The
+factorisation (``factorizer``) is MKL Pardiso's sparse Cholesky when MKL is installed (the
+``sparse`` extra; ``PardisoCholesky`` of the private ``_pardiso`` module: METIS
+nested-dissection ordering, ``L`` only), else
+:func:`~contactqp.compliance.condensation.factorize` (SuperLU in symmetric mode, a minimum-degree
+ordering, no pivoting); both with the checks of ``factorize`` for singular and indefinite
+stiffnesses.
 
 Cost, with ``T`` the time of one pair of triangular solves (about ``4 nnz(L)`` flops):
 
@@ -27,14 +30,31 @@ Cost, with ``T`` the time of one pair of triangular solves (about ``4 nnz(L)`` f
   blocks asked for cached;
 * :meth:`~SparseDelassusOperator.diagonal_blocks`: ``m T``, cached.
 
-The factoriser was chosen by measurement (a clamped tetrahedral slab of
-``benchmarks/bench_sparse_fe.py``, one thread, CPU seconds on the project's 2-core machine).
-CHOLMOD through scikit-sparse does not build from pip alone (its source tarball needs
-SuiteSparse's headers, ``cholmod.h``), so it cannot be a dependency. CHOLMOD as the ``cholespy``
-wheel ships (with a reference BLAS) was measured beside SuperLU: at 30,258 freedoms it factors in
-9.2 s against SuperLU's 10.6 s (40.7 M entries in ``L + U``) and solves in 39 ms against 71 ms, in
-594 MB against 801 MB of peak memory; at 7,938 freedoms 0.66 s against 0.74 s. A gain below 2x
-does not pay for a second factorisation path without SuperLU's pivot checks: SuperLU it is.
+The factoriser was chosen by measurement: the clamped tetrahedral slab of
+``benchmarks/bench_sparse_fe.py`` at 202,248 freedoms (11,236 contact nodes), one thread, CPU
+seconds of the factorisation, then of one solve, and the process's peak memory (scikit-fem's
+assembly alone peaks at 2.34 GB):
+
+==================================================  =======  =======  =========  =======
+factoriser                                          factor   solve    nnz        peak
+==================================================  =======  =======  =========  =======
+MKL Pardiso (``mkl`` wheel, through ctypes), METIS  8.1 s    0.11 s   101 M (L)  2.34 GB
+SuperLU on a METIS ordering (pymetis)               30 s     0.21 s   190 M      2.74 GB
+CHOLMOD of the ``cholespy`` wheel (reference BLAS)  73 s     0.16 s   n/a        2.34 GB
+Pardiso, partial solve (contact freedoms last)      45 s     0.06 s   214 M (L)  3.30 GB*
+SuperLU, minimum degree: the fallback               240 s    1.5 s**  516 M      11.6 GB
+==================================================  =======  =======  =========  =======
+
+SuperLU in symmetric mode; (*) in a process that also held the full factor; (**) wall-clock,
+session 8, on a loaded machine (``benchmarks/README.md``).
+
+Pardiso is called directly rather than through pypardiso, whose every solve hashes the matrix
+and copies its indices (0.25 s a solve here). At 30,258 freedoms: Pardiso 0.62 s, SuperLU on
+METIS 1.8 s, SuperLU minimum degree 5.2 s, QDLDL (AMD ordering, not supernodal) 16.6 s. A
+matrix-free product, CG with pyamg's smoothed-aggregation preconditioner (rigid-body modes as
+its near null space) to a residual of 1e-12, took 19 iterations and 1.2 s a product at 202,248
+freedoms (setup 2.0 s), ten times a Pardiso solve. scikit-sparse (CHOLMOD) has no wheel for this
+platform, and the only python-mumps wheel for Python 3.11 is built against numpy 1.
 """
 
 from __future__ import annotations
@@ -44,14 +64,25 @@ from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike
 
 from ..core.model import SYMMETRY_RTOL
 from ..core.operators import Operator, _everything, _indices
 from ..errors import InvalidInputError
-from .condensation import SINGULAR_PIVOT_RTOL, _checked_freedoms, _checked_stiffness, factorize
+from ._pardiso import PardisoCholesky, pardiso_installed
+from .condensation import (
+    SINGULAR_PIVOT_RTOL,
+    _checked_freedoms,
+    _checked_stiffness,
+    _checked_symmetric,
+    factorize,
+)
 
-__all__ = ["SparseComplianceOperator", "SparseDelassusOperator", "SOLVE_BATCH_BYTES"]
+__all__ = ["FACTORIZERS", "SOLVE_BATCH_BYTES", "SparseComplianceOperator", "SparseDelassusOperator"]
+
+#: The accepted names of the ``factorizer`` argument.
+FACTORIZERS = ("pardiso", "superlu")
 
 #: Memory (bytes) of one batch of right-hand sides solved together (diagonals and blocks).
 SOLVE_BATCH_BYTES = 64 * 2**20
@@ -72,13 +103,19 @@ class SparseDelassusOperator(Operator):
         Names of the ``n`` freedoms, for the errors of the factorisation.
     pivot_rtol, symmetry_rtol : float
         See :func:`~contactqp.compliance.condensation.factorize`.
+    factorizer : {None, "pardiso", "superlu"}
+        The factorisation of ``K`` (see the module notes): MKL Pardiso's Cholesky (the
+        ``sparse`` extra) or SuperLU; None: Pardiso when MKL is installed, else SuperLU.
 
     Attributes
     ----------
     shape : tuple of int
         ``(m, m)``.
+    factorizer : str
+        The factorisation used, ``"pardiso"`` or ``"superlu"``.
     factor_nnz : int
-        Stored entries of the factor (``L`` and ``U``): its memory is about 12 bytes each.
+        Stored entries of the factor (Pardiso: ``L``, about 8 bytes each; SuperLU: ``L`` and
+        ``U``, about 12 bytes each).
 
     Raises
     ------
@@ -86,7 +123,9 @@ class SparseDelassusOperator(Operator):
         From the factorisation: ``K`` singular (not enough fixations) or indefinite.
     InvalidInputError
         ``K`` not square, not finite or not symmetric; ``A`` not a finite (m, n) matrix with
-        ``m >= 1``.
+        ``m >= 1``; an unknown ``factorizer``.
+    MissingDependencyError
+        ``factorizer="pardiso"`` and MKL is not installed.
     """
 
     def __init__(
@@ -97,6 +136,7 @@ class SparseDelassusOperator(Operator):
         labels: Sequence[str] | None = None,
         pivot_rtol: float = SINGULAR_PIVOT_RTOL,
         symmetry_rtol: float = SYMMETRY_RTOL,
+        factorizer: str | None = None,
     ) -> None:
         K = _checked_stiffness(stiffness)
         n = K.shape[0]
@@ -108,13 +148,29 @@ class SparseDelassusOperator(Operator):
             )
         if not np.all(np.isfinite(A.data)):
             raise InvalidInputError("constraints contain NaN or inf")
-        self._setup(K, A.shape[0], labels, pivot_rtol, symmetry_rtol)
+        self._setup(K, A.shape[0], labels, pivot_rtol, symmetry_rtol, factorizer)
         self._A, self._AT = A, A.T.tocsc()
 
-    def _setup(self, K, m: int, labels, pivot_rtol: float, symmetry_rtol: float) -> None:
+    def _setup(
+        self, K, m: int, labels, pivot_rtol: float, symmetry_rtol: float, factorizer
+    ) -> None:
+        if factorizer is None:
+            factorizer = "pardiso" if pardiso_installed() else "superlu"
+        if factorizer not in FACTORIZERS:
+            raise InvalidInputError(
+                f'factorizer must be None, "pardiso" or "superlu", got {factorizer!r}'
+            )
         super().__init__((m, m))
         self._n = K.shape[0]
-        self._lu = factorize(K, labels=labels, pivot_rtol=pivot_rtol, symmetry_rtol=symmetry_rtol)
+        self._lu: PardisoCholesky | spla.SuperLU
+        if factorizer == "pardiso":
+            K, _ = _checked_symmetric(K, labels, symmetry_rtol)
+            self._lu = PardisoCholesky(K, labels=labels, pivot_rtol=pivot_rtol)
+        else:
+            self._lu = factorize(
+                K, labels=labels, pivot_rtol=pivot_rtol, symmetry_rtol=symmetry_rtol
+            )
+        self.factorizer = factorizer
         self.factor_nnz = int(self._lu.nnz)
         self._diagonal: np.ndarray | None = None
         self._diagonal_blocks: dict[int, np.ndarray] = {}
@@ -229,7 +285,7 @@ class SparseComplianceOperator(SparseDelassusOperator):
         Symmetric positive definite stiffness with the fixations applied (N/m).
     freedoms : array_like of int, shape (m,)
         Indices ``c`` of the chosen freedoms in ``stiffness``, distinct.
-    labels, pivot_rtol, symmetry_rtol
+    labels, pivot_rtol, symmetry_rtol, factorizer
         See :class:`SparseDelassusOperator`.
 
     Attributes
@@ -246,13 +302,21 @@ class SparseComplianceOperator(SparseDelassusOperator):
         labels: Sequence[str] | None = None,
         pivot_rtol: float = SINGULAR_PIVOT_RTOL,
         symmetry_rtol: float = SYMMETRY_RTOL,
+        factorizer: str | None = None,
     ) -> None:
         K = _checked_stiffness(stiffness)
         self.freedoms = _checked_freedoms(freedoms, K.shape[0]).astype(np.intp)
-        self._setup(K, self.freedoms.size, labels, pivot_rtol, symmetry_rtol)
+        self._setup(K, self.freedoms.size, labels, pivot_rtol, symmetry_rtol, factorizer)
 
     @classmethod
-    def of_model(cls, model, nodes, *, components: Sequence[int] | None = None):
+    def of_model(
+        cls,
+        model,
+        nodes,
+        *,
+        components: Sequence[int] | None = None,
+        factorizer: str | None = None,
+    ):
         """The compliance of nodes of an :class:`~contactqp.compliance.fem.ElasticModel`.
 
         The operator of the flexibility
@@ -266,6 +330,8 @@ class SparseComplianceOperator(SparseDelassusOperator):
             Distinct mesh node indices.
         components : sequence of int, optional
             Directions kept at every node (0 = x, 1 = y, 2 = z); all by default.
+        factorizer : {None, "pardiso", "superlu"}
+            See :class:`SparseDelassusOperator`.
 
         Raises
         ------
@@ -304,7 +370,7 @@ class SparseComplianceOperator(SparseDelassusOperator):
             raise InvalidInputError(
                 f"nodes: freedom {int(held[0])} is fixed and has no flexibility"
             )
-        return cls(K, position[chosen])
+        return cls(K, position[chosen], factorizer=factorizer)
 
     def _scatter(self, x: np.ndarray) -> np.ndarray:
         z = np.zeros((self._n,) + x.shape[1:])
