@@ -32,6 +32,17 @@ subprocess's ``ru_maxrss``, C++ allocations included), one thread everywhere
    ``Tamaas``: ``PolonskyKeerRey`` (kernel ``2 / (E* |q|)`` on nodal pressures): the same
    discrete operator, so the areas must agree to the solvers' tolerance.
 
+3. **Partial slip** (``--slip-sizes``, off by default): the Hertz sphere pressed to ``P`` (a
+   contact radius of ``n / 4`` cells) and sheared by ``Q = mu P / 2`` (``mu = 0.3``, Poisson's
+   ratio 0.4999 for both, so that the normal-tangential coupling vanishes), in one step from
+   the unloaded state, both forces fixed. ``contactqp``: ``SlidingSurfaceProblem(force=(Q,
+   0))`` on the non-periodic full ``HalfSpaceOperator`` (``coupling=False``), solved by
+   ``tangential-fista`` (tol 5e-9, natural-map error printed); ``Tamaas``:
+   ``PolonskyKeerTan`` (tol 1e-8, mean tractions ``(Q, 0, P) / L^2`` on a ``2n x 2n`` period of
+   its ``surface_2d`` model). Accuracy: the loads carried over ``P`` and ``Q``, the contact
+   radius over Hertz's and the stick radius over Mindlin's ``c = a (1 - Q / mu P)^(1/3)``
+   (both from the cell counts).
+
 Time: ``first`` is the first call in a fresh process (operator/model construction and solve,
 imports excluded); ``best`` the best of the repeats in the same process (up to ``--repeat``,
 within a few seconds). ``MB`` is the subprocess's peak resident set (``ru_maxrss``) and
@@ -43,6 +54,7 @@ Run from the repository root (``make bench-scale`` installs the peers, the ``ben
     .venv/bin/python benchmarks/bench_scale.py                  # Hertz 64..512, rough 512
     .venv/bin/python benchmarks/bench_scale.py --large          # + Hertz 1024^2, rough 2048^2
     .venv/bin/python benchmarks/bench_scale.py --sizes 64,128 --rough-sizes 256
+    .venv/bin/python benchmarks/bench_scale.py --sizes "" --skip-rough --slip-sizes 128,256
 
 A peer that cannot be imported is reported and skipped; the others run.
 """
@@ -75,6 +87,9 @@ ROUGH_LOADS = (0.01, 0.025, 0.05)  # p / (E* h'_rms)
 ROUGH_SLOPE = 0.1
 HERTZ_PEERS = ("contactqp", "tamaas", "contactmechanics")
 ROUGH_PEERS = ("contactqp", "tamaas")
+SLIP_PEERS = ("contactqp", "tamaas")
+SLIP_MU, SLIP_POISSON = 0.3, 0.4999
+SLIP_TOL = 5e-9  # tangential-fista: natural-map errors of 6e-9 to 8e-9, below the target's 1e-8
 
 
 # --- the problems --------------------------------------------------------------------------
@@ -237,9 +252,81 @@ def run_rough(name: str, n: int, level: float):
     return call, judge
 
 
+def run_slip(name: str, n: int):
+    dx = SIDE / n
+    e_star = YOUNG / (1.0 - SLIP_POISSON**2)
+    a = n / 4 * dx
+    load = 4.0 * e_star * a**3 / (3.0 * RADIUS)
+    shear = 0.5 * SLIP_MU * load
+    if name == "contactqp":
+        import contactqp as cq
+        from contactqp.compliance.fft_halfspace import HalfSpaceOperator
+        from contactqp.core.sliding_surface import SlidingSurfaceProblem
+        from contactqp.core.surface import SurfaceProblem
+
+        s = hertz_setup(n)["s"].ravel()
+        _import_lazy()
+
+        def call():
+            normal = HalfSpaceOperator(n, n, dx, dx, YOUNG, SLIP_POISSON, workers=1)
+            full = HalfSpaceOperator(
+                n, n, dx, dx, YOUNG, SLIP_POISSON, components="full", coupling=False, workers=1
+            )
+            problem = SlidingSurfaceProblem(
+                SurfaceProblem(normal, s, load=load), full, SLIP_MU, force=(shear, 0.0)
+            )
+            result = cq.solve(problem, tol=SLIP_TOL)
+            assert result.success, result.message
+            f = result.forces  # (p, t_x, t_y) per cell
+            return (f[:, 0], f[:, 1], f[:, 2], result.certificate.natural_map), result.iterations
+
+        tol = f"tol={SLIP_TOL:g}"
+    else:
+        import tamaas as tm
+
+        tm.set_log_level(tm.LogLevel.error)
+        m = 2 * n
+        c = (np.arange(m) - (m - 1) / 2) * dx
+        XX, YY = np.meshgrid(c, c)
+        surface = -(XX**2 + YY**2) / (2 * RADIUS)
+        area = (m * dx) ** 2
+
+        def call():
+            model = tm.ModelFactory.createModel(tm.model_type.surface_2d, [m * dx] * 2, [m, m])
+            model.E, model.nu = YOUNG, SLIP_POISSON
+            solver = tm.PolonskyKeerTan(model, surface, 1e-8, SLIP_MU)
+            solver.max_iter = 100000
+            solver.solve([shear / area, 0.0, load / area])
+            f = np.array(model.traction).reshape(-1, 3) * dx * dx  # (t_x, t_y, p) per point
+            return (f[:, 2], f[:, 0], f[:, 1], None), -1
+
+        tol = "tol=1e-8"
+
+    def judge(forces):
+        p, tx, ty, natural_map = (np.asarray(v) if v is not None else None for v in forces)
+        contact = p > 1e-10 * p.max()
+        stick = contact & (np.hypot(tx, ty) < SLIP_MU * p * (1 - 1e-6))
+        c = a * (1 - shear / (SLIP_MU * load)) ** (1 / 3)
+        return {
+            "load": float(p.sum() / load),
+            "shear": float(tx.sum() / shear),
+            "a": float(np.sqrt(contact.sum() * dx * dx / np.pi) / a),
+            "c": float(np.sqrt(stick.sum() * dx * dx / np.pi) / c),
+            "natural_map": None if natural_map is None else float(natural_map),
+            "tol": tol,
+        }
+
+    return call, judge
+
+
 def worker(case: str, name: str, n: int, level: float, repeat: int) -> dict:
     try:
-        call, judge = run_hertz(name, n) if case == "hertz" else run_rough(name, n, level)
+        if case == "hertz":
+            call, judge = run_hertz(name, n)
+        elif case == "rough":
+            call, judge = run_rough(name, n, level)
+        else:
+            call, judge = run_slip(name, n)
     except ImportError as error:
         return {"error": f"cannot import {name}: {error}"}
     base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -300,7 +387,9 @@ def main() -> None:
         help="rough-surface mean pressures p / (E* h'_rms)",
     )
     parser.add_argument("--skip-rough", action="store_true")
+    parser.add_argument("--slip-sizes", default="", help="partial-slip grid sides (off: '')")
     args = parser.parse_args()
+    slip_sizes = [int(v) for v in args.slip_sizes.split(",") if v]
     sizes = [int(v) for v in args.sizes.split(",") if v]
     rough_sizes = [int(v) for v in args.rough_sizes.split(",") if v]
     rough_loads = [float(v) for v in args.rough_loads.split(",") if v]
@@ -384,6 +473,38 @@ def main() -> None:
                         f"{abs(own['area'] / peer['area'] - 1):.1e}, load "
                         f"{abs(own['load'] / peer['load'] - 1):.1e}"
                     )
+    slip: dict[str, dict[int, dict]] = {name: {} for name in SLIP_PEERS}
+    if slip_sizes:
+        print()
+        print(
+            f"Partial slip: the Hertz sphere pressed to P and sheared by Q = mu P / 2 (mu = "
+            f"{SLIP_MU}, nu = {SLIP_POISSON}), both forces fixed"
+        )
+        print(
+            f"{'cells':>9} {'contender':>10} {'first':>9} {'best':>9} {'MB':>6} {'it':>5} "
+            f"{'load/P':>9} {'shear/Q':>9} {'a/a_H':>7} {'c/c_M':>7} {'natural map':>11}  "
+            "tolerance"
+        )
+        for n in slip_sizes:
+            for name in SLIP_PEERS:
+                row = measure("slip", name, n, 0.0, args.repeat, args.timeout)
+                slip[name][n] = row
+                if "error" in row:
+                    print(f"{n * n:>9,} {name:>10}  skipped: {row['error']}")
+                    continue
+                nm = "" if row["natural_map"] is None else f"{row['natural_map']:.1e}"
+                print(
+                    f"{n * n:>9,} {name:>10} {_time(row['first']):>9} {_time(row['best']):>9} "
+                    f"{row['peak_mb']:>6.0f} {row['iterations']:>5} {row['load']:>9.6f} "
+                    f"{row['shear']:>9.6f} {row['a']:>7.4f} {row['c']:>7.4f} {nm:>11}  "
+                    f"{row['tol']}"
+                )
+            own, peer = slip["contactqp"][n], slip["tamaas"][n]
+            if "error" not in own and "error" not in peer:
+                print(
+                    f"{'':>9} {'cq/tamaas':>10} first {own['first'] / peer['first']:.2f}x best "
+                    f"{own['best'] / peer['best']:.2f}x"
+                )
     print()
     print("targets:")
     for n in sizes:
@@ -412,6 +533,17 @@ def main() -> None:
             print(
                 f"  rough {n}^2 p/E*h'={level}: same area to 1e-3 ({same}), "
                 f"{ratio:.2f}x Tamaas ({'met' if ok else 'NOT met'})"
+            )
+
+    for n, own in slip["contactqp"].items():
+        peer = slip["tamaas"][n]
+        if "error" not in own and "error" not in peer:
+            ratio = own["best"] / peer["best"]
+            ok = ratio <= 1.0 and own["natural_map"] <= 1e-8
+            print(
+                f"  partial slip {n}^2: <= 1.0x Tamaas's PolonskyKeerTan at natural map 1e-8: "
+                f"{ratio:.2f}x, {own['natural_map']:.1e} ({'met' if ok else 'NOT met'}; "
+                f"Tamaas carries {peer['load']:.4f} P and {peer['shear']:.4f} Q)"
             )
 
 

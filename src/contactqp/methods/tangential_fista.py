@@ -180,7 +180,10 @@ def _lipschitz(apply, cells: np.ndarray) -> tuple[float, int]:
         x = np.ones(k)
         return 1.02 * float(x @ matvec(x)) / float(x @ x), count[0]
     op = LinearOperator((k, k), matvec=matvec, dtype=float)
-    value = eigsh(op, k=1, which="LA", tol=1e-4, ncv=min(k, 20), return_eigenvectors=False)
+    start = np.random.default_rng(0).uniform(0.5, 1.5, k)  # ARPACK's own start is random
+    value = eigsh(
+        op, k=1, which="LA", tol=1e-4, ncv=min(k, 20), v0=start, return_eigenvectors=False
+    )
     return 1.02 * float(value[0]), count[0]
 
 
@@ -242,7 +245,12 @@ def _fista(apply, t, bound, on, offset, force, delta, lam, step, tol, max_iter, 
     normal forces (zero without coupling); at a fixed ``force`` the shift ``delta`` is the mean
     displacement of the sticking points and ``lam`` the multiplier of the force."""
     run = _Run(t, delta, message=f"reached max_iter = {max_iter} iterations")
-    u = apply(t) + offset
+    coupled = bool(np.any(offset))
+
+    def slip_of(forces: np.ndarray) -> np.ndarray:  # W_TT t + offset
+        return apply(forces) + offset if coupled else apply(forces)
+
+    u = slip_of(t)
     y, uy, theta = t.copy(), u.copy(), 1.0
     with np.errstate(over="ignore", invalid="ignore"):
         while True:
@@ -271,14 +279,20 @@ def _fista(apply, t, bound, on, offset, force, delta, lam, step, tol, max_iter, 
                 t_new[~on] = 0.0
             else:
                 t_new, lam = _project_sum(y - step * uy, bound, force, on, lam)
-            u_new = apply(t_new) + offset
-            if float(np.sum((y - t_new) * (t_new - t))) > 0.0:  # restart (gradient test)
+            u_new = slip_of(t_new)
+            step_t = t_new - t
+            y -= t_new
+            if float(np.vdot(y, step_t)) > 0.0:  # restart (gradient test)
                 theta, beta = 1.0, 0.0
             else:
                 theta_new = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * theta * theta))
                 beta, theta = (theta - 1.0) / theta_new, theta_new
-            y = t_new + beta * (t_new - t)
-            uy = u_new + beta * (u_new - u)
+            y = step_t  # y = t_new + beta (t_new - t), and uy the same of u
+            y *= beta
+            y += t_new
+            uy = u_new - u
+            uy *= beta
+            uy += u_new
             t, u = t_new, u_new
 
 
