@@ -40,9 +40,9 @@ Multilevel start: without warm starts, when both compliances have coarser lattic
 (:meth:`~contactqp.core.operators.Operator.coarsening`: an FFT half-space of an even number
 of cells), the problem is first solved on cells merged 2 x 2 (the separation and ``mu``
 averaged, the same load and shift or force; to :data:`COARSE_TOL`), coarsest first, and its
-forces, shared among the merged cells, start the finer solve. Measured on Cattaneo-Mindlin at
-128 x 128 (``Q = mu P / 2``): 337 FISTA iterations from the unsheared state, 216 from the coarse
-start.
+forces, shared among the merged cells, start the finer solve. Measured on Cattaneo-Mindlin
+(``Q = mu P / 2``, tol ``1e-10``): 337 FISTA iterations from the unsheared state at 128 x 128,
+216 from the coarse start; at 256 x 256, 1,702 against 298 (41 s against 8.5 s).
 
 The iteration stops when the projected slip vanishes at the current forces: inside a disc the
 slip, on its bound the slip's part that is not directed against the force (with the outward
