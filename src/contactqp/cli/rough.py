@@ -84,8 +84,9 @@ DEFAULT_CELL = 1e-6  # m, for a generated surface
 @click.option(
     "--mu",
     type=float,
-    help="Friction coefficient: only 0 (frictionless) is accepted; there is no matrix-free "
-    "frictional method for surfaces yet, so any other value is refused (exit 2).",
+    help="Friction coefficient: only 0 (frictionless) is accepted. The matrix-free partial "
+    "slip (contactqp.core.sliding_surface) solves non-periodic grids only, so any other value "
+    "is refused (exit 2).",
 )
 @click.option(
     "--json",
