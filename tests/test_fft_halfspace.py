@@ -292,6 +292,49 @@ def test_half_plane_equals_the_strip_kernel_by_quadrature(n, reference, fft):
         assert np.linalg.eigvalsh(dense)[0] > 0
 
 
+def test_the_full_half_plane_is_the_plane_strain_limit_of_the_half_space():
+    """Non-periodic: the full half-plane (x, z per strip) is symmetric, its two diagonal blocks
+    are the normal operator, and a long line of 3-D cells under a line load (Cerruti and
+    Boussinesq integrated along y) gives its coupling and, up to the log kernel's datum
+    constant, its tangential displacements (a 40,001-cell line: the coupling's tails beyond it
+    are 2e-4 of it)."""
+    n, dx, M = 12, 1e-4, 40001
+    W = HalfPlaneOperator(n, dx, E, NU, components="full")
+    B = W.block()
+    assert np.array_equal(B, B.T)
+    normal = HalfPlaneOperator(n, dx, E, NU).block()
+    np.testing.assert_allclose(B[1::2, 1::2], normal, rtol=1e-15)
+    np.testing.assert_allclose(B[0::2, 0::2], normal, rtol=1e-15)
+    f = np.random.default_rng(7).standard_normal(2 * n)
+    assert relative(W @ f, B @ f) < PRODUCT_RTOL
+    space = HalfSpaceOperator(n, M, dx, dx, E, NU, components="full")
+    for source, column in ((0, 0), (2, 1)):  # x then z of strip 4: 3-D components 0 and 2
+        line = np.zeros((M, n, 3))
+        line[:, 4, source] = dx  # 1 N/m along y, as forces of the cells
+        u3 = (space @ line.ravel()).reshape(M, n, 3)[M // 2][:, [0, 2]]
+        u2 = B[:, 2 * 4 + column].reshape(n, 2)
+        cross = 1 - column  # the other component: the coupling
+        assert relative(u3[:, cross], u2[:, cross]) < 1e-3
+        same = u3[:, column] - u3[0, column]  # the datum constant drops out of differences
+        assert relative(same, u2[:, column] - u2[0, column]) < 1e-7  # measured 7e-9
+    plain = HalfPlaneOperator(n, dx, E, NU, components="full", coupling=False).block()
+    assert not np.any(plain[0::2, 1::2])
+
+
+@pytest.mark.parametrize("n", [32, 33])
+def test_the_periodic_full_half_plane_is_the_half_space_uniform_in_y(n):
+    dx, dy = 2e-3, 1e-3
+    W = HalfPlaneOperator(n, dx, E, NU, periodic=True, components="full")
+    space = HalfSpaceOperator(n, 1, dx, dy, E, NU, periodic=True, components="full")
+    f = np.random.default_rng(n).standard_normal((n, 2))
+    f3 = np.zeros((n, 3))
+    f3[:, [0, 2]] = f * dy
+    u3 = (space @ f3.ravel()).reshape(n, 3)[:, [0, 2]]
+    assert relative(W @ f.ravel(), u3.ravel()) < 1e-12
+    B = W.block()
+    np.testing.assert_allclose(B, B.T, rtol=0, atol=1e-13 * np.max(np.abs(B)))
+
+
 def test_half_plane_datum_shifts_every_entry_by_one_constant():
     n, dx = 10, 1e-3
     near = HalfPlaneOperator(n, dx, E, NU, reference=1e-2).block()

@@ -635,7 +635,7 @@ def _half_space_spectra(nx, ny, dx, dy, E, nu, full: bool, coupling: bool) -> li
 
 
 class HalfPlaneOperator(_LatticeOperator):
-    """Normal flexibility of an elastic half-plane (plane strain) under a line of strips, by FFT.
+    """Flexibility of an elastic half-plane (plane strain) under a line of strips, by FFT.
 
     ``n`` strips of width ``dx`` centred at ``(i - (n - 1) / 2) dx`` carry each a uniform
     pressure; entry ``(i, j)`` is the normal displacement (m) at the centre of strip ``i``
@@ -656,6 +656,15 @@ class HalfPlaneOperator(_LatticeOperator):
     Periodic, the line is one period and the kernel is Westergaard's
     ``u_hat = 2 p_hat / (E* |q|)``, of zero mean (no datum: see the module notes).
 
+    With ``components="full"`` each strip has two entries, ``(x, z)`` (tangential, then normal
+    along the outward normal): a tangential line load displaces the surface tangentially by the
+    same kernel, and the coupling of Flamant's solution [Johnson1985b]_ adds
+    ``c sgn(x_i - x_j)`` to the tangential displacement under an outward normal force, and
+    ``-c sgn(x_i - x_j)`` to the outward normal displacement under a tangential one, with
+    ``c = (1 - 2 nu)(1 + nu) / (2 E)`` (per N/m; a strip's own centre 0). Periodic, the
+    coupling's spectrum is ``-i (1 - 2 nu)(1 + nu) / (E q)`` (zero at the mean and the Nyquist
+    frequency), the same as the half-space's along one axis.
+
     Parameters
     ----------
     n : int
@@ -669,6 +678,10 @@ class HalfPlaneOperator(_LatticeOperator):
     periodic : bool
         True: the line is one period (the spectral kernel); False: a finite line on an infinite
         half-plane (zero padding).
+    components : {"normal", "full"}
+        One entry per strip (the normal force and displacement), or two, ``(x, z)``.
+    coupling : bool
+        With ``"full"``: False drops the normal-tangential coupling (the ``(1 - 2 nu)`` terms).
     reference : float or None
         The datum ``r0`` (m), > 0, non-periodic only; None: ``n dx``.
     workers, fft
@@ -689,6 +702,8 @@ class HalfPlaneOperator(_LatticeOperator):
         poisson: float,
         *,
         periodic: bool = False,
+        components: str = "normal",
+        coupling: bool = True,
         reference: float | None = None,
         workers: int | None = None,
         fft: str | None = None,
@@ -697,9 +712,17 @@ class HalfPlaneOperator(_LatticeOperator):
         dx = _positive_length(dx, "dx")
         E, nu = _material(young, poisson)
         periodic = true_or_false(periodic, "periodic")
+        if components not in ("normal", "full"):
+            raise InvalidInputError(f'components must be "normal" or "full", got {components!r}')
+        coupling = true_or_false(coupling, "coupling")
         E_star = E / (1.0 - nu * nu)
+        c = 0.5 * (1.0 - 2.0 * nu) * (1.0 + nu) / E if coupling else 0.0
         self.periodic = periodic
-        pairs = (((0, 1.0),),)
+        self.components = components
+        full = components == "full"
+        # (x, z) per strip: the log kernel (kind 0) on both, the odd coupling (kind 1) between
+        pairs = (((0, 1.0), (1, 1.0)), ((1, -1.0), (0, 1.0))) if full else (((0, 1.0),),)
+        parity = ((0,), (1,)) if full else ((0,),)
         if periodic:
             if reference is not None:
                 raise InvalidInputError(
@@ -709,13 +732,20 @@ class HalfPlaneOperator(_LatticeOperator):
             self.reference = None
             q = 2.0 * np.pi * scipy.fft.rfftfreq(n, dx)
             inverse = np.divide(1.0, q, out=np.zeros_like(q), where=q > 0)
-            spectrum = 2.0 / (E_star * dx) * inverse
-            super().__init__((n,), pairs, ((0,),), _workers(workers), fft, spectra=[spectrum])
+            spectra: list[np.ndarray] = [2.0 / (E_star * dx) * inverse]
+            if full:
+                odd = -2j * c / dx * inverse
+                if n % 2 == 0:
+                    odd[n // 2] = 0.0  # q and -q are one mode there
+                spectra.append(odd)
+            super().__init__((n,), pairs, parity, _workers(workers), fft, spectra=spectra)
             return
         r0 = n * dx if reference is None else _positive_length(reference, "reference")
         self.reference = r0
-        table = _strip_kernel(np.arange(n) * dx, dx, E_star, r0)
-        super().__init__((n,), pairs, ((0,),), _workers(workers), fft, tables=[table])
+        tables = [_strip_kernel(np.arange(n) * dx, dx, E_star, r0)]
+        if full:  # c sgn(d) at the centres of the other strips, 0 at the strip's own
+            tables.append(np.where(np.arange(n) > 0, c, 0.0))
+        super().__init__((n,), pairs, parity, _workers(workers), fft, tables=tables)
 
 
 def _strip_kernel(X: np.ndarray, dx: float, E_star: float, r0: float) -> np.ndarray:
