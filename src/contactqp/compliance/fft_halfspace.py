@@ -658,7 +658,7 @@ class HalfPlaneOperator(_LatticeOperator):
 
     With ``components="full"`` each strip has two entries, ``(x, z)`` (tangential, then normal
     along the outward normal): a tangential line load displaces the surface tangentially by the
-    same kernel, and the coupling of Flamant's solution [Johnson1985b]_ adds
+    same kernel, and the coupling of Flamant's solution (Johnson 1985, sec. 2.2) adds
     ``c sgn(x_i - x_j)`` to the tangential displacement under an outward normal force, and
     ``-c sgn(x_i - x_j)`` to the outward normal displacement under a tangential one, with
     ``c = (1 - 2 nu)(1 + nu) / (2 E)`` (per N/m; a strip's own centre 0). Periodic, the
