@@ -142,9 +142,7 @@ def random_problem(seed, nc=30, mu=0.3, sparse=False, cohesion=None):
     W = A @ A.T + 0.5 * np.eye(m)
     q = 0.5 * rng.standard_normal(m)
     q[::2] -= 0.4
-    return LocalProblem(
-        sp.csr_matrix(W) if sparse else W, q, np.full(nc, mu), 2, cohesion=cohesion
-    )
+    return LocalProblem(sp.csr_matrix(W) if sparse else W, q, np.full(nc, mu), 2, cohesion=cohesion)
 
 
 CASES = [
