@@ -1157,8 +1157,8 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     :data:`PLANAR_SPAN` or more sweeps would not reach ``tol`` within ``max_sweeps``
     (code 1), or after ``max_sweeps`` (code 2).
 
-    Then, from the reactions ``r`` alone and ``W`` as given, the certificate of
-    :func:`small_certificate`: ``u = W r + q``, ``measures`` = (natural-map error,
+    Then, from the reactions ``r`` alone and ``W`` as given (a dense one over the columns
+    where ``r`` is not zero), the certificate of :func:`small_certificate`: ``u = W r + q``, ``measures`` = (natural-map error,
     ``|| |W| |r| ||`` over the rows the error depends on, ``||q||``,
     ``max(||q||, ||r||, ||u||)``) and ``status`` (open 0, stick 1, slip 2 with ``rtol``).
     Returns ``(sweeps, code)``: the index :data:`PLANAR_REASONS`.
@@ -1197,7 +1197,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
         raise ValueError("indptr must have m + 1 entries, indices and data indptr[m]")
     most = nc * nc if dense else (ip[m] if m else 0)
     cdef double* work = <double*> malloc((4 * nc + 4 * most + 6 * m + nc + 1) * sizeof(double))
-    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((2 * nc + most + 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((2 * nc + most + m + 1) * sizeof(Py_ssize_t))
     cdef Py_ssize_t* history = <Py_ssize_t*> malloc((max_sweeps + 2) * sizeof(Py_ssize_t))
     cdef double* errors = <double*> malloc((max_sweeps + 2) * sizeof(double))
     if work == NULL or index == NULL or history == NULL or errors == NULL:
@@ -1222,6 +1222,8 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     B.ptr = index
     B.col = index + nc + 1
     cdef Py_ssize_t* mark = B.col + most
+    cdef Py_ssize_t* loaded = mark + nc  # the columns where r is not zero
+    cdef Py_ssize_t count
     cdef Small S
     cdef double bn, bt, a00, a01, a10, a11, coupling, change, size, relative, residual, error
     cdef double ratio = 1.0, rate, total, magnitude, product, w, aa, value, largest, force
@@ -1365,11 +1367,17 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
             rd[k] = x[k] - sh[k]
         product = 0.0
         w = 0.0
+        count = 0
+        for k in range(m):
+            if rd[k] != 0.0:
+                loaded[count] = k
+                count += 1
         for row in range(m):
             total = 0.0
             magnitude = 0.0
-            if dense:
-                for j in range(m):
+            if dense:  # over the columns where r is not zero: the other terms are 0 exactly
+                for k in range(count):
+                    j = loaded[k]
                     value = Wd[row * m + j] * rd[j]
                     total += value
                     magnitude += fabs(value)
