@@ -1141,7 +1141,8 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     ``(indptr, indices, data)`` of ``W`` (intp indices) are used; ``q`` (m), ``mu`` (nc),
     ``shift`` (m, the apex shift of
     :attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`, or empty: none), ``r``
-    (m: the start in, the reactions out), ``u`` (m, out), ``status`` (nc, intp, out), ``measures`` (4, out).
+    (m: the start in, the reactions out), ``u`` (m, out), ``status`` (nc, intp, out),
+    ``measures`` (4, out).
 
     ``W`` is read once into 2x2 contact blocks (those that hold a nonzero entry). With
     ``check_blocks``, each diagonal block's symmetric part is tested as
@@ -1152,15 +1153,16 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     each contact on its own scale too, floored at ``floor`` times the problem's) is evaluated
     at the start when that is zero (``u = q``), after each of the ``first`` sweeps, then when
     the relative change of a sweep, times the ratio of error to change at the last evaluation,
-    reaches ``tol``, and at least every :data:`PLANAR_EVERY` sweeps and after the last. The sweeps stop when it is at most
-    ``tol`` (code 0), with ``stall_test`` when the rate over the last
-    :data:`PLANAR_SPAN` or more sweeps would not reach ``tol`` within ``max_sweeps``
+    reaches ``tol``, and at least every ``PLANAR_EVERY`` (10) sweeps and after the last. The
+    sweeps stop when it is at most ``tol`` (code 0), with ``stall_test`` when the rate over the
+    last ``PLANAR_SPAN`` (20) or more sweeps would not reach ``tol`` within ``max_sweeps``
     (code 1), or after ``max_sweeps`` (code 2).
 
     Then, from the reactions ``r`` alone and ``W`` as given (a dense one over the columns
-    where ``r`` is not zero), the certificate of :func:`small_certificate`: ``u = W r + q``, ``measures`` = (natural-map error,
-    ``|| |W| |r| ||`` over the rows the error depends on, ``||q||``,
-    ``max(||q||, ||r||, ||u||)``) and ``status`` (open 0, stick 1, slip 2 with ``rtol``).
+    where ``r`` is not zero), the certificate of :func:`small_certificate`: ``u = W r + q``,
+    ``measures`` = (natural-map error, ``|| |W| |r| ||`` over the rows the error depends on,
+    ``||q||``, ``max(||q||, ||r||, ||u||)``) and ``status`` (open 0, stick 1, slip 2 with
+    ``rtol``).
     Returns ``(sweeps, code)``: the index :data:`PLANAR_REASONS`.
     """
     cdef Py_ssize_t sw[2]
