@@ -1132,6 +1132,66 @@ cdef void _block_product(const Blocks* B, const double* x, const double* q,
         u[2 * i + 1] = bt
 
 
+cdef inline void _planar_factors(const double* a, double mu, double* f) noexcept nogil:
+    """``f`` (9 values): what :func:`_planar_local` computes of contact block ``a`` alone.
+
+    ``f[0:4]`` the map ``b -> -a^-1 b`` (row-major; ``f[8]`` is 1 when ``a`` is invertible,
+    else 0), and for either edge ``s = +1, -1`` (``k = 0, 1``): ``f[4 + 2k]`` the inverse of
+    ``a00 - s mu a01`` when that is positive (else -1), ``f[5 + 2k] = a10 - s mu a11``.
+    """
+    cdef double det = a[0] * a[3] - a[1] * a[2], s, denominator
+    cdef int side
+    if det != 0.0:
+        f[0] = -a[3] / det
+        f[1] = a[1] / det
+        f[2] = a[2] / det
+        f[3] = -a[0] / det
+        f[8] = 1.0
+    else:
+        f[0] = f[1] = f[2] = f[3] = 0.0
+        f[8] = 0.0
+    for side in range(2):
+        s = 1.0 - 2.0 * side
+        denominator = a[0] - s * mu * a[1]
+        f[4 + 2 * side] = 1.0 / denominator if denominator > 0.0 else -1.0
+        f[5 + 2 * side] = a[2] - s * mu * a[3]
+
+
+cdef inline void _planar_local_factored(const double* a, const double* f, double bn, double bt,
+                                        double mu, double rn0, double rt0,
+                                        double* out) noexcept nogil:
+    """:func:`_planar_local` with the block's divisions done once (:func:`_planar_factors`)."""
+    cdef double rn, rt, ut, s
+    cdef int side
+    if bn >= 0.0:
+        out[0] = 0.0
+        out[1] = 0.0
+        return
+    if mu == 0.0:
+        if f[4] > 0.0:  # 1 / a00
+            out[0] = -bn * f[4]
+            out[1] = 0.0
+            return
+    else:
+        if f[8] != 0.0:
+            rn = f[0] * bn + f[1] * bt
+            rt = f[2] * bn + f[3] * bt
+            if rn > 0.0 and (rt if rt >= 0.0 else -rt) <= mu * rn:
+                out[0] = rn
+                out[1] = rt
+                return
+        for side in range(2):
+            if f[4 + 2 * side] > 0.0:
+                s = 1.0 - 2.0 * side
+                rn = -bn * f[4 + 2 * side]
+                ut = f[5 + 2 * side] * rn + bt
+                if s * ut >= 0.0:
+                    out[0] = rn
+                    out[1] = -s * mu * rn
+                    return
+    _planar_local(a[0], a[1], a[2], a[3], bn, bt, mu, rn0, rt0, out)  # none holds: its step
+
+
 def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures, double tol,
                  Py_ssize_t max_sweeps, Py_ssize_t first, bint check_blocks, double psd_shift,
                  bint stall_test, bint per_contact, double floor, double rtol):
@@ -1198,7 +1258,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     if not dense and (sp_[0] != m + 1 or si[0] < ip[m] or sd_[0] < ip[m]):
         raise ValueError("indptr must have m + 1 entries, indices and data indptr[m]")
     most = nc * nc if dense else (ip[m] if m else 0)
-    cdef double* work = <double*> malloc((4 * nc + 4 * most + 6 * m + nc + 1) * sizeof(double))
+    cdef double* work = <double*> malloc((13 * nc + 4 * most + 6 * m + 1) * sizeof(double))
     cdef Py_ssize_t* index = <Py_ssize_t*> malloc((2 * nc + most + m + 1) * sizeof(Py_ssize_t))
     cdef Py_ssize_t* history = <Py_ssize_t*> malloc((max_sweeps + 2) * sizeof(Py_ssize_t))
     cdef double* errors = <double*> malloc((max_sweeps + 2) * sizeof(double))
@@ -1216,6 +1276,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     cdef double* qa = x + m  # q - W shift
     cdef double* react = qa + m  # x - shift
     cdef double* squares = react + m
+    cdef double* factors = squares + nc + m  # after the zero shift
     cdef Py_ssize_t kk
     if ss[0] == 0:  # no shift: zeros
         sh = squares + nc
@@ -1297,6 +1358,8 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     S.squares = squares
     with nogil:
         S.qq = _dot(qd, qd, m)
+        for i in range(nc):
+            _planar_factors(B.diag + 4 * i, mud[i], factors + 9 * i)
         for k in range(m):
             x[k] = rd[k] + sh[k]
             if sh[k] != 0.0:
@@ -1353,8 +1416,8 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
                 bn = qa[2 * i]
                 bt = qa[2 * i + 1]
                 _block_row(&B, i, x, &bn, &bt)
-                _planar_local(a[0], a[1], a[2], a[3], bn, bt, mud[i], x[2 * i], x[2 * i + 1],
-                              out)
+                _planar_local_factored(a, factors + 9 * i, bn, bt, mud[i], x[2 * i],
+                                       x[2 * i + 1], out)
                 change += (out[0] - x[2 * i]) ** 2 + (out[1] - x[2 * i + 1]) ** 2
                 size += out[0] * out[0] + out[1] * out[1]
                 x[2 * i] = out[0]
