@@ -46,15 +46,20 @@ from contactqp.methods.planar import solve_planar
 FCLIB = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
 SHARED_2D = ["FrictionContactProblem00071.dat", "FrictionContactProblem00374.dat"]
 
-pytestmark = pytest.mark.skipif(
-    kernels.planar_solve is None, reason="the compiled kernels are not built"
+#: The tests that compare the compiled solve with the Python-driven sweeps need it; the others
+#: check whichever route this build has.
+needs_compiled = pytest.mark.skipif(
+    kernels.planar_solve is None, reason="compiled kernels not built: no compiled solve to check"
 )
+ROUTES = ["compiled", "python"]
 
 
-@pytest.fixture
-def python_sweeps(monkeypatch):
-    """solve_planar as it runs without the compiled solve: sweeps driven from Python."""
-    monkeypatch.setattr(kernels, "planar_solve", None)
+def route(name, monkeypatch):
+    """Select the route ``name``: the compiled solve, or the sweeps driven from Python."""
+    if name == "compiled" and kernels.planar_solve is None:
+        pytest.skip("compiled kernels not built: no compiled solve to check")
+    if name == "python":
+        monkeypatch.setattr(kernels, "planar_solve", None)
 
 
 def small_problem(seed, nc=4, mu=0.3, sparse=False):
@@ -109,10 +114,12 @@ def enumerate_solutions(problem):
     return solutions
 
 
+@pytest.mark.parametrize("name", ROUTES)
 @pytest.mark.parametrize("sparse", [False, True])
 @pytest.mark.parametrize("mu", [0.1, 0.3])
 @pytest.mark.parametrize("seed", range(6))
-def test_compiled_route_gives_the_exact_solution_found_by_enumeration(seed, mu, sparse):
+def test_planar_gives_the_exact_solution_found_by_enumeration(seed, mu, sparse, name, monkeypatch):
+    route(name, monkeypatch)
     problem = small_problem(seed, mu=mu, sparse=sparse)
     solutions = enumerate_solutions(problem)
     assert len(solutions) == 1  # the problem is well posed: one solution
@@ -154,6 +161,7 @@ CASES = [
 ]
 
 
+@needs_compiled
 @pytest.mark.parametrize("case", range(len(CASES)))
 @pytest.mark.parametrize("per_contact", [False, True])
 def test_compiled_and_python_driven_sweeps_agree(case, per_contact, monkeypatch):
@@ -172,8 +180,10 @@ def test_compiled_and_python_driven_sweeps_agree(case, per_contact, monkeypatch)
     np.testing.assert_allclose(compiled.forces, python.forces, atol=1e-6 * scale)
 
 
+@pytest.mark.parametrize("name", ROUTES)
 @pytest.mark.parametrize("case", range(len(CASES)))
-def test_the_certificate_is_that_of_the_problem_as_given(case):
+def test_the_certificate_is_that_of_the_problem_as_given(case, name, monkeypatch):
+    route(name, monkeypatch)
     kwargs = dict(CASES[case])
     cohesion = kwargs.pop("cohesion", None)
     problem = random_problem(
@@ -195,6 +205,7 @@ def test_the_certificate_is_that_of_the_problem_as_given(case):
 
 @pytest.mark.parametrize("name", SHARED_2D)
 def test_shared_2d_files_are_certified_and_equal_newton(name):
+    """The default route, compiled where built."""
     problem = read_any(FCLIB / name)
     result = cq.solve(problem)  # the default route, at its tol 1e-8
     assert result.method == "planar" and result.success
@@ -208,6 +219,7 @@ def test_shared_2d_files_are_certified_and_equal_newton(name):
     np.testing.assert_array_equal(fine.contact_status, newton.contact_status)
 
 
+@needs_compiled
 @pytest.mark.parametrize("name", SHARED_2D)
 def test_shared_2d_files_take_no_more_sweeps_than_before(name, monkeypatch):
     """The compiled route stops no later than the Python-driven sweeps (the former route)."""
@@ -221,13 +233,9 @@ def test_shared_2d_files_take_no_more_sweeps_than_before(name, monkeypatch):
     np.testing.assert_allclose(compiled.forces, python.forces, atol=1e-6 * scale)
 
 
-def test_a_spent_budget_is_reported_not_converged(python_sweeps):
-    problem = read_any(FCLIB / "FrictionContactProblem00071.dat")
-    python = solve_planar(problem, max_iter=3)
-    assert not python.success and python.iterations == 3
-
-
-def test_compiled_route_reports_a_spent_budget():
+@pytest.mark.parametrize("name", ROUTES)
+def test_a_spent_budget_is_reported_not_converged(name, monkeypatch):
+    route(name, monkeypatch)
     problem = read_any(FCLIB / "FrictionContactProblem00071.dat")
     result = solve_planar(problem, max_iter=3)
     assert not result.success and result.iterations == 3
@@ -237,8 +245,10 @@ def test_compiled_route_reports_a_spent_budget():
     )
 
 
-def test_duplicate_entries_of_a_sparse_w_are_summed():
+@pytest.mark.parametrize("name", ROUTES)
+def test_duplicate_entries_of_a_sparse_w_are_summed(name, monkeypatch):
     """A CSR ``W`` may store an entry twice (its value is the sum), on the diagonal too."""
+    route(name, monkeypatch)
     dense = small_problem(3, nc=4)
     W = np.asarray(dense.W)
     rows, cols = np.nonzero(W)
@@ -256,13 +266,16 @@ def test_duplicate_entries_of_a_sparse_w_are_summed():
     np.testing.assert_allclose(result.forces, exact, atol=1e-9 * max(1.0, np.abs(exact).max()))
 
 
-def test_warm_start_at_the_solution_needs_no_sweep_beyond_the_first():
+@pytest.mark.parametrize("name", ROUTES)
+def test_warm_start_at_the_solution_needs_no_sweep_beyond_the_first(name, monkeypatch):
+    route(name, monkeypatch)
     problem = random_problem(20, sparse=True)
     cold = solve_planar(problem, tol=1e-10)
     again = solve_planar(problem, r0=cold.forces, tol=1e-10)
     assert again.success and again.iterations <= 1
 
 
+@needs_compiled
 def test_an_open_problem_is_solved_at_the_start():
     """``q_N >= 0`` everywhere: ``r = 0`` solves it, and the error at the cold start says so."""
     problem = LocalProblem(np.eye(4) + 0.1, [0.5, 0.3, 0.2, -0.1], [0.3, 0.3], 2)
