@@ -16,7 +16,7 @@ types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overr
 :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb` are their callers.
 """
 
-from libc.math cimport fabs, isfinite, log, sqrt
+from libc.math cimport copysign, fabs, isfinite, log, sqrt
 from libc.stdlib cimport free, malloc
 from cpython.buffer cimport (
     PyBUF_C_CONTIGUOUS, PyBUF_FORMAT, PyBUF_WRITABLE, PyBuffer_Release, PyObject_GetBuffer
@@ -1133,12 +1133,14 @@ cdef void _block_product(const Blocks* B, const double* x, const double* q,
 
 
 cdef inline void _planar_factors(const double* a, double mu, double* f) noexcept nogil:
-    """``f`` (9 values): what :func:`_planar_local` computes of contact block ``a`` alone.
+    """``f`` (10 values): what :func:`_planar_local` computes of contact block ``a`` alone.
 
     ``f[0:4]`` the map ``b -> -a^-1 b`` (row-major; ``f[8]`` is 1 when ``a`` is invertible,
     else 0), and for either edge ``s = +1, -1`` (``k = 0, 1``): ``f[4 + 2k]`` the inverse of
-    ``a00 - s mu a01`` when that is positive (else -1), ``f[5 + 2k] = a10 - s mu a11``.
+    ``a00 - s mu a01`` when that is positive (else -1), ``f[5 + 2k] = a10 - s mu a11``;
+    ``f[9] = 1 / (1 + mu^2)`` (the projection on the cone, :func:`_planar_error`).
     """
+    f[9] = 1.0 / (1.0 + mu * mu)
     cdef double det = a[0] * a[3] - a[1] * a[2], s, denominator
     cdef int side
     if det != 0.0:
@@ -1155,6 +1157,40 @@ cdef inline void _planar_factors(const double* a, double mu, double* f) noexcept
         denominator = a[0] - s * mu * a[1]
         f[4 + 2 * side] = 1.0 / denominator if denominator > 0.0 else -1.0
         f[5 + 2 * side] = a[2] - s * mu * a[3]
+
+
+cdef double _planar_error(const Blocks* B, const double* x, const double* q, const double* mu,
+                          const double* f, double qq) noexcept nogil:
+    """The natural-map error of reactions ``x`` (no apex shift) with ``u = W x + q``, by
+    blocks, in one pass: :func:`_natural_error` without ``per_contact``, the 2-D projection
+    written out (``|u_T|`` and ``|x_T|`` need no square root)."""
+    cdef Py_ssize_t i
+    cdef double total = 0.0, rr = 0.0, uu = 0.0, un, ut, rn, rt, yn, yt, t, a, pn, pt, c
+    cdef double scale
+    cdef const double* d
+    for i in range(B.nc):
+        d = B.diag + 4 * i
+        rn = x[2 * i]
+        rt = x[2 * i + 1]
+        un = q[2 * i] + d[0] * rn + d[1] * rt
+        ut = q[2 * i + 1] + d[2] * rn + d[3] * rt
+        _block_row(B, i, x, &un, &ut)
+        c = mu[i]
+        yn = rn - un - c * fabs(ut)
+        yt = rt - ut
+        t = fabs(yt)
+        if t <= c * yn and yn >= 0.0:  # inside
+            pn = yn
+            pt = yt
+        else:
+            a = max(yn + c * t, 0.0) * f[10 * i + 9]  # 0 in the polar cone
+            pn = a
+            pt = copysign(c * a, yt) if t > 0.0 else 0.0
+        total += (rn - pn) ** 2 + (rt - pt) ** 2
+        rr += rn * rn + rt * rt
+        uu += un * un + ut * ut
+    scale = sqrt(max(qq, max(rr, uu)))
+    return sqrt(total) / (scale if scale > 0.0 else 1.0)
 
 
 cdef inline void _planar_local_factored(const double* a, const double* f, double bn, double bt,
@@ -1258,7 +1294,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     if not dense and (sp_[0] != m + 1 or si[0] < ip[m] or sd_[0] < ip[m]):
         raise ValueError("indptr must have m + 1 entries, indices and data indptr[m]")
     most = nc * nc if dense else (ip[m] if m else 0)
-    cdef double* work = <double*> malloc((13 * nc + 4 * most + 6 * m + 1) * sizeof(double))
+    cdef double* work = <double*> malloc((14 * nc + 4 * most + 6 * m + 1) * sizeof(double))
     cdef Py_ssize_t* index = <Py_ssize_t*> malloc((2 * nc + most + m + 1) * sizeof(Py_ssize_t))
     cdef Py_ssize_t* history = <Py_ssize_t*> malloc((max_sweeps + 2) * sizeof(Py_ssize_t))
     cdef double* errors = <double*> malloc((max_sweeps + 2) * sizeof(double))
@@ -1359,7 +1395,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     with nogil:
         S.qq = _dot(qd, qd, m)
         for i in range(nc):
-            _planar_factors(B.diag + 4 * i, mud[i], factors + 9 * i)
+            _planar_factors(B.diag + 4 * i, mud[i], factors + 10 * i)
         for k in range(m):
             x[k] = rd[k] + sh[k]
             if sh[k] != 0.0:
@@ -1377,14 +1413,17 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
         relative = 0.0
         while True:
             if check:
-                if zero and sweep == 0:
-                    for k in range(m):
-                        ud[k] = qa[k]
+                if not shifted and not per_contact:  # the FCLIB error, in one pass
+                    error = _planar_error(&B, x, qa, mud, factors, S.qq)
                 else:
-                    _block_product(&B, x, qa, ud)
-                for k in range(m):
-                    react[k] = x[k] - sh[k]
-                _natural_error(&S, react, ud, &residual, &error)
+                    if zero and sweep == 0:
+                        for k in range(m):
+                            ud[k] = qa[k]
+                    else:
+                        _block_product(&B, x, qa, ud)
+                    for k in range(m):
+                        react[k] = x[k] - sh[k]
+                    _natural_error(&S, react, ud, &residual, &error)
                 history[checks] = sweep
                 errors[checks] = error
                 checks += 1
@@ -1416,7 +1455,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
                 bn = qa[2 * i]
                 bt = qa[2 * i + 1]
                 _block_row(&B, i, x, &bn, &bt)
-                _planar_local_factored(a, factors + 9 * i, bn, bt, mud[i], x[2 * i],
+                _planar_local_factored(a, factors + 10 * i, bn, bt, mud[i], x[2 * i],
                                        x[2 * i + 1], out)
                 change += (out[0] - x[2 * i]) ** 2 + (out[1] - x[2 * i + 1]) ** 2
                 size += out[0] * out[0] + out[1] * out[1]
