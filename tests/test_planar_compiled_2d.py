@@ -39,6 +39,7 @@ from contactqp.core.local_problem import (
     contact_status,
     natural_map_error,
 )
+from contactqp.errors import NotPositiveDefiniteError
 from contactqp.io.fclib import read_any
 from contactqp.methods.coulomb import solve_coulomb
 from contactqp.methods.planar import solve_planar
@@ -283,3 +284,15 @@ def test_an_open_problem_is_solved_at_the_start():
     assert result.success and result.iterations == 0
     np.testing.assert_array_equal(result.forces, np.zeros(4))
     np.testing.assert_array_equal(result.contact_status, [0, 0])
+
+
+@needs_compiled
+def test_a_block_indefinite_once_its_duplicates_are_summed_is_refused():
+    """``W_00`` stored as -1.9 and 2.0 is 0.1: with the coupling 1 the block is indefinite."""
+    W = sp.csr_matrix(
+        (np.array([-1.9, 2.0, 1.0, 1.0, 1.0]), np.array([0, 0, 1, 0, 1]), np.array([0, 3, 5])),
+        shape=(2, 2),
+    )
+    assert np.allclose(W.toarray(), [[0.1, 1.0], [1.0, 1.0]])
+    with pytest.raises(NotPositiveDefiniteError, match="contact 0"):
+        solve_planar(LocalProblem(W, [-1.0, 0.0], [0.3], 2))

@@ -22,9 +22,9 @@ call from the final ``r`` and ``W`` as given; no Python runs between sweeps. Eva
 error costs about a sweep, so it is evaluated at the cold start when that is ``r = 0``
 (``u = q``: an open problem takes no sweep), after the first :data:`COMPILED_FIRST` sweeps,
 then when the relative change of a sweep, scaled by the ratio of error to change at the last
-evaluation, says ``tol`` may be met, and at least every
-``PLANAR_EVERY`` (10) sweeps of the kernel. On the 89-contact shared file this
-stops at the first sweep that meets ``tol`` (59) with a few evaluations.
+evaluation, says ``tol`` may be met, and at least every ``PLANAR_EVERY`` (10) sweeps of the
+kernel. On the 89-contact shared file this stops at the first sweep that meets ``tol`` (59)
+after 7 evaluations.
 
 Gauss-Seidel converges linearly, and slowly on the singular ``W`` of large rigid granular
 problems. Without the compiled kernels the sweeps are driven from Python
@@ -78,10 +78,10 @@ __all__ = [
 SWEEPS = 200  #: largest number of Gauss-Seidel sweeps before Newton takes over
 EVERY = 10  #: sweeps between two evaluations of the natural-map error (the first few: each)
 FIRST = 4  #: sweeps after each of which the error is evaluated (small problems converge there)
-#: Sweeps after each of which the compiled route evaluates the error;
-#: after them it evaluates it when the change of a sweep, scaled by the ratio of error to change
-#: measured at the last evaluation, says ``tol`` may be met (and at least every
-#: ``PLANAR_EVERY`` sweeps of :func:`~contactqp.kernels.compiled.planar_solve`).
+#: Sweeps after each of which the compiled route evaluates the error; after them it evaluates it
+#: when the change of a sweep, scaled by the ratio of error to change measured at the last
+#: evaluation, says ``tol`` may be met (and at least every ``PLANAR_EVERY`` sweeps of
+#: :func:`~contactqp.kernels.compiled.planar_solve`).
 COMPILED_FIRST = 1
 #: Most contacts of a 2-D problem that :func:`contactqp.solve` sends to the planar route when no
 #: method is named; larger ones go to the coulomb method directly. Gauss-Seidel's rate falls
@@ -359,10 +359,14 @@ def _solve_compiled(
         STATUS_RTOL,
     )
     reason = kernels.PLANAR_REASONS[code]
-    if reason == "diagonal block not semidefinite":
+    if reason == "diagonal block not semidefinite":  # sweeps is then the contact's index
         blocks = np.empty((nc, 4))
         kernels.planar_blocks(*_kernel_arrays(problem.W), blocks)
-        check_contact_blocks(blocks)  # raises, naming the block
+        check_contact_blocks(blocks)  # raises, naming the block and its entries
+        raise NotPositiveDefiniteError(  # a block of duplicate entries, which the kernel sums
+            f"W is not positive semidefinite: the symmetric part of contact {sweeps}'s "
+            f"diagonal block (its duplicate entries summed) is not"
+        )
     if reason != "converged" and sweeps < max_iter:
         return None, sweeps
     error, product, size_q, scale = measures.tolist()
