@@ -296,3 +296,13 @@ def test_a_block_indefinite_once_its_duplicates_are_summed_is_refused():
     assert np.allclose(W.toarray(), [[0.1, 1.0], [1.0, 1.0]])
     with pytest.raises(NotPositiveDefiniteError, match="contact 0"):
         solve_planar(LocalProblem(W, [-1.0, 0.0], [0.3], 2))
+
+
+@pytest.mark.parametrize("name", ROUTES)
+@pytest.mark.parametrize("sparse", [False, True])
+def test_a_problem_without_contacts_is_solved(sparse, name, monkeypatch):
+    route(name, monkeypatch)
+    W = sp.csr_matrix((0, 0)) if sparse else np.zeros((0, 0))
+    result = solve_planar(LocalProblem(W, np.zeros(0), np.zeros(0), 2))
+    assert result.success and result.forces.shape == (0,)
+    assert result.certificate.natural_map == 0.0

@@ -1285,11 +1285,11 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 1, sst, True, "status")
     cdef double* md = <double*> _buffer(measures, b'd', 1, sm, True, "measures")
     cdef Py_ssize_t m = sq[0], nc = smu[0], most, nb = 0, i, j, k, l, p, s, c, row
-    cdef bint dense = sw[0] > 0
+    cdef bint dense = sw[0] > 0 or m == 0  # no contacts: nothing to read either way
     if (m != 2 * nc or (ss[0] != m and ss[0] != 0) or sr[0] != m or su[0] != m
             or sst[0] != nc or sm[0] != 4):
         raise ValueError("inconsistent shapes")
-    if dense and (sw[0] != m or sw[1] != m):
+    if dense and (sw[0] != m or sw[1] != m) and m > 0:
         raise ValueError("a dense W must be (m, m)")
     if not dense and (sp_[0] != m + 1 or si[0] < ip[m] or sd_[0] < ip[m]):
         raise ValueError("indptr must have m + 1 entries, indices and data indptr[m]")
