@@ -306,3 +306,17 @@ def test_a_problem_without_contacts_is_solved(sparse, name, monkeypatch):
     result = solve_planar(LocalProblem(W, np.zeros(0), np.zeros(0), 2))
     assert result.success and result.forces.shape == (0,)
     assert result.certificate.natural_map == 0.0
+
+
+@pytest.mark.parametrize("name", ROUTES)
+def test_strided_and_fortran_ordered_arrays_are_read(name, monkeypatch):
+    """``mu`` a strided view and ``W`` in Fortran order: the same answer as contiguous ones."""
+    route(name, monkeypatch)
+    base = random_problem(30, nc=6)
+    W = np.asfortranarray(base.W)
+    mu = np.repeat(base.mu, 2)[::2]
+    assert not mu.flags.c_contiguous and not W.flags.c_contiguous
+    result = solve_planar(LocalProblem(W, base.q, mu, 2), tol=1e-12)
+    reference = solve_planar(base, tol=1e-12)
+    assert result.success
+    np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-12)

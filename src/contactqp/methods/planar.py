@@ -342,7 +342,7 @@ def _solve_compiled(
     sweeps, code = kernels.planar_solve(
         *arrays,
         problem.q,  # C-contiguous, as validated
-        problem.mu,
+        np.ascontiguousarray(problem.mu),  # a view of the caller's array, perhaps strided
         problem.apex_shift if np.count_nonzero(problem.law.cohesion) else _NO_DATA,  # empty: none
         r,
         u,
