@@ -31,6 +31,8 @@ __all__ = [
     "small_certificate",
     "small_semidefinite",
     "SMALL_REASONS",
+    "planar_solve",
+    "PLANAR_REASONS",
     "IMPLEMENTATION",
     "FORCE_PURE_NUMPY",
     "pure_numpy_forced",
@@ -57,6 +59,13 @@ small_certificate: Callable[..., None] | None = None
 small_semidefinite: Callable[..., None] | None = None
 #: The reasons of :func:`~contactqp.kernels.compiled.small_newton`'s codes (coulomb's Newton run).
 SMALL_REASONS: tuple[str, ...] = ()
+#: The compiled 2-D solve (:func:`contactqp.kernels.compiled.planar_solve`: the Gauss-Seidel
+#: sweeps and the certificate in one call), None with the pure-numpy kernels: its oracle is the
+#: sweeps of :func:`planar_gauss_seidel` driven from Python, which
+#: :mod:`contactqp.methods.planar` runs where it is None.
+planar_solve: Callable[..., tuple[int, int]] | None = None
+#: The reasons of :func:`~contactqp.kernels.compiled.planar_solve`'s codes.
+PLANAR_REASONS: tuple[str, ...] = ()
 
 if pure_numpy_forced():
     from .pure_numpy import (
@@ -87,6 +96,8 @@ else:
         small_certificate = _compiled.small_certificate
         small_semidefinite = _compiled.small_semidefinite
         SMALL_REASONS = _compiled.SMALL_REASONS
+        planar_solve = _compiled.planar_solve
+        PLANAR_REASONS = _compiled.PLANAR_REASONS
 
         IMPLEMENTATION = "compiled"
     except ImportError as _missing:

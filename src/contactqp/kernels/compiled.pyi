@@ -19,6 +19,9 @@ __all__ = [
 
 SMALL_REASONS: tuple[str, ...]
 SMALL_CONSTANTS: dict[str, float]
+PLANAR_REASONS: tuple[str, ...]
+PLANAR_EVERY: int
+PLANAR_SPAN: int
 
 def small_newton(
     W: np.ndarray,
@@ -48,6 +51,28 @@ def small_certificate(
     status: np.ndarray,
 ) -> None: ...
 def small_semidefinite(W: np.ndarray, shift: float, passed: np.ndarray) -> None: ...
+def planar_solve(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    shift: np.ndarray,
+    r: np.ndarray,
+    u: np.ndarray,
+    status: np.ndarray,
+    measures: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    first: int,
+    check_blocks: bool,
+    psd_shift: float,
+    stall_test: bool,
+    per_contact: bool,
+    floor: float,
+    rtol: float,
+) -> tuple[int, int]: ...
 def project_rows(X: np.ndarray, mu: np.ndarray, P: np.ndarray) -> None: ...
 def natural_map_rows(
     R: np.ndarray, U: np.ndarray, mu: np.ndarray, squares: np.ndarray

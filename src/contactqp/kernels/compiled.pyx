@@ -16,7 +16,7 @@ types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overr
 :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb` are their callers.
 """
 
-from libc.math cimport fabs, isfinite, log, sqrt
+from libc.math cimport copysign, fabs, isfinite, log, sqrt
 from libc.stdlib cimport free, malloc
 from cpython.buffer cimport (
     PyBUF_C_CONTIGUOUS, PyBUF_FORMAT, PyBUF_WRITABLE, PyBuffer_Release, PyObject_GetBuffer
@@ -35,6 +35,10 @@ __all__ = [
     "small_certificate",
     "small_semidefinite",
     "SMALL_REASONS",
+    "planar_solve",
+    "PLANAR_REASONS",
+    "PLANAR_EVERY",
+    "PLANAR_SPAN",
 ]
 
 
@@ -1069,3 +1073,454 @@ def small_semidefinite(W, double shift, passed):
             pd[p] = 1 if ok else 0
     free(S)
     free(keep)
+
+
+# ---------------------------------------------------------------------------------------------
+# 2-D contacts: the whole Gauss-Seidel solve of methods.planar, its certificate included.
+
+#: Why :func:`planar_solve` stopped, by the code it returns.
+PLANAR_REASONS = ("converged", "stalled", "sweep budget spent", "diagonal block not semidefinite")
+cdef enum:
+    _PLANAR_EVERY = 10
+    _PLANAR_SPAN = 20
+#: Most sweeps between two evaluations of the error in :func:`planar_solve`.
+PLANAR_EVERY = _PLANAR_EVERY
+#: Fewest sweeps over which :func:`planar_solve`'s stall test measures the rate.
+PLANAR_SPAN = _PLANAR_SPAN
+
+
+cdef struct Blocks:
+    # W by 2x2 contact blocks: diag[4 i:4 i + 4] the diagonal block of contact i (row-major),
+    # the off-diagonal blocks of block row i at slots ptr[i] .. ptr[i + 1] - 1, col[s] their
+    # block column and val[4 s:4 s + 4] their entries (row-major)
+    Py_ssize_t nc
+    double* diag
+    Py_ssize_t* ptr
+    Py_ssize_t* col
+    double* val
+
+
+cdef inline void _block_row(const Blocks* B, Py_ssize_t i, const double* x, double* bn,
+                            double* bt) noexcept nogil:
+    """``(bn, bt) += sum over the off-diagonal blocks of row i of W_ij x_j``."""
+    cdef Py_ssize_t s, j
+    cdef double n = bn[0], t = bt[0], xn, xt
+    cdef const double* v
+    for s in range(B.ptr[i], B.ptr[i + 1]):
+        j = B.col[s]
+        v = B.val + 4 * s
+        xn = x[2 * j]
+        xt = x[2 * j + 1]
+        n += v[0] * xn + v[1] * xt
+        t += v[2] * xn + v[3] * xt
+    bn[0] = n
+    bt[0] = t
+
+
+cdef void _block_product(const Blocks* B, const double* x, const double* q,
+                         double* u) noexcept nogil:
+    """``u = W x + q`` by blocks."""
+    cdef Py_ssize_t i
+    cdef double bn, bt
+    cdef const double* a
+    for i in range(B.nc):
+        a = B.diag + 4 * i
+        bn = q[2 * i] + a[0] * x[2 * i] + a[1] * x[2 * i + 1]
+        bt = q[2 * i + 1] + a[2] * x[2 * i] + a[3] * x[2 * i + 1]
+        _block_row(B, i, x, &bn, &bt)
+        u[2 * i] = bn
+        u[2 * i + 1] = bt
+
+
+cdef inline void _planar_factors(const double* a, double mu, double* f) noexcept nogil:
+    """``f`` (10 values): what :func:`_planar_local` computes of contact block ``a`` alone.
+
+    ``f[0:4]`` the map ``b -> -a^-1 b`` (row-major; ``f[8]`` is 1 when ``a`` is invertible,
+    else 0), and for either edge ``s = +1, -1`` (``k = 0, 1``): ``f[4 + 2k]`` the inverse of
+    ``a00 - s mu a01`` when that is positive (else -1), ``f[5 + 2k] = a10 - s mu a11``;
+    ``f[9] = 1 / (1 + mu^2)`` (the projection on the cone, :func:`_planar_error`).
+    """
+    f[9] = 1.0 / (1.0 + mu * mu)
+    cdef double det = a[0] * a[3] - a[1] * a[2], s, denominator
+    cdef int side
+    if det != 0.0:
+        f[0] = -a[3] / det
+        f[1] = a[1] / det
+        f[2] = a[2] / det
+        f[3] = -a[0] / det
+        f[8] = 1.0
+    else:
+        f[0] = f[1] = f[2] = f[3] = 0.0
+        f[8] = 0.0
+    for side in range(2):
+        s = 1.0 - 2.0 * side
+        denominator = a[0] - s * mu * a[1]
+        f[4 + 2 * side] = 1.0 / denominator if denominator > 0.0 else -1.0
+        f[5 + 2 * side] = a[2] - s * mu * a[3]
+
+
+cdef double _planar_error(const Blocks* B, const double* x, const double* q, const double* mu,
+                          const double* f, double qq) noexcept nogil:
+    """The natural-map error of reactions ``x`` (no apex shift) with ``u = W x + q``, by
+    blocks, in one pass: :func:`_natural_error` without ``per_contact``, the 2-D projection
+    written out (``|u_T|`` and ``|x_T|`` need no square root)."""
+    cdef Py_ssize_t i
+    cdef double total = 0.0, rr = 0.0, uu = 0.0, un, ut, rn, rt, yn, yt, t, a, pn, pt, c
+    cdef double scale
+    cdef const double* d
+    for i in range(B.nc):
+        d = B.diag + 4 * i
+        rn = x[2 * i]
+        rt = x[2 * i + 1]
+        un = q[2 * i] + d[0] * rn + d[1] * rt
+        ut = q[2 * i + 1] + d[2] * rn + d[3] * rt
+        _block_row(B, i, x, &un, &ut)
+        c = mu[i]
+        yn = rn - un - c * fabs(ut)
+        yt = rt - ut
+        t = fabs(yt)
+        if t <= c * yn and yn >= 0.0:  # inside
+            pn = yn
+            pt = yt
+        else:
+            a = max(yn + c * t, 0.0) * f[10 * i + 9]  # 0 in the polar cone
+            pn = a
+            pt = copysign(c * a, yt) if t > 0.0 else 0.0
+        total += (rn - pn) ** 2 + (rt - pt) ** 2
+        rr += rn * rn + rt * rt
+        uu += un * un + ut * ut
+    scale = sqrt(max(qq, max(rr, uu)))
+    return sqrt(total) / (scale if scale > 0.0 else 1.0)
+
+
+cdef inline void _planar_local_factored(const double* a, const double* f, double bn, double bt,
+                                        double mu, double rn0, double rt0,
+                                        double* out) noexcept nogil:
+    """:func:`_planar_local` with the block's divisions done once (:func:`_planar_factors`)."""
+    cdef double rn, rt, ut, s
+    cdef int side
+    if bn >= 0.0:
+        out[0] = 0.0
+        out[1] = 0.0
+        return
+    if mu == 0.0:
+        if f[4] > 0.0:  # 1 / a00
+            out[0] = -bn * f[4]
+            out[1] = 0.0
+            return
+    else:
+        if f[8] != 0.0:
+            rn = f[0] * bn + f[1] * bt
+            rt = f[2] * bn + f[3] * bt
+            if rn > 0.0 and (rt if rt >= 0.0 else -rt) <= mu * rn:
+                out[0] = rn
+                out[1] = rt
+                return
+        for side in range(2):
+            if f[4 + 2 * side] > 0.0:
+                s = 1.0 - 2.0 * side
+                rn = -bn * f[4 + 2 * side]
+                ut = f[5 + 2 * side] * rn + bt
+                if s * ut >= 0.0:
+                    out[0] = rn
+                    out[1] = -s * mu * rn
+                    return
+    _planar_local(a[0], a[1], a[2], a[3], bn, bt, mu, rn0, rt0, out)  # none holds: its step
+
+
+def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures, double tol,
+                 Py_ssize_t max_sweeps, Py_ssize_t first, bint check_blocks, double psd_shift,
+                 bint stall_test, bint per_contact, double floor, double rtol):
+    """The Gauss-Seidel solve of a 2-D local problem and its certificate, in one call.
+
+    ``W`` is a dense (m, m) array, or, when it has no rows, the CSR arrays
+    ``(indptr, indices, data)`` of ``W`` (intp indices) are used; ``q`` (m), ``mu`` (nc),
+    ``shift`` (m, the apex shift of
+    :attr:`~contactqp.core.local_problem.LocalProblem.apex_shift`, or empty: none), ``r``
+    (m: the start in, the reactions out), ``u`` (m, out), ``status`` (nc, intp, out),
+    ``measures`` (4, out).
+
+    ``W`` is read once into 2x2 contact blocks (those that hold a nonzero entry). With
+    ``check_blocks``, each diagonal block's symmetric part is tested as
+    :func:`contactqp.methods.planar.check_contact_blocks` does (with ``psd_shift``); the first
+    that fails stops the call with code 3 and its contact as the count. The sweeps are those of
+    :func:`planar_gauss_seidel` on the reactions from the apex, ``r + shift``; the natural-map
+    error of :func:`~contactqp.core.local_problem.natural_map_residual` (``per_contact``:
+    each contact on its own scale too, floored at ``floor`` times the problem's) is evaluated
+    at the start when that is zero (``u = q``), after each of the ``first`` sweeps, then when
+    the relative change of a sweep, times the ratio of error to change at the last evaluation,
+    reaches ``tol``, and at least every ``PLANAR_EVERY`` (10) sweeps and after the last. The
+    sweeps stop when it is at most ``tol`` (code 0), with ``stall_test`` when the rate over the
+    last ``PLANAR_SPAN`` (20) or more sweeps would not reach ``tol`` within ``max_sweeps``
+    (code 1), or after ``max_sweeps`` (code 2).
+
+    Then, from the reactions ``r`` alone and ``W`` as given (a dense one over the columns
+    where ``r`` is not zero), the certificate of :func:`small_certificate`: ``u = W r + q``,
+    ``measures`` = (natural-map error, ``|| |W| |r| ||`` over the rows the error depends on,
+    ``||q||``, ``max(||q||, ||r||, ||u||)``) and ``status`` (open 0, stick 1, slip 2 with
+    ``rtol``).
+    Returns ``(sweeps, code)``: the index :data:`PLANAR_REASONS`.
+    """
+    cdef Py_ssize_t sw[2]
+    cdef Py_ssize_t sp_[1]
+    cdef Py_ssize_t si[1]
+    cdef Py_ssize_t sd_[1]
+    cdef Py_ssize_t sq[1]
+    cdef Py_ssize_t smu[1]
+    cdef Py_ssize_t ss[1]
+    cdef Py_ssize_t sr[1]
+    cdef Py_ssize_t su[1]
+    cdef Py_ssize_t sst[1]
+    cdef Py_ssize_t sm[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 2, sw, False, "W")
+    cdef const Py_ssize_t* ip = <const Py_ssize_t*> _buffer(indptr, b'n', 1, sp_, False, "indptr")
+    cdef const Py_ssize_t* ix = <const Py_ssize_t*> _buffer(indices, b'n', 1, si, False,
+                                                            "indices")
+    cdef const double* dv = <const double*> _buffer(data, b'd', 1, sd_, False, "data")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 1, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 1, smu, False, "mu")
+    cdef const double* sh = <const double*> _buffer(shift, b'd', 1, ss, False, "shift")
+    cdef double* rd = <double*> _buffer(r, b'd', 1, sr, True, "r")
+    cdef double* ud = <double*> _buffer(u, b'd', 1, su, True, "u")
+    cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 1, sst, True, "status")
+    cdef double* md = <double*> _buffer(measures, b'd', 1, sm, True, "measures")
+    cdef Py_ssize_t m = sq[0], nc = smu[0], most, nb = 0, i, j, k, l, p, s, c, row
+    cdef bint dense = sw[0] > 0 or m == 0  # no contacts: nothing to read either way
+    if (m != 2 * nc or (ss[0] != m and ss[0] != 0) or sr[0] != m or su[0] != m
+            or sst[0] != nc or sm[0] != 4):
+        raise ValueError("inconsistent shapes")
+    if dense and (sw[0] != m or sw[1] != m) and m > 0:
+        raise ValueError("a dense W must be (m, m)")
+    if not dense and (sp_[0] != m + 1 or si[0] < ip[m] or sd_[0] < ip[m]):
+        raise ValueError("indptr must have m + 1 entries, indices and data indptr[m]")
+    most = nc * nc if dense else (ip[m] if m else 0)
+    cdef double* work = <double*> malloc((14 * nc + 4 * most + 6 * m + 1) * sizeof(double))
+    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((2 * nc + most + m + 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t* history = <Py_ssize_t*> malloc((max_sweeps + 2) * sizeof(Py_ssize_t))
+    cdef double* errors = <double*> malloc((max_sweeps + 2) * sizeof(double))
+    if work == NULL or index == NULL or history == NULL or errors == NULL:
+        free(work)
+        free(index)
+        free(history)
+        free(errors)
+        raise MemoryError()
+    cdef Blocks B
+    B.nc = nc
+    B.diag = work
+    B.val = work + 4 * nc
+    cdef double* x = B.val + 4 * most  # reactions from the apex
+    cdef double* qa = x + m  # q - W shift
+    cdef double* react = qa + m  # x - shift
+    cdef double* squares = react + m
+    cdef double* factors = squares + nc + m  # after the zero shift
+    cdef Py_ssize_t kk
+    if ss[0] == 0:  # no shift: zeros
+        sh = squares + nc
+        for kk in range(m):
+            (squares + nc)[kk] = 0.0
+    B.ptr = index
+    B.col = index + nc + 1
+    cdef Py_ssize_t* mark = B.col + most
+    cdef Py_ssize_t* loaded = mark + nc  # the columns where r is not zero
+    cdef Py_ssize_t count
+    cdef Small S
+    cdef double bn, bt, a00, a01, a10, a11, coupling, change, size, relative, residual, error
+    cdef double ratio = 1.0, rate, total, magnitude, product, w, aa, value, largest, force
+    cdef double carry, slip, apex
+    cdef double out[2]
+    cdef double* a
+    cdef bint shifted = False, zero = True, check
+    cdef Py_ssize_t sweep = 0, checks = 0, last = 0, code = 2, bad = -1
+    with nogil:
+        # W by contact blocks
+        for i in range(nc):
+            mark[i] = -1
+        for i in range(nc):
+            B.ptr[i] = nb
+            a = B.diag + 4 * i
+            a[0] = a[1] = a[2] = a[3] = 0.0
+            if dense:
+                for j in range(nc):
+                    a00 = Wd[2 * i * m + 2 * j]
+                    a01 = Wd[2 * i * m + 2 * j + 1]
+                    a10 = Wd[(2 * i + 1) * m + 2 * j]
+                    a11 = Wd[(2 * i + 1) * m + 2 * j + 1]
+                    if j == i:
+                        a[0], a[1], a[2], a[3] = a00, a01, a10, a11
+                    elif a00 != 0.0 or a01 != 0.0 or a10 != 0.0 or a11 != 0.0:
+                        B.col[nb] = j
+                        B.val[4 * nb] = a00
+                        B.val[4 * nb + 1] = a01
+                        B.val[4 * nb + 2] = a10
+                        B.val[4 * nb + 3] = a11
+                        nb += 1
+            else:
+                for k in range(2):
+                    for p in range(ip[2 * i + k], ip[2 * i + k + 1]):
+                        c = ix[p]
+                        j = c // 2
+                        l = c - 2 * j
+                        if j == i:
+                            a[2 * k + l] += dv[p]
+                            continue
+                        s = mark[j]
+                        if s < B.ptr[i]:  # no block of j in this row yet
+                            s = nb
+                            mark[j] = nb
+                            B.col[nb] = j
+                            B.val[4 * nb] = B.val[4 * nb + 1] = 0.0
+                            B.val[4 * nb + 2] = B.val[4 * nb + 3] = 0.0
+                            nb += 1
+                        B.val[4 * s + 2 * k + l] += dv[p]
+        B.ptr[nc] = nb
+        if check_blocks:
+            for i in range(nc):
+                a = B.diag + 4 * i
+                coupling = 0.5 * (a[1] + a[2])
+                if (a[0] < 0.0 or a[3] < 0.0
+                        or coupling * coupling > (1.0 + psd_shift) ** 2 * a[0] * a[3]):
+                    bad = i
+                    break
+    if bad >= 0:
+        free(work)
+        free(index)
+        free(history)
+        free(errors)
+        return bad, 3
+    S.m, S.nc, S.d = m, nc, 2
+    S.q, S.mu, S.shift = qd, mud, sh
+    S.per_contact = per_contact
+    S.floor = floor
+    S.squares = squares
+    with nogil:
+        S.qq = _dot(qd, qd, m)
+        for i in range(nc):
+            _planar_factors(B.diag + 4 * i, mud[i], factors + 10 * i)
+        for k in range(m):
+            x[k] = rd[k] + sh[k]
+            if sh[k] != 0.0:
+                shifted = True
+            if x[k] != 0.0:
+                zero = False
+        if shifted:  # q - W shift
+            _block_product(&B, sh, qd, qa)
+            for k in range(m):
+                qa[k] = 2.0 * qd[k] - qa[k]
+        else:
+            for k in range(m):
+                qa[k] = qd[k]
+        check = zero
+        relative = 0.0
+        while True:
+            if check:
+                if not shifted and not per_contact:  # the FCLIB error, in one pass
+                    error = _planar_error(&B, x, qa, mud, factors, S.qq)
+                else:
+                    if zero and sweep == 0:
+                        for k in range(m):
+                            ud[k] = qa[k]
+                    else:
+                        _block_product(&B, x, qa, ud)
+                    for k in range(m):
+                        react[k] = x[k] - sh[k]
+                    _natural_error(&S, react, ud, &residual, &error)
+                history[checks] = sweep
+                errors[checks] = error
+                checks += 1
+                last = sweep
+                if error <= tol:
+                    code = 0
+                    break
+                if sweep >= max_sweeps:
+                    code = 2
+                    break
+                if relative > 0.0:
+                    ratio = error / relative
+                if stall_test:
+                    for k in range(checks - 2, -1, -1):
+                        if history[k] <= sweep - _PLANAR_SPAN:
+                            rate = (error / errors[k]) ** (1.0 / (sweep - history[k]))
+                            if rate >= 1.0 or sweep + log(tol / error) / log(rate) > max_sweeps:
+                                code = 1
+                            break
+                    if code == 1:
+                        break
+            elif sweep >= max_sweeps:
+                code = 2
+                break
+            change = 0.0
+            size = 0.0
+            for i in range(nc):
+                a = B.diag + 4 * i
+                bn = qa[2 * i]
+                bt = qa[2 * i + 1]
+                _block_row(&B, i, x, &bn, &bt)
+                _planar_local_factored(a, factors + 10 * i, bn, bt, mud[i], x[2 * i],
+                                       x[2 * i + 1], out)
+                change += (out[0] - x[2 * i]) ** 2 + (out[1] - x[2 * i + 1]) ** 2
+                size += out[0] * out[0] + out[1] * out[1]
+                x[2 * i] = out[0]
+                x[2 * i + 1] = out[1]
+            sweep += 1
+            size = sqrt(max(size, S.qq))
+            relative = sqrt(change) / (size if size > 0.0 else 1.0)
+            check = (sweep <= first or ratio * relative <= tol
+                     or sweep - last >= _PLANAR_EVERY or sweep >= max_sweeps)
+        # the certificate, from the reactions and W as given
+        for k in range(m):
+            rd[k] = x[k] - sh[k]
+        product = 0.0
+        w = 0.0
+        count = 0
+        for k in range(m):
+            if rd[k] != 0.0:
+                loaded[count] = k
+                count += 1
+        for row in range(m):
+            total = 0.0
+            magnitude = 0.0
+            if dense:  # over the columns where r is not zero: the other terms are 0 exactly
+                for k in range(count):
+                    j = loaded[k]
+                    value = Wd[row * m + j] * rd[j]
+                    total += value
+                    magnitude += fabs(value)
+            else:
+                for p in range(ip[row], ip[row + 1]):
+                    value = dv[p] * rd[ix[p]]
+                    total += value
+                    magnitude += fabs(value)
+            ud[row] = total + qd[row]
+            if row % 2 == 0 or mud[row // 2] != 0.0:  # the certified rows
+                product += magnitude * magnitude
+            w = max(w, fabs(B.diag[4 * (row // 2) + 3 * (row % 2)]))
+        if w == 0.0:
+            w = 1.0
+        _natural_error(&S, rd, ud, &residual, &error)
+        md[0] = error
+        md[1] = sqrt(product)
+        md[2] = sqrt(S.qq)
+        size = 0.0
+        aa = 0.0
+        value = 0.0
+        for k in range(m):
+            size += rd[k] * rd[k]
+            apex = rd[k] + sh[k]
+            aa += apex * apex
+            value += ud[k] * ud[k]
+        md[3] = sqrt(max(S.qq, max(size, value)))
+        largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
+        force = largest if largest > 0.0 else 1.0
+        for i in range(nc):
+            apex = rd[2 * i] + sh[2 * i]
+            carry = apex * apex + (rd[2 * i + 1] + sh[2 * i + 1]) ** 2
+            slip = fabs(ud[2 * i + 1])
+            if sqrt(carry) > rtol * force:
+                std[i] = 2 if slip > rtol * w * force else 1
+            else:
+                std[i] = 0
+    free(work)
+    free(index)
+    free(history)
+    free(errors)
+    return sweep, code
