@@ -177,3 +177,30 @@ def test_singular_general_mass_is_refused():
     assert block_size(M) is None
     with pytest.raises(NotPositiveDefiniteError, match="singular"):
         cq.solve(problem)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [name for name in GLOBAL_FILES if "i0122" not in name and "pheres" not in name],
+)  # the five files whose H has at most DENSE_READ entries
+def test_the_certificate_reads_small_sparse_matrices_dense_to_the_same_values(name, monkeypatch):
+    """The small shared files' M and H are read dense by the certificate (DENSE_READ); the
+    sparse reading gives the same certificate to rounding."""
+    from contactqp.core import local_problem
+
+    given = read_any(FCLIB / name)
+    assert sp.issparse(given.H) and isinstance(given._read[1], np.ndarray)
+    r = cq.solve(given).forces
+    dense = given.certify(r)
+    monkeypatch.setattr(local_problem, "DENSE_READ", 0)
+    sparse = read_any(FCLIB / name)
+    assert sp.issparse(sparse._read[1])
+    other = sparse.certify(r)
+    for a, b in ((dense.error, other.error), (dense.equilibrium, other.equilibrium)):
+        assert a == pytest.approx(b, rel=1e-6, abs=1e-15)
+    # u = H^T v + w cancels at contacts at rest: rounding relative to the terms summed
+    terms = abs(sparse.H.T) @ np.abs(other.v) + np.abs(sparse.w)
+    assert np.all(np.abs(dense.u - other.u) <= 1e-12 * np.max(terms))
+    assert np.allclose(dense.v, other.v, rtol=1e-12, atol=1e-14 * np.max(np.abs(other.v)))
+    # (the rounding limit is not compared: its condition number is a randomised estimate)
+    assert dense.limits.data == pytest.approx(other.limits.data, rel=1e-9, abs=1e-300)

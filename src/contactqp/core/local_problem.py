@@ -434,6 +434,9 @@ class AccuracyLimits:
 _EPS = float(np.finfo(float).eps)
 
 
+#: :meth:`GlobalProblem.certify` reads a sparse ``M`` or ``H`` of at most this many entries
+#: (dense) as a dense copy.
+DENSE_READ = 1 << 16
 #: Stored entries of a block of rows of a sparse matrix in :func:`_abs_product`.
 _SPARSE_BLOCK = 1 << 18
 
@@ -741,6 +744,19 @@ class GlobalProblem:
         return _ScaledFactor(self.M)
 
     @functools.cached_property
+    def _read(self) -> tuple[sp.csr_matrix | np.ndarray, sp.csr_matrix | np.ndarray]:
+        """``(M, H)`` as :meth:`certify` reads them: a sparse one of at most
+        :data:`DENSE_READ` entries as a dense copy (a product costs numpy about a
+        microsecond, scipy.sparse some tens: the certificate of a small problem cost 20 times
+        its solve)."""
+        M, H = self.M, self.H
+        if sp.issparse(M) and M.shape[0] * M.shape[1] <= DENSE_READ:
+            M = M.toarray()
+        if sp.issparse(H) and H.shape[0] * H.shape[1] <= DENSE_READ:
+            H = H.toarray()
+        return M, H
+
+    @functools.cached_property
     def _condensed(self) -> LocalProblem:
         Mm, Hm, fv, wv, muv, dim = self.M, self.H, self.f, self.w, self.mu, self.dim
         ndof, m = Mm.shape[0], Hm.shape[1]
@@ -800,7 +816,7 @@ class GlobalProblem:
             raise InvalidInputError(
                 f"r must have length dim*n_contacts = {m}, got shape {rv.shape}"
             )
-        M, H, f, w = self.M, self.H, self.f, self.w
+        (M, H), f, w = self._read, self.f, self.w
         Hr = np.asarray(H @ rv).ravel()
         if M.shape[0] == 0:
             v, equilibrium, s, condition = np.zeros(0), 0.0, np.zeros(0), 1.0
@@ -838,17 +854,15 @@ class GlobalProblem:
         rel = {name: relative_rounding(self.digits.get(name)) for name in ("M", "H", "f", "w")}
         if not any(rel.values()):
             return 0.0
+        M, H = self._read
         # first order: M dv = -dM v + dH r + df, du = H^T dv + dH^T v + dw
-        forcing = (
-            rel["M"] * _abs_product(self.M, v)
-            + rel["H"] * _abs_product(self.H, r)
-            + rel["f"] * np.abs(self.f)
-        )
+        forcing = rel["M"] * _abs_product(M, v) + rel["H"] * _abs_product(H, r)
+        forcing += rel["f"] * np.abs(self.f)
         factor = self._factor if factor is None else factor
-        moved = factor.solve(forcing) if self.M.shape[0] else forcing
+        moved = factor.solve(forcing) if M.shape[0] else forcing
         return float(
-            np.linalg.norm(np.asarray(self.H.T @ moved).ravel())
-            + rel["H"] * np.linalg.norm(_abs_product(self.H.T, v))
+            np.linalg.norm(np.asarray(H.T @ moved).ravel())
+            + rel["H"] * np.linalg.norm(_abs_product(H.T, v))
             + rel["w"] * np.linalg.norm(self.w)
         )
 
