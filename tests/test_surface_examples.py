@@ -43,3 +43,29 @@ def test_flat_punch_example_refuses_too_few_cells(capsys):
         load_example("flat_punch").main(["--cells", "1"])
     assert info.value.code == 2
     capsys.readouterr()
+
+
+def test_coated_sphere_example_between_hertz_and_the_oedometer(capsys):
+    """Thick: Hertz (the contact radius to the grid's quantisation, half a cell of 16 per
+    radius; the peak pressure to 1 %, with the periodic images); thin (h = a_H / 20): the
+    oedometer to 2 % (measured 1 %, the cells per radius falling to 8); between them the
+    contact shrinks and the peak pressure rises as the coating thins."""
+    rows = load_example("coated_sphere").main(["--thickness", "inf,1,0.2,0.05"])
+    printed = capsys.readouterr().out
+    assert "certified: True" in printed
+    thick, thin = rows[0], rows[-1]
+    assert thick["radius"] == pytest.approx(thick["radius_hertz"], abs=0.5 * thick["cell"])
+    assert thick["peak_pressure"] == pytest.approx(thick["peak_pressure_hertz"], rel=0.01)
+    assert thin["radius"] == pytest.approx(thin["radius_oedometer"], abs=0.5 * thin["cell"])
+    assert thin["peak_pressure"] == pytest.approx(thin["peak_pressure_oedometer"], rel=0.02)
+    radii = [row["radius"] for row in rows]
+    peaks = [row["peak_pressure"] for row in rows]
+    assert np.all(np.diff(radii) < 0) and np.all(np.diff(peaks) > 0)
+
+
+def test_coated_sphere_example_refuses_bad_arguments(capsys):
+    for argv in (["--cells", "4"], ["--thickness", "x"], ["--thickness", "0"]):
+        with pytest.raises(SystemExit) as info:
+            load_example("coated_sphere").main(argv)
+        assert info.value.code == 2
+    capsys.readouterr()
