@@ -218,3 +218,39 @@ def test_fixed_force_finds_the_shift():
         SlidingSurfaceProblem(surface, full, MU, shift=(delta, 0.0), force=(1.0, 0.0))
     with pytest.raises(InvalidInputError, match="exactly one of shift"):
         SlidingSurfaceProblem(surface, full, MU)
+
+
+@pytest.mark.parametrize("ratio", [0.3, 0.7])
+def test_a_periodic_asperity_is_hertz_and_mindlin(ratio):
+    """One asperity per period, ``h = h0 (cos qx + cos qy)`` (tip radius ``1 / (h0 q^2)``),
+    pressed to a Hertz radius of an eighth of the period and sheared by ``Q`` (force given:
+    the periodic shift is free): the contact radius is Hertz's and the stick radius
+    Mindlin's, each to the grid and the images' small pull."""
+    n, L = 128, 128 * H
+    q = 2 * np.pi / L
+    x, y = grid(n, n, H, H)
+    x, y = x - x.min() - L / 2 + H / 2, y - y.min() - L / 2 + H / 2  # the tip at a cell centre
+    h0 = 1e-6
+    tip = 1 / (h0 * q * q)
+    s = h0 * (2 - np.cos(q * x) - np.cos(q * y))
+    a = L / 8
+    load = 4 * E_STAR * a**3 / (3 * tip)
+    normal = HalfSpaceOperator(n, n, H, H, E, NU, periodic=True)
+    full = HalfSpaceOperator(n, n, H, H, E, NU, periodic=True, components="full", coupling=False)
+    problem = SlidingSurfaceProblem(
+        SurfaceProblem(normal, s, load=load), full, MU, force=(ratio * MU * load, 0.0)
+    )
+    result = cq.solve(problem)
+    assert result.success and result.certificate.natural_map <= 1e-8
+    assert result.tangential_force[0] == pytest.approx(ratio * MU * load, rel=1e-12)
+    contact = result.forces[:, 0] > 0
+    radius = np.sqrt(np.count_nonzero(contact) * H * H / np.pi)
+    stick = np.sqrt(np.count_nonzero(result.stick) * H * H / np.pi)
+    assert abs(radius - a) <= H  # measured 0.47 of a cell above Hertz's
+    # Mindlin's stick radius on the measured contact: measured 0.08 of a cell below
+    assert abs(stick - radius * (1 - ratio) ** (1 / 3)) <= 0.5 * H
+    with pytest.raises(InvalidInputError, match="give the tangential force instead"):
+        SlidingSurfaceProblem(SurfaceProblem(normal, s, load=load), full, MU, shift=(1e-7, 0.0))
+    plain = HalfSpaceOperator(n, n, H, H, E, NU, components="full", coupling=False)
+    with pytest.raises(InvalidInputError, match="both periodic or both not"):
+        SlidingSurfaceProblem(SurfaceProblem(normal, s, load=load), plain, MU, force=(1.0, 0.0))

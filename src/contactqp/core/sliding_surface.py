@@ -26,6 +26,12 @@ move the surface normally and the normal forces move it tangentially: the gap an
 above are then those of the full product ``W f``, and the method solves the normal and the
 tangential problems in turn until they agree.
 
+Periodic surfaces (one period of a rough surface, ``periodic=True`` operators): the mean
+tangential displacement of a periodic half-space under a net shear is free, as its mean
+normal one is under a net load, so a periodic problem gives the tangential ``force`` (and its
+surface the load); the shift is then the unknown that balances it, the tangential compliance
+of the interface beyond the bulk's.
+
 Load history: the shift is measured from the unloaded state and the problem is one
 increment, the Coulomb law acting on its slip. Without coupling the pressing causes no
 tangential traction, so this is the answer of a press followed by a *monotonic* shear from
@@ -118,8 +124,8 @@ class SlidingSurfaceProblem:
     InvalidInputError
         ``surface`` not a SurfaceProblem, a compliance not of shape (3 m, 3 m), ``mu`` negative,
         not finite or of the wrong size, not exactly one of ``shift`` and ``force``, either not
-        two finite numbers, or a periodic surface (whose tangential mean displacement is free
-        as well).
+        two finite numbers, a periodic compliance with a shift (its mean tangential
+        displacement is free: give the force), or one periodic and one non-periodic compliance.
     """
 
     kind = "sliding-surface"
@@ -145,10 +151,15 @@ class SlidingSurfaceProblem:
                 f"compliance must have shape ({3 * m}, {3 * m}) (x, y, z per point of the "
                 f"surface), got {operator.shape}"
             )
-        if getattr(operator, "periodic", False) or getattr(surface.compliance, "periodic", False):
+        periodic = getattr(operator, "periodic", False)
+        if periodic != getattr(surface.compliance, "periodic", False):
             raise InvalidInputError(
-                "a periodic compliance has no stiffness against a uniform shift; "
-                "use a non-periodic grid"
+                "compliance and surface.compliance must be both periodic or both not"
+            )
+        if periodic and shift is not None:
+            raise InvalidInputError(
+                "shift: a periodic compliance has no stiffness against a uniform shift; "
+                "give the tangential force instead"
             )
         mu_arr = np.asarray(mu, dtype=float) if np.ndim(mu) else np.full(m, float(mu))
         mu_arr = finite_array(mu_arr, "mu", 1)
