@@ -76,6 +76,18 @@ def test_mu_zero_is_the_frictionless_contact():
     assert records("--grid", 8, "--pressures", "1e9", "--mu", 0)[0]["certificate"]
 
 
+def test_mu_shears_each_load():
+    plain = records("--grid", 32, "--pressures", "1e9,2e9")
+    sheared = records("--grid", 32, "--pressures", "1e9,2e9", "--mu", 0.3, "--shear", 0.4)
+    for a, b in zip(plain, sheared, strict=True):
+        assert b["certificate"] and b["area_fraction"] == a["area_fraction"]
+        assert 0 < b["stick_fraction"] < 1 and b["shift"] > 0 and b["tangential_stiffness"] > 0
+        assert "stick_fraction" not in a
+    assert sheared[1]["shift"] > sheared[0]["shift"]  # Q = 0.4 mu P grows with the load
+    status, out, err = run("--grid", "32", "--pressures", "1e9", "--mu", "0.3")
+    assert status == 0 and "stick fraction" in out and "Sheared by Q = 0.5 mu P" in out
+
+
 def test_a_wavy_surface_follows_westergaard_up_to_full_contact(tmp_path):
     nx = 128
     path, full = sinusoid(tmp_path, nx=nx)
@@ -140,7 +152,8 @@ def test_the_ascii_grid_and_the_figures(tmp_path):
 @pytest.mark.parametrize(
     ("args", "needle"),
     [
-        (("--mu", "0.3"), "--mu: contactqp rough solves frictionless contact only"),
+        (("--grid", "8", "--shear", "0.5"), "--shear shears a frictional contact"),
+        (("--grid", "8", "--mu", "0.3", "--shear", "1.5"), "--shear must be Q / (mu P)"),
         (("--mu", "-1"), "--mu must be a friction coefficient >= 0"),
         (("--surface", "FLAT", "--cell", "1e-6"), "the surface is flat"),
         (("--surface", "SURFACE", "--grid", "32"), "--grid shape a generated surface"),

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
 import click
 
-from ..errors import InvalidInputError, UnsupportedProblemError
+from ..errors import InvalidInputError
 from .app import EXIT_NOT_SOLVED, console, fail, float_list, progress
 
 #: The generated surface's defaults (used when no --surface is given).
@@ -84,9 +85,15 @@ DEFAULT_CELL = 1e-6  # m, for a generated surface
 @click.option(
     "--mu",
     type=float,
-    help="Friction coefficient: only 0 (frictionless) is accepted. The matrix-free partial "
-    "slip (contactqp.core.sliding_surface) solves non-periodic grids only, so any other value "
-    "is refused (exit 2).",
+    help="Friction coefficient; above 0 each pressed state is also sheared along x by "
+    "Q = shear * mu * P (Coulomb per cell, the normal-tangential coupling neglected): the "
+    "stick fraction, the shift and the tangential stiffness are added [default: 0].",
+)
+@click.option(
+    "--shear",
+    type=float,
+    help="With --mu: the tangential force over the friction limit, Q / (mu P), in (0, 1) "
+    "[default: 0.5].",
 )
 @click.option(
     "--json",
@@ -118,6 +125,7 @@ def rough(
     poisson: float,
     pressures: list[float] | None,
     mu: float | None,
+    shear: float | None,
     as_json: bool,
     plot: Path | None,
     vtu: Path | None,
@@ -129,14 +137,12 @@ def rough(
     (--surface) or generated (self-affine, --grid, --hurst, --rms-slope, --seed). Exit status 1
     when a load is not solved to its certificate.
     """
-    if mu is not None and not mu >= 0:
+    if mu is not None and not (math.isfinite(mu) and mu >= 0):
         raise InvalidInputError(f"--mu must be a friction coefficient >= 0, got {mu!r}")
-    if mu:
-        raise UnsupportedProblemError(
-            "--mu: contactqp rough solves frictionless contact only (the matrix-free partial "
-            "slip of contactqp.core.sliding_surface is not wired to rough surfaces yet); "
-            "leave out --mu"
-        )
+    if shear is not None and not mu:
+        raise InvalidInputError("--shear shears a frictional contact: give --mu > 0 with it")
+    if shear is not None and not (math.isfinite(shear) and 0 < shear < 1):
+        raise InvalidInputError(f"--shear must be Q / (mu P) in (0, 1), got {shear!r}")
     generated = {
         "--grid": grid,
         "--hurst": hurst,
@@ -184,7 +190,13 @@ def rough(
 
     with progress("load") as report:
         contact = solve_rough_contact(
-            height_map, pressures, young=young, poisson=poisson, progress=report
+            height_map,
+            pressures,
+            young=young,
+            poisson=poisson,
+            mu=mu or 0.0,
+            shear=0.5 if shear is None else shear,
+            progress=report,
         )
     if as_json:
         for point in contact.points:
@@ -263,3 +275,19 @@ def _table(contact) -> None:
         "linear law: area fraction = kappa p / (E* h'rms), kappa = sqrt(8/pi) (Persson); "
         "stiffness = -dp/d(mean gap)"
     )
+    if contact.mu > 0:
+        shear = Table(
+            title=f"Sheared by Q = {contact.shear:g} mu P along x, mu = {contact.mu:g} (the "
+            "normal-tangential coupling neglected)"
+        )
+        for column in ("pressure (Pa)", "stick fraction", "shift (m)", "stiffness Q/(A shift)"):
+            shear.add_column(column, justify="right")
+        for point in contact.points:
+            stiffness = point.tangential_stiffness
+            shear.add_row(
+                f"{point.pressure:.6g}",
+                f"{point.stick_fraction:.4f}",
+                f"{point.shift:.4g}",
+                "" if stiffness is None else f"{stiffness:.4g} Pa/m",
+            )
+        out.print(shear)

@@ -27,6 +27,17 @@ Per load
     (Pa/m), by finite differences on the loads' mean gaps (second order,
     :func:`numpy.gradient` on unequal steps); None for a single load and in full contact.
 
+With friction (``mu > 0``)
+    Each pressed state is then sheared along ``x`` by the tangential force
+    ``Q = shear * mu * P`` (``0 < shear < 1``, force fixed, the shift the unknown: the periodic
+    :class:`~contactqp.core.sliding_surface.SlidingSurfaceProblem`), Coulomb's law on each
+    cell with the normal-tangential coupling of the half-space neglected (Cattaneo and
+    Mindlin's assumption: exact for two elastically similar bodies; the pressure is then that
+    of the frictionless solve). Per load: ``stick_fraction``, the fraction of the contact that
+    sticks; ``shift``, the tangential displacement of the flat against the surface's mean
+    (m); ``tangential_stiffness`` ``Q / (L_x L_y shift)`` (Pa/m), the interface's secant
+    stiffness. Every answer is certified by the Coulomb problem's natural map.
+
 Linear law
 ----------
 At small loads the real contact area grows in proportion to the load,
@@ -55,7 +66,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -90,9 +101,15 @@ class LoadPoint:
     seconds, iterations :
         The solve's wall time (s) and iterations.
     certificate : bool
-        The method converged and its answer passed the certificate (``result.success``).
+        The method converged and its answer passed the certificate (``result.success``; with
+        friction, the sheared state's as well).
     result : SurfaceResult
         The solve's full result (forces in N per cell, gaps, certificate).
+    sheared : SlidingSurfaceResult or None
+        With friction, the sheared state's result (forces ``(p, t_x, t_y)`` per cell).
+    stick_fraction, shift, tangential_stiffness : float or None
+        With friction (see the module notes): the sticking fraction of the contact, the shift
+        (m) and ``Q / (area shift)`` (Pa/m).
     """
 
     pressure: float
@@ -103,10 +120,15 @@ class LoadPoint:
     iterations: int
     certificate: bool
     result: Any = field(repr=False, compare=False)
+    sheared: Any = field(default=None, repr=False, compare=False)
+    stick_fraction: float | None = None
+    shift: float | None = None
+    tangential_stiffness: float | None = None
 
     def as_record(self) -> dict[str, Any]:
-        """A JSON-ready dict of the scalar fields (SI units)."""
-        return {
+        """A JSON-ready dict of the scalar fields (SI units); the frictional ones with
+        friction only."""
+        record = {
             "pressure": self.pressure,
             "area_fraction": self.area_fraction,
             "mean_gap": self.mean_gap,
@@ -115,6 +137,13 @@ class LoadPoint:
             "iterations": self.iterations,
             "certificate": self.certificate,
         }
+        if self.sheared is not None:
+            record.update(
+                stick_fraction=self.stick_fraction,
+                shift=self.shift,
+                tangential_stiffness=self.tangential_stiffness,
+            )
+        return record
 
     def pressure_map(self, shape: tuple[int, int], cell: float) -> np.ndarray:
         """The contact pressure (Pa) of each cell, shape ``(ny, nx)``."""
@@ -142,6 +171,8 @@ class RoughContact:
     young: float
     poisson: float
     points: list[LoadPoint]
+    mu: float = 0.0
+    shear: float | None = None
 
     @property
     def modulus(self) -> float:
@@ -171,6 +202,8 @@ def solve_rough_contact(
     *,
     young: float = 210e9,
     poisson: float = 0.3,
+    mu: float = 0.0,
+    shear: float = 0.5,
     progress: Callable[[int, int], None] | None = None,
     **options: Any,
 ) -> RoughContact:
@@ -184,10 +217,14 @@ def solve_rough_contact(
         Mean pressures over the period (Pa), positive, strictly increasing.
     young, poisson : float
         Young's modulus (Pa, > 0) and Poisson's ratio (in [0, 0.5)) of the half-space.
+    mu : float
+        Friction coefficient, >= 0; above 0 each load is then sheared (module notes).
+    shear : float
+        With friction, the tangential force over the friction limit, ``Q / (mu P)``, in (0, 1).
     progress : callable, optional
         Called as ``progress(done, total)`` after each load.
     **options
-        Passed to the solve's method (e.g. ``tol``).
+        Passed to the normal solve's method (e.g. ``tol``; ``tol`` to the sheared one too).
 
     Returns
     -------
@@ -197,9 +234,11 @@ def solve_rough_contact(
     ------
     InvalidInputError
         No pressures, a pressure not positive and finite or not above the one before, a
-        modulus not positive or a Poisson ratio out of range.
+        modulus not positive, a Poisson ratio out of range, ``mu`` negative or not finite, or
+        ``shear`` outside (0, 1).
     """
     from ...compliance.fft_halfspace import HalfSpaceOperator
+    from ...core.sliding_surface import SlidingSurfaceProblem
     from ...core.surface import SurfaceProblem
     from ...methods import solve
 
@@ -214,13 +253,22 @@ def solve_rough_contact(
         raise InvalidInputError(f"young must be a positive modulus (Pa), got {young!r}")
     if not (math.isfinite(poisson) and 0 <= poisson < 0.5):
         raise InvalidInputError(f"poisson must be in [0, 0.5), got {poisson!r}")
+    if not (math.isfinite(mu) and mu >= 0):
+        raise InvalidInputError(f"mu must be a friction coefficient >= 0, got {mu!r}")
+    if mu > 0 and not (math.isfinite(shear) and 0 < shear < 1):
+        raise InvalidInputError(f"shear must be Q / (mu P) in (0, 1), got {shear!r}")
     ny, nx = surface.shape
     cell = surface.cell
     operator = HalfSpaceOperator(nx, ny, cell, cell, young, poisson, periodic=True)
+    full = None
+    if mu > 0:
+        full = HalfSpaceOperator(
+            nx, ny, cell, cell, young, poisson, periodic=True, components="full", coupling=False
+        )
     heights = surface.heights.ravel()
     separation = heights.max() - heights
     area = nx * ny * cell**2
-    results = []
+    results, sheared = [], []
     previous: tuple[float, np.ndarray] | None = None
     for k, pressure in enumerate(p):
         problem = SurfaceProblem(operator, separation, load=float(pressure * area))
@@ -228,6 +276,11 @@ def solve_rough_contact(
         result = solve(problem, r0=r0, **options)
         results.append(result)
         previous = (float(pressure), np.asarray(result.forces, dtype=float))
+        if full is not None:
+            force = (shear * mu * float(pressure * area), 0.0)
+            sliding = SlidingSurfaceProblem(problem, full, mu, force=force)
+            tol = {"tol": options["tol"]} if "tol" in options else {}
+            sheared.append(solve(sliding, p0=result.forces, **tol))
         if progress is not None:
             progress(k + 1, p.size)
     gaps = np.array([float(np.mean(result.gaps)) for result in results])
@@ -252,4 +305,28 @@ def solve_rough_contact(
         )
         for pressure, result, gap, k in zip(p, results, gaps, stiffness, strict=True)
     ]
-    return RoughContact(surface, float(young), float(poisson), points)
+    if full is not None:
+        points = [
+            _with_shear(point, shearing, area)
+            for point, shearing in zip(points, sheared, strict=True)
+        ]
+    return RoughContact(
+        surface, float(young), float(poisson), points, float(mu), shear if mu > 0 else None
+    )
+
+
+def _with_shear(point: LoadPoint, sheared, area: float) -> LoadPoint:
+    """``point`` with its sheared state's fields (see the module notes)."""
+    contact = np.asarray(sheared.forces[:, 0]) > 0
+    shift = float(sheared.shift[0])
+    force = float(sheared.tangential_force[0])
+    return replace(
+        point,
+        seconds=point.seconds + float(sheared.seconds),
+        iterations=point.iterations + int(sheared.iterations),
+        certificate=point.certificate and bool(sheared.success),
+        sheared=sheared,
+        stick_fraction=float(np.count_nonzero(sheared.stick & contact) / max(1, contact.sum())),
+        shift=shift,
+        tangential_stiffness=force / (area * shift) if shift > 0 else None,
+    )
