@@ -11,6 +11,7 @@ import warnings
 import numpy as np
 import pytest
 
+import contactqp as cq
 from contactqp.cli import main
 
 E, NU = 210e9, 0.3
@@ -86,6 +87,20 @@ def test_mu_shears_each_load():
     assert sheared[1]["shift"] > sheared[0]["shift"]  # Q = 0.4 mu P grows with the load
     status, out, err = run("--grid", "32", "--pressures", "1e9", "--mu", "0.3")
     assert status == 0 and "stick fraction" in out and "Sheared by Q = 0.5 mu P" in out
+
+
+def test_mu_writes_the_shear_and_the_status_to_the_grid(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    mesh = tmp_path / "sheared.vtu"
+    status, out, err = run("--grid", "32", "--pressures", "1e9", "--mu", "0.3", "--vtu", mesh)
+    assert status == 0, err
+    data = meshio.read(mesh).point_data
+    shear, codes = data["shear_0"], data["status_0"]
+    # the tractions along x add up to Q = 0.5 mu P (mean pressure 1e9 Pa over the period)
+    assert np.mean(shear) == pytest.approx(0.5 * 0.3 * 1e9, rel=1e-10)
+    labels = {int(cq.ContactStatus.OPEN), int(cq.ContactStatus.STICK), int(cq.ContactStatus.SLIP)}
+    assert set(np.unique(codes).astype(int)) == labels
+    assert np.all(shear[codes == int(cq.ContactStatus.OPEN)] == 0.0)
 
 
 def test_a_wavy_surface_follows_westergaard_up_to_full_contact(tmp_path):

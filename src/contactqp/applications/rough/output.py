@@ -25,7 +25,9 @@ def rough_mesh(contact: RoughContact) -> PointMesh:
     Points are the cells' corners ``(i cell, j cell, h)`` (one per cell, z the height in m);
     the quads join neighbouring points (the period is not closed). Point fields: ``height``
     (m), and for each load ``k`` (in the order of the pressures) ``gap_k`` (m) and
-    ``pressure_k`` (Pa).
+    ``pressure_k`` (Pa); sheared (with friction), also ``shear_k`` (Pa, the tangential
+    traction along x) and ``status_k`` (:class:`~contactqp.core.status.ContactStatus` codes:
+    open, stick or slip).
     """
     surface = contact.surface
     ny, nx = surface.shape
@@ -44,6 +46,9 @@ def rough_mesh(contact: RoughContact) -> PointMesh:
     for k, point in enumerate(contact.points):
         data[f"gap_{k}"] = point.gap_map(surface.shape).ravel()
         data[f"pressure_{k}"] = point.pressure_map(surface.shape, surface.cell).ravel()
+        if point.sheared is not None:
+            data[f"shear_{k}"] = np.asarray(point.sheared.forces[:, 1]) / surface.cell**2
+            data[f"status_{k}"] = np.asarray(point.sheared.contact_status, dtype=float)
     return PointMesh(points, [("quad", quads)], data)
 
 
