@@ -32,19 +32,16 @@ normal one is under a net load, so a periodic problem gives the tangential ``for
 surface the load); the shift is then the unknown that balances it, the tangential compliance
 of the interface beyond the bulk's.
 
-Load history: the shift is measured from the unloaded state and the problem is one
-increment, the Coulomb law acting on its slip. Without coupling the pressing causes no
-tangential traction, so this is the answer of a press followed by a *monotonic* shear from
-zero along a fixed direction (each point's slip keeps its direction, as in Cattaneo and
-Mindlin's theory); :func:`~contactqp.methods.tangential_fista.shear_history` solves a sequence
-of growing shifts, each warm-started from the previous. With coupling, the pressing itself
-makes frictional tractions (Spence's problem), and one increment presses and shifts together,
-proportionally: the answer of a monotonic pressing at zero shift (Spence's problem is
-self-similar, so the one-step and the incremental answers agree), or of a pressing and a
-shift growing in proportion; a press followed by a shear would need the pressed state's
-tractions in the law and is not covered (:func:`~contactqp.methods.tangential_fista.shear_history`
-refuses a coupled compliance). Unloading or reversed shear (Mindlin-Deresiewicz) is not covered
-either.
+Load history: the shift is measured from the unloaded state, and the problem is one
+increment of the law from the state ``previous`` (its slips ``w``; by default the unloaded
+state): Coulomb's law acts on ``w - w_previous``, the slip of this increment, the tractions
+being the total ones. One increment from the unloaded state is the answer of a pressing and a
+shift growing together in proportion (without coupling, of a press followed by a monotonic
+shear, as in Cattaneo and Mindlin's theory: each point's slip keeps its direction; with
+coupling at zero shift, Spence's self-similar frictional indentation). A chain of increments,
+each from the one before (:func:`~contactqp.methods.tangential_fista.shear_history`), follows
+any path: a press then a shear with coupling, an unloading or a reversed shear
+(Mindlin-Deresiewicz's hysteresis); its accuracy is that of the increments taken.
 
 :func:`certify_sliding` judges an answer through one product of ``W`` with the returned forces
 (:class:`SlidingCertificate`): the frictionless residuals of
@@ -104,6 +101,10 @@ class SlidingSurfaceProblem:
     force : array_like, shape (2,), optional
         Total tangential force ``Q = (Q_x, Q_y)`` on the surface (N), below the friction limit
         ``sum mu_i p_i``; the shift is then an unknown. Exactly one of ``shift`` and ``force``.
+    previous : SlidingSurfaceResult or array_like of shape (m, 2), optional
+        The state this increment starts from: its slips ``w`` (m; a result's ``slips``).
+        Coulomb's law then acts on the slip of this increment, ``w - w_previous``, as in a load
+        history (see the module notes). Default: the unloaded state (zero).
     certificate_tol : float
         Largest relative residual the certificate accepts.
 
@@ -117,6 +118,8 @@ class SlidingSurfaceProblem:
     shift, force : ndarray, shape (2,), or None
         The one given; the other is None.
     fixed : {"shift", "force"}
+    previous_slips : ndarray, shape (m, 2)
+        The slips of the state the increment starts from (zero: the unloaded state).
     certificate_tol : float
 
     Raises
@@ -138,6 +141,7 @@ class SlidingSurfaceProblem:
         *,
         shift=None,
         force=None,
+        previous=None,
         certificate_tol: float = CERTIFICATE_TOL,
     ):
         if not isinstance(surface, SurfaceProblem):
@@ -184,6 +188,7 @@ class SlidingSurfaceProblem:
         self.shift: np.ndarray | None = value if force is None else None
         self.force: np.ndarray | None = value if force is not None else None
         self.fixed = "shift" if force is None else "force"
+        self.previous_slips = _previous_slips(previous, m)
         self.certificate_tol = positive_tolerance(certificate_tol, "certificate_tol")
 
     @property
@@ -225,7 +230,8 @@ class SlidingSurfaceProblem:
         status, success, message = verdict(converged, certificate, message)
         peak = float(np.max(np.abs(p), initial=0.0))
         closed = p > 1e-10 * peak
-        slipping = np.hypot(slips[:, 0], slips[:, 1]) > SLIP_RTOL * length
+        step = slips - self.previous_slips  # the law acts on this increment's slip
+        slipping = np.hypot(step[:, 0], step[:, 1]) > SLIP_RTOL * length
         codes = np.where(
             closed,
             np.where(slipping, ContactStatus.SLIP, ContactStatus.STICK),
@@ -260,6 +266,19 @@ class SlidingSurfaceProblem:
             f"SlidingSurfaceProblem({type(self.compliance).__name__}, {self.size} points, "
             f"{self.fixed}={tuple(float(v) for v in given)!r})"
         )
+
+
+def _previous_slips(previous, m: int) -> np.ndarray:
+    """The previous state's slips, (m, 2), from a result, an array or None (zeros)."""
+    if previous is None:
+        return np.zeros((m, 2))
+    slips = previous.slips if isinstance(previous, SlidingSurfaceResult) else previous
+    value = finite_array(np.asarray(slips, dtype=float), "previous", 2)
+    if value.shape != (m, 2):
+        raise InvalidInputError(
+            f"previous: the slips of the state before must have shape ({m}, 2), got {value.shape}"
+        )
+    return value
 
 
 @dataclass(frozen=True)
@@ -386,7 +405,8 @@ def _certify(problem, t, p, approach, shift, u):
     )
     bound = problem.mu * p
     size = np.hypot(t[:, 0], t[:, 1])
-    slip = np.hypot(slips[:, 0], slips[:, 1])
+    step = slips - problem.previous_slips  # the law acts on this increment's slip
+    slip = np.hypot(step[:, 0], step[:, 1])
     balance = 0.0
     if surface.load is not None:
         balance = abs(float(np.sum(p)) - surface.load) / surface.load
@@ -394,7 +414,7 @@ def _certify(problem, t, p, approach, shift, u):
         Q = problem.force
         miss = float(np.hypot(*(t.sum(axis=0) - Q)))
         balance = max(balance, miss / max(float(np.hypot(*Q)), force))
-    aligned = slip[:, None] * t + bound[:, None] * slips
+    aligned = slip[:, None] * t + bound[:, None] * step
     certificate = SlidingCertificate(
         penetration=max(0.0, float(np.max(-gaps))) / length,
         force_sign=max(0.0, float(np.max(-p))) / force,
@@ -403,18 +423,19 @@ def _certify(problem, t, p, approach, shift, u):
         cone=max(0.0, float(np.max(size - bound))) / force,
         stick=float(np.max(slip * np.maximum(bound - size, 0.0))) / (force * length),
         alignment=float(np.max(np.hypot(aligned[:, 0], aligned[:, 1]))) / (force * length),
-        natural_map=_natural_map(problem, t, p, gaps, slips, approach, shift, length),
+        natural_map=_natural_map(problem, t, p, gaps, step, approach, shift, length),
         tol=tol,
     )
     return certificate, slips, gaps, length
 
 
 def _natural_map(problem, t, p, gaps, slips, approach, shift, length) -> float:
-    """The per-contact natural-map error of the dense route, in dimensionless units."""
+    """The per-contact natural-map error of the dense route, in dimensionless units, of the
+    increment's slips ``slips``."""
     scale_force = length / float(np.max(problem.compliance.diagonal()))
     r = np.column_stack([p, t]) / scale_force  # (N, T1, T2) per point
     v = np.column_stack([gaps, slips]) / length
-    q = np.column_stack([problem.surface.separation - approach, np.broadcast_to(-shift, t.shape)])
+    q = np.column_stack([problem.surface.separation - approach, -shift - problem.previous_slips])
     q = q / length
     mu = problem.mu
     shifted = v.copy()

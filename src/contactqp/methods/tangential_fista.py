@@ -70,7 +70,7 @@ from scipy.sparse.linalg import LinearOperator, eigsh
 from ..core.model import iteration_cap, positive_tolerance, true_or_false, warm_start
 from ..core.sliding_surface import SlidingSurfaceProblem, SlidingSurfaceResult
 from ..core.surface import SurfaceProblem
-from ..errors import InvalidInputError, UnsupportedProblemError
+from ..errors import InvalidInputError
 from .constrained_cg import solve_constrained_cg
 
 __all__ = [
@@ -245,10 +245,10 @@ def _fista(apply, t, bound, on, offset, force, delta, lam, step, tol, max_iter, 
     normal forces (zero without coupling); at a fixed ``force`` the shift ``delta`` is the mean
     displacement of the sticking points and ``lam`` the multiplier of the force."""
     run = _Run(t, delta, message=f"reached max_iter = {max_iter} iterations")
-    coupled = bool(np.any(offset))
+    offset_given = bool(np.any(offset))
 
     def slip_of(forces: np.ndarray) -> np.ndarray:  # W_TT t + offset
-        return apply(forces) + offset if coupled else apply(forces)
+        return apply(forces) + offset if offset_given else apply(forces)
 
     u = slip_of(t)
     y, uy, theta = t.copy(), u.copy(), 1.0
@@ -405,7 +405,7 @@ def _solve(
     start = time.perf_counter()
     m = problem.size
     surface = problem.surface
-    if multilevel and r0 is None and p0 is None:
+    if multilevel and r0 is None and p0 is None and not np.any(problem.previous_slips):
         nested = _coarse_start(problem, max_iter, max_outer, levels)
         if nested is not None:
             r0, p0 = nested
@@ -414,6 +414,8 @@ def _solve(
     apply = _Tangential(problem)
     offset = _normal_offsets(apply, p, normal.displacements)
     coupled = bool(np.any(offset))
+    # the law acts on this increment's slip: the previous state's is taken off
+    offset = offset - problem.previous_slips
     force = problem.force
     bound = problem.mu * np.maximum(p, 0.0)
     if force is not None and not float(np.hypot(*force)) < float(np.sum(bound)):
@@ -506,7 +508,7 @@ def _solve(
         normal = solve_constrained_cg(pressed, r0=p, tol=tol)
         p, approach = normal.forces, normal.approach
         info["normal_iterations"] += normal.iterations
-        offset = _normal_offsets(apply, p, normal.displacements)
+        offset = _normal_offsets(apply, p, normal.displacements) - problem.previous_slips
     if lipschitz is not None:
         info["lipschitz"] = lipschitz
     info.update(residual=residual, products=apply.products, coupled=coupled)
@@ -531,64 +533,36 @@ def shear_history(
     shifts: Iterable,
     **options,
 ) -> list[SlidingSurfaceResult]:
-    """Press, then shear monotonically: one :class:`SlidingSurfaceProblem` per shift.
+    """A load history of shifts: one :class:`SlidingSurfaceProblem` per shift, each an
+    increment from the state the one before left (its ``previous``).
 
-    Each shift is measured from the unsheared state and the shifts must grow along one fixed
-    direction (a monotonic, proportional shear: each point's slip keeps its direction, so the
-    answer at each shift is the one-step answer of the module notes). Each solve is
-    warm-started from the previous one's forces and reuses its ``lipschitz``.
+    The first shift is one increment from the unloaded state (a zero first shift presses
+    without shear: with a coupled compliance, Spence's frictional indentation); the next ones
+    may go any way, back included (an unloading, a reversed shear): Coulomb's law acts on each
+    increment's slip (see :mod:`contactqp.core.sliding_surface`). Each solve is warm-started
+    from the previous one's forces and reuses its ``lipschitz``.
 
     Parameters
     ----------
     surface, compliance, mu
         As :class:`SlidingSurfaceProblem`.
     shifts : iterable of array_like, shape (2,)
-        The shifts ``(delta_x, delta_y)`` (m), growing along one direction.
+        The shifts ``(delta_x, delta_y)`` (m), measured from the unloaded state.
     **options
         Options of :func:`solve_tangential_fista` (``tol``, ``max_iter``).
 
     Returns
     -------
     list of SlidingSurfaceResult
-
-    Raises
-    ------
-    InvalidInputError
-        Shifts that are not parallel to the first nonzero one and growing.
-    UnsupportedProblemError
-        A coupled compliance: its pressing makes frictional tractions that the shear then
-        starts from, a state the one-increment problems do not carry (see
-        :mod:`contactqp.core.sliding_surface`).
     """
     results: list[SlidingSurfaceResult] = []
-    direction: np.ndarray | None = None
-    previous = 0.0
+    previous: SlidingSurfaceResult | None = None
     r0 = p0 = lipschitz = None
     for shift in shifts:
-        problem = SlidingSurfaceProblem(surface, compliance, mu, shift=shift)
-        delta = np.asarray(problem.shift)
-        size = float(np.hypot(delta[0], delta[1]))
-        if direction is None and size > 0.0:
-            direction = delta / size
-        if size > 0.0:
-            assert direction is not None
-            along = float(delta @ direction)
-            across = abs(float(delta[0] * direction[1] - delta[1] * direction[0]))
-            if across > 1e-12 * size or along < previous:
-                raise InvalidInputError(
-                    f"shifts must grow along one direction (a monotonic shear), got {shift!r} "
-                    f"after a shift of {previous!r} m along {tuple(direction)!r}"
-                )
-            previous = along
+        problem = SlidingSurfaceProblem(surface, compliance, mu, shift=shift, previous=previous)
         result = solve_tangential_fista(problem, r0=r0, p0=p0, lipschitz=lipschitz, **options)
-        if result.info["coupled"]:
-            raise UnsupportedProblemError(
-                "shear_history: the compliance couples the normal and tangential problems, so "
-                "the pressing leaves frictional tractions the shear starts from, which one "
-                "increment per shift does not carry; solve one SlidingSurfaceProblem (pressing "
-                "and shift together) or use an uncoupled compliance (coupling=False)"
-            )
         results.append(result)
+        previous = result
         r0, p0 = result.forces[:, 1:], result.forces[:, 0]
         lipschitz = result.info.get("lipschitz", lipschitz)
     return results
