@@ -81,7 +81,7 @@ def _per_contact(value: ArrayLike, name: str, count: int) -> np.ndarray:
             f"{name} must be a scalar or hold one value per contact ({count}), got shape "
             f"{array.shape}"
         )
-    if np.any(array < 0):
+    if (array < 0).any():
         raise InvalidInputError(
             f"{name} must be >= 0, got {array.min():g} at contact {int(np.argmin(array))}"
         )

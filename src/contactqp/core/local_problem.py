@@ -89,7 +89,7 @@ def _as_matrix(name, value):
         raise InvalidInputError(f"{name} must be a real matrix: {exc}") from None
     if mat.ndim != 2:
         raise InvalidInputError(f"{name} must be 2-D, got shape {mat.shape}")
-    if not np.all(np.isfinite(data)):
+    if not np.isfinite(data).all():
         raise InvalidInputError(f"{name} contains NaN or inf")
     return mat
 

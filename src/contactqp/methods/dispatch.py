@@ -28,8 +28,8 @@ def _is_frictionless(problem, kind: str) -> bool:
     """True when ``mu = 0`` on every contact of a problem of a frictional ``kind``."""
     if kind in ("frictional", "frictional-polygonal"):
         return problem.frictionless
-    if kind == "local":
-        return problem.frictionless
+    if kind == "local":  # read directly: the cached property's lock costs more on small ones
+        return not (problem.mu > 0).any()
     if kind == "global":
         return not np.any(problem.mu > 0)
     return False
