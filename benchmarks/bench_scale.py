@@ -106,17 +106,34 @@ def hertz_setup(n: int) -> dict:
 
 
 def rough_heights(n: int, seed: int = 1) -> tuple[np.ndarray, float]:
-    """A periodic self-affine surface (m) on ``n x n`` points of spacing ``SIDE / n``."""
+    """A periodic self-affine surface (m) on ``n x n`` points of spacing ``SIDE / n``.
+
+    By default its cut-off is at ``n / 8`` wavelengths per period and its random field is
+    drawn on the ``n x n`` grid: each size is another, rougher surface. With
+    ``--rough-cutoff C`` (the environment variable ``BENCH_ROUGH_CUTOFF``, which the workers
+    inherit) the cut-off is ``C`` and the field is drawn on the ``(2C + 2)^2`` modes below it:
+    the same surface at every ``n >= 2C + 2``, only resolved more finely.
+    """
     dx = SIDE / n
     rng = np.random.default_rng(seed)
     qx = 2 * np.pi * np.fft.fftfreq(n, dx)
     q = np.hypot(qx[None, :], qx[:, None])
     ql = 2 * np.pi / SIDE
-    qr, qs = 4 * ql, n / 8 * ql
+    fixed = os.environ.get("BENCH_ROUGH_CUTOFF")
+    cutoff = n / 8 if fixed is None else float(fixed)
+    qr, qs = 4 * ql, cutoff * ql
     psd = np.where(q < qr, qr, q) ** (-2 * (1 + 0.8))
     psd[(q > qs) | (q == 0)] = 0.0
-    spectrum = np.fft.fft2(rng.standard_normal((n, n))) * np.sqrt(psd)
-    h = np.fft.ifft2(spectrum).real
+    if fixed is None:
+        noise = np.fft.fft2(rng.standard_normal((n, n)))
+    else:  # the same modes at every n: drawn on the smallest grid that holds the cut-off
+        m = 2 * int(np.ceil(cutoff)) + 2
+        if n < m:
+            raise SystemExit(f"--rough-cutoff {cutoff:g} needs grids of at least {m} points")
+        modes = np.fft.fftfreq(m, 1 / m).astype(int) % n
+        noise = np.zeros((n, n), dtype=complex)
+        noise[np.ix_(modes, modes)] = np.fft.fft2(rng.standard_normal((m, m))) * (n / m) ** 2
+    h = np.fft.ifft2(noise * np.sqrt(psd)).real
     slope = np.sqrt(np.mean(np.abs(np.fft.ifft2(1j * qx[None, :] * np.fft.fft2(h))) ** 2) * 2)
     return h * (ROUGH_SLOPE / slope), dx
 
@@ -387,9 +404,16 @@ def main() -> None:
         help="rough-surface mean pressures p / (E* h'_rms)",
     )
     parser.add_argument("--skip-rough", action="store_true")
+    parser.add_argument(
+        "--rough-cutoff",
+        type=float,
+        help="a fixed cut-off (wavelengths per period): the same rough surface at every size",
+    )
     parser.add_argument("--slip-sizes", default="", help="partial-slip grid sides (off: '')")
     args = parser.parse_args()
     slip_sizes = [int(v) for v in args.slip_sizes.split(",") if v]
+    if args.rough_cutoff is not None:
+        os.environ["BENCH_ROUGH_CUTOFF"] = repr(args.rough_cutoff)  # read by the workers
     sizes = [int(v) for v in args.sizes.split(",") if v]
     rough_sizes = [int(v) for v in args.rough_sizes.split(",") if v]
     rough_loads = [float(v) for v in args.rough_loads.split(",") if v]
@@ -473,6 +497,21 @@ def main() -> None:
                         f"{abs(own['area'] / peer['area'] - 1):.1e}, load "
                         f"{abs(own['load'] / peer['load'] - 1):.1e}"
                     )
+        if len(rough_sizes) >= 2:
+            surface = (
+                "cut-off n/8: a rougher surface at each size"
+                if args.rough_cutoff is None
+                else f"the same surface, cut-off {args.rough_cutoff:g}"
+            )
+            print(f"cost growth, time ~ N^k (best times; {surface}):")
+            for level in rough_loads:
+                for name in ROUGH_PEERS:
+                    ok = [n for n in rough_sizes if "error" not in rough[name][(n, level)]]
+                    if len(ok) >= 2:
+                        k = exponent(ok, [rough[name][(n, level)]["best"] for n in ok])
+                        print(
+                            f"  rough {level:>6} {name:>10}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2"
+                        )
     slip: dict[str, dict[int, dict]] = {name: {} for name in SLIP_PEERS}
     if slip_sizes:
         print()
