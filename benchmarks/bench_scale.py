@@ -544,6 +544,13 @@ def main() -> None:
                     f"{'':>9} {'cq/tamaas':>10} first {own['first'] / peer['first']:.2f}x best "
                     f"{own['best'] / peer['best']:.2f}x"
                 )
+        if len(slip_sizes) >= 2:
+            print("cost growth, time ~ N^k (best times):")
+            for name in SLIP_PEERS:
+                ok = [n for n in slip_sizes if "error" not in slip[name][n]]
+                if len(ok) >= 2:
+                    k = exponent(ok, [slip[name][n]["best"] for n in ok])
+                    print(f"  partial slip {name:>10}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2")
     print()
     print("targets:")
     for n in sizes:
