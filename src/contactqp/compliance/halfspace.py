@@ -58,6 +58,7 @@ import numbers
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.model import true_or_false
 from ..errors import InvalidInputError
 
 __all__ = ["grid", "influence_matrix", "normal_influence", "rectangle_potential"]
@@ -469,8 +470,7 @@ def influence_matrix(
     dx = _positive_length(dx, "dx")
     dy = _positive_length(dy, "dy")
     E, nu = _material(young, poisson)
-    if not isinstance(coupling, (bool, np.bool_)):
-        raise InvalidInputError(f"coupling must be True or False, got {coupling!r}")
+    coupling = true_or_false(coupling, "coupling")
 
     def evaluate(X, Y):
         return _cell_kernels(X, Y, dx, dy, E, nu, coupling)

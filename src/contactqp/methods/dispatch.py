@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 from .frictional import solve_frictional
 from .global_route import condense
 from .local_global import certify_global
@@ -28,10 +26,8 @@ def _is_frictionless(problem, kind: str) -> bool:
     """True when ``mu = 0`` on every contact of a problem of a frictional ``kind``."""
     if kind in ("frictional", "frictional-polygonal"):
         return problem.frictionless
-    if kind == "local":  # read directly: the cached property's lock costs more on small ones
-        return not (problem.mu > 0).any()
-    if kind == "global":
-        return not np.any(problem.mu > 0)
+    if kind in ("local", "global"):  # read directly: a cached property's lock costs more
+        return not (problem.mu > 0).any()  # on the small problems these kinds often are
     return False
 
 
