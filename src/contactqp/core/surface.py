@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from .certificate import CERTIFICATE_TOL, Certificate
 from .model import finite_array, positive_tolerance
-from .operators import Operator, as_operator
+from .operators import Coarsening, Operator, as_operator
 from .result import ContactResult, verdict
 from .status import ContactStatus
 
@@ -145,6 +145,22 @@ class SurfaceProblem:
     def size(self) -> int:
         """Number of surface points ``m``."""
         return int(self.separation.size)
+
+    def coarsened(self) -> tuple[SurfaceProblem, Coarsening] | None:
+        """The same problem on the compliance's coarser lattice
+        (:meth:`~contactqp.core.operators.Operator.coarsening`: the separation averaged over
+        the merged points, the same load or approach) and that coarsening, or None when the
+        compliance has none."""
+        coarsening = self.compliance.coarsening()
+        if coarsening is None:
+            return None
+        coarse = SurfaceProblem(
+            coarsening.operator,
+            coarsening.restrict(self.separation),
+            load=self.load,
+            approach=self.approach,
+        )
+        return coarse, coarsening
 
     def gaps(self, displacements: np.ndarray, approach: float) -> np.ndarray:
         """``s - delta + u``: the gaps (m) for surface displacements ``u = W r`` (m)."""

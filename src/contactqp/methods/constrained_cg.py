@@ -202,15 +202,10 @@ def _iterate(problem: SurfaceProblem, r0, tol: float, max_iter: int, preconditio
 def _coarse_start(problem: SurfaceProblem, max_iter: int, precondition: bool, levels: list):
     """Forces for ``problem`` from the solves on its coarser lattices (None: no coarser one);
     each level's cells, iterations and products are appended to ``levels``, coarsest first."""
-    coarsening = problem.compliance.coarsening()
-    if coarsening is None:
+    coarsened = problem.coarsened()
+    if coarsened is None:
         return None
-    coarse = SurfaceProblem(
-        coarsening.operator,
-        coarsening.restrict(problem.separation),
-        load=problem.load,
-        approach=problem.approach,
-    )
+    coarse, coarsening = coarsened
     start = _coarse_start(coarse, max_iter, precondition, levels)
     M = coarse.compliance.preconditioner() if precondition else None
     run = _iterate(coarse, start, COARSE_TOL, max_iter, M)

@@ -300,18 +300,13 @@ def _coarse_start(problem: SlidingSurfaceProblem, max_iter: int, max_outer: int,
     """``(t, p)`` for ``problem`` from the solve on its coarser lattices, or None (no coarser
     lattice, or a coarse solve that gives no usable forces); each level's points and
     iterations are appended to ``levels``, coarsest first."""
-    surface = problem.surface
-    normal, full = surface.compliance.coarsening(), problem.compliance.coarsening()
-    if normal is None or full is None:
+    pressed, full = problem.surface.coarsened(), problem.compliance.coarsening()
+    if pressed is None or full is None:
         return None
+    surface, normal = pressed
     try:
         coarse = SlidingSurfaceProblem(
-            SurfaceProblem(
-                normal.operator,
-                normal.restrict(surface.separation),
-                load=surface.load,
-                approach=surface.approach,
-            ),
+            surface,
             full.operator,
             normal.restrict(problem.mu),
             shift=problem.shift,
