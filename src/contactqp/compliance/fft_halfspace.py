@@ -530,9 +530,7 @@ class _SpectralInverse:
         kernel = self._kernels.get(shape)
         if kernel is None:
             dx, dy = self._cell
-            qy = 2.0 * np.pi * scipy.fft.fftfreq(shape[0], dy)[:, None]
-            qx = 2.0 * np.pi * scipy.fft.rfftfreq(shape[1], dx)[None, :]
-            q = np.hypot(qx, qy)
+            q = _wavenumbers(shape[1], shape[0], dx, dy)
             q.flat[0] = np.min(q[q > 0], initial=1.0 / max(dx, dy))  # definite on the mean
             kernel = 0.5 * self._E_star * dx * dy * q
             if self._layer is not None:
@@ -611,7 +609,7 @@ def _half_space_spectra(nx, ny, dx, dy, E, nu, full: bool, coupling: bool) -> li
     """The periodic kernels on the ``rfftn`` grid of a ``(ny, nx)`` lattice, per unit force."""
     qx = 2.0 * np.pi * scipy.fft.rfftfreq(nx, dx)[None, :]
     qy = 2.0 * np.pi * scipy.fft.fftfreq(ny, dy)[:, None]
-    q = _wavenumbers(nx, ny, dx, dy)
+    q = np.hypot(qx, qy)
     inverse = np.divide(1.0, q, out=np.zeros_like(q), where=q > 0)  # the mean mode: 0
     G = E / (2.0 * (1.0 + nu))
     scale = 1.0 / (G * dx * dy)
