@@ -391,6 +391,14 @@ def exponent(sizes: list[int], times: list[float]) -> float:
     return float(np.polyfit(np.log(np.square(sizes)), np.log(times), 1)[0])
 
 
+def print_growth(label: str, rows: dict[int, dict]) -> None:
+    """The cost growth ``k`` over the sizes of ``rows`` (grid side -> row) that ran."""
+    ok = [n for n, row in rows.items() if "error" not in row]
+    if len(ok) >= 2:
+        k = exponent(ok, [rows[n]["best"] for n in ok])
+        print(f"  {label}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", default="64,128,256,512", help="Hertz grid sides")
@@ -460,10 +468,7 @@ def main() -> None:
     print()
     print("cost growth, time ~ N^k (best times, least squares over the sizes run):")
     for name in HERTZ_PEERS:
-        ok = [n for n in sizes if "error" not in hertz[name][n]]
-        if len(ok) >= 2:
-            k = exponent(ok, [hertz[name][n]["best"] for n in ok])
-            print(f"  Hertz {name:>16}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2")
+        print_growth(f"Hertz {name:>16}", hertz[name])
     rough: dict[str, dict[tuple[int, float], dict]] = {name: {} for name in ROUGH_PEERS}
     if not args.skip_rough:
         print()
@@ -506,12 +511,8 @@ def main() -> None:
             print(f"cost growth, time ~ N^k (best times; {surface}):")
             for level in rough_loads:
                 for name in ROUGH_PEERS:
-                    ok = [n for n in rough_sizes if "error" not in rough[name][(n, level)]]
-                    if len(ok) >= 2:
-                        k = exponent(ok, [rough[name][(n, level)]["best"] for n in ok])
-                        print(
-                            f"  rough {level:>6} {name:>10}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2"
-                        )
+                    rows = {n: rough[name][(n, level)] for n in rough_sizes}
+                    print_growth(f"rough {level:>6} {name:>10}", rows)
     slip: dict[str, dict[int, dict]] = {name: {} for name in SLIP_PEERS}
     if slip_sizes:
         print()
@@ -547,10 +548,7 @@ def main() -> None:
         if len(slip_sizes) >= 2:
             print("cost growth, time ~ N^k (best times):")
             for name in SLIP_PEERS:
-                ok = [n for n in slip_sizes if "error" not in slip[name][n]]
-                if len(ok) >= 2:
-                    k = exponent(ok, [slip[name][n]["best"] for n in ok])
-                    print(f"  partial slip {name:>10}: k = {k:.2f} over {ok[0]}^2..{ok[-1]}^2")
+                print_growth(f"partial slip {name:>10}", slip[name])
     print()
     print("targets:")
     for n in sizes:
