@@ -317,7 +317,8 @@ def solve_rough_contact(
 
 def _with_shear(point: LoadPoint, sheared, area: float) -> LoadPoint:
     """``point`` with its sheared state's fields (see the module notes)."""
-    contact = np.asarray(sheared.forces[:, 0]) > 0
+    stick = int(np.count_nonzero(sheared.stick))
+    closed = stick + int(np.count_nonzero(sheared.slip))  # the result's own contact statuses
     shift = float(sheared.shift[0])
     force = float(sheared.tangential_force[0])
     return replace(
@@ -326,7 +327,7 @@ def _with_shear(point: LoadPoint, sheared, area: float) -> LoadPoint:
         iterations=point.iterations + int(sheared.iterations),
         certificate=point.certificate and bool(sheared.success),
         sheared=sheared,
-        stick_fraction=float(np.count_nonzero(sheared.stick & contact) / max(1, contact.sum())),
+        stick_fraction=stick / max(1, closed),
         shift=shift,
         tangential_stiffness=force / (area * shift) if shift > 0 else None,
     )
