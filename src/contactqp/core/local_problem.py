@@ -59,6 +59,7 @@ __all__ = [
     "project_rows",
     "projection_on_cones",
     "relative_rounding",
+    "limits_from_norms",
 ]
 
 
@@ -501,17 +502,32 @@ def accuracy_limits(problem: LocalProblem, r, u, *, magnitude=None) -> AccuracyL
     (:func:`column_products`); only those rows of it are read.
     """
     rv, uv = np.asarray(r, dtype=float), np.asarray(u, dtype=float)
-    scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv)) or 1.0
+    scale = math.sqrt(max(problem.q @ problem.q, rv @ rv, uv @ uv))
     if magnitude is None:
         magnitude = _abs_product(problem.W, rv)
     product = float(np.linalg.norm(magnitude[problem.certified_rows]))
-    size_q = float(np.linalg.norm(problem.q))
-    digits = problem.digits
-    data = (
-        relative_rounding(digits.get("W")) * product + relative_rounding(digits.get("q")) * size_q
-    )
+    return limits_from_norms(product, float(np.linalg.norm(problem.q)), scale, problem.digits)
+
+
+def limits_from_norms(
+    product: float,
+    size_q: float,
+    scale: float,
+    digits: dict[str, int],
+    data_rounding: tuple[float, float] | None = None,
+) -> AccuracyLimits:
+    """:func:`accuracy_limits` from its norms: ``product`` the norm of ``|W| |r|`` over the
+    certified rows, ``size_q`` of ``q``, ``scale`` the error's (0 counts as 1).
+    ``data_rounding``: the :func:`relative_rounding` of ``W``'s and ``q``'s digits, when the
+    caller has them already."""
+    scale = scale or 1.0
+    if data_rounding is None:
+        data_rounding = (relative_rounding(digits.get("W")), relative_rounding(digits.get("q")))
+    data_w, data_q = data_rounding
     return AccuracyLimits(
-        rounding=_EPS * (product + size_q) / scale, data=data / scale, digits=dict(digits)
+        rounding=_EPS * (product + size_q) / scale,
+        data=(data_w * product + data_q * size_q) / scale,
+        digits=dict(digits),
     )
 
 
@@ -546,13 +562,7 @@ def certify_small(
         status,
     )
     error, product, size_q, scale = measures[0].tolist()
-    scale = scale or 1.0
-    data_w, data_q = small.data_rounding
-    limits = AccuracyLimits(
-        rounding=_EPS * (product + size_q) / scale,
-        data=(data_w * product + data_q * size_q) / scale,
-        digits=dict(problem.digits),
-    )
+    limits = limits_from_norms(product, size_q, scale, problem.digits, small.data_rounding)
     return u[0], error, limits, status[0]
 
 

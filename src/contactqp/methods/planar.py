@@ -53,10 +53,9 @@ import scipy.sparse as sp
 from .. import kernels
 from ..core.local_problem import (
     CONTACT_FLOOR,
-    AccuracyLimits,
     LocalProblem,
+    limits_from_norms,
     natural_map_residual,
-    relative_rounding,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
@@ -95,7 +94,6 @@ _NO_DATA = np.empty(0)
 #: Relative threshold of "zero" in the contact status (that of
 #: :func:`~contactqp.core.local_problem.contact_status_unchecked`).
 STATUS_RTOL = 1e-6
-_EPS = float(np.finfo(float).eps)
 
 
 def _kernel_arrays(W: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -370,14 +368,7 @@ def _solve_compiled(
     if reason != "converged" and sweeps < max_iter:
         return None, sweeps
     error, product, size_q, scale = measures.tolist()
-    scale = scale or 1.0
-    digits = problem.digits
-    data_w, data_q = relative_rounding(digits.get("W")), relative_rounding(digits.get("q"))
-    limits = AccuracyLimits(  # the formula of accuracy_limits, from the kernel's norms
-        rounding=_EPS * (product + size_q) / scale,
-        data=(data_w * product + data_q * size_q) / scale,
-        digits=dict(digits),
-    )
+    limits = limits_from_norms(product, size_q, scale, problem.digits)
     converged = error <= tol
     verdict = "converged" if converged else f"not converged to {tol:g}"
     message = (
