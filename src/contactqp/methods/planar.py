@@ -96,16 +96,19 @@ _NO_DATA = np.empty(0)
 STATUS_RTOL = 1e-6
 
 
-def _kernel_arrays(W: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(dense, indptr, indices, data)`` as :func:`~contactqp.kernels.planar_gauss_seidel`
-    takes them: a dense ``W`` itself, or the CSR arrays of a sparse one (int64 indices)."""
+def _kernel_arrays(
+    W: Any, index: type = np.int64
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(dense, indptr, indices, data)`` as the kernels take them: a dense ``W``
+    (C-contiguous), or the CSR arrays of a sparse one, its indices of type ``index``
+    (:func:`~contactqp.kernels.planar_gauss_seidel`: int64; ``planar_solve``: intp)."""
     if isinstance(W, np.ndarray):
         return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
     csr = sp.csr_matrix(W)
     return (
         _NO_ROWS,
-        csr.indptr.astype(np.int64, copy=False),
-        csr.indices.astype(np.int64, copy=False),
+        np.ascontiguousarray(csr.indptr, dtype=index),
+        np.ascontiguousarray(csr.indices, dtype=index),
         np.ascontiguousarray(csr.data, dtype=float),
     )
 
@@ -300,21 +303,6 @@ def _newton(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sw
     )
 
 
-def _compiled_arrays(W: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(dense, indptr, indices, data)`` as :func:`~contactqp.kernels.compiled.planar_solve`
-    takes them: a dense ``W`` (C-contiguous), or the CSR arrays of a sparse one (intp
-    indices; a validated problem's CSR matrix is read as it is, not copied)."""
-    if isinstance(W, np.ndarray):
-        return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
-    csr = W if isinstance(W, sp.csr_matrix) else sp.csr_matrix(W)
-    return (
-        _NO_ROWS,
-        np.ascontiguousarray(csr.indptr, dtype=np.intp),
-        np.ascontiguousarray(csr.indices, dtype=np.intp),
-        np.ascontiguousarray(csr.data, dtype=float),
-    )
-
-
 def _solve_compiled(
     problem: LocalProblem,
     r: np.ndarray,
@@ -333,7 +321,7 @@ def _solve_compiled(
     """
     assert kernels.planar_solve is not None  # the caller's test
     nc = problem.n_contacts
-    arrays = _compiled_arrays(problem.W)
+    arrays = _kernel_arrays(problem.W, np.intp)
     u = np.empty(r.shape[0])
     status = np.empty(nc, dtype=np.intp)
     measures = np.empty(4)
