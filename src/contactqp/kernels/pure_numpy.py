@@ -249,8 +249,9 @@ def planar_gauss_seidel(
 def _matrix(
     W: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, n: int
 ) -> Any:
-    """A dense ``W``, or (no rows) the (n, n) CSR matrix of the arrays."""
-    if W.shape[0]:
+    """A dense ``W``, or (no rows) the (n, n) CSR matrix of the arrays (no index pointer
+    either: a problem without contacts, dense)."""
+    if W.shape[0] or indptr.size == 0:
         return np.asarray(W)
     import scipy.sparse as sp
 
