@@ -105,6 +105,15 @@ def hertz_setup(n: int) -> dict:
     return {"n": n, "dx": dx, "a": a, "load": load, "r2": r2, "s": r2 / (2 * RADIUS)}
 
 
+def tamaas_sphere(n: int, dx: float) -> tuple[int, np.ndarray]:
+    """``(m, heights)``: Tamaas's period of ``m = 2n`` points of spacing ``dx`` padding the
+    ``n x n`` grid, and the sphere's heights on it (the tip at its centre)."""
+    m = 2 * n
+    c = (np.arange(m) - (m - 1) / 2) * dx
+    XX, YY = np.meshgrid(c, c)
+    return m, -(XX**2 + YY**2) / (2 * RADIUS)
+
+
 def rough_heights(n: int, seed: int = 1) -> tuple[np.ndarray, float]:
     """A periodic self-affine surface (m) on ``n x n`` points of spacing ``SIDE / n``.
 
@@ -175,10 +184,7 @@ def run_hertz(name: str, n: int):
         import tamaas as tm
 
         tm.set_log_level(tm.LogLevel.error)
-        m = 2 * n
-        c = (np.arange(m) - (m - 1) / 2) * dx
-        XX, YY = np.meshgrid(c, c)
-        surface = -(XX**2 + YY**2) / (2 * RADIUS)
+        m, surface = tamaas_sphere(n, dx)
         o = n // 2
 
         def call():
@@ -302,10 +308,7 @@ def run_slip(name: str, n: int):
         import tamaas as tm
 
         tm.set_log_level(tm.LogLevel.error)
-        m = 2 * n
-        c = (np.arange(m) - (m - 1) / 2) * dx
-        XX, YY = np.meshgrid(c, c)
-        surface = -(XX**2 + YY**2) / (2 * RADIUS)
+        m, surface = tamaas_sphere(n, dx)
         area = (m * dx) ** 2
 
         def call():
