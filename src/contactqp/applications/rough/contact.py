@@ -106,10 +106,8 @@ class LoadPoint:
     result : SurfaceResult
         The solve's full result (forces in N per cell, gaps, certificate).
     sheared : SlidingSurfaceResult or None
-        With friction, the sheared state's result (forces ``(p, t_x, t_y)`` per cell).
-    stick_fraction, shift, tangential_stiffness : float or None
-        With friction (see the module notes): the sticking fraction of the contact, the shift
-        (m) and ``Q / (area shift)`` (Pa/m).
+        With friction, the sheared state's result (forces ``(p, t_x, t_y)`` per cell); the
+        properties ``stick_fraction``, ``shift`` and ``tangential_stiffness`` read it.
     """
 
     pressure: float
@@ -121,9 +119,29 @@ class LoadPoint:
     certificate: bool
     result: Any = field(repr=False, compare=False)
     sheared: Any = field(default=None, repr=False, compare=False)
-    stick_fraction: float | None = None
-    shift: float | None = None
-    tangential_stiffness: float | None = None
+
+    @property
+    def stick_fraction(self) -> float | None:
+        """With friction, the fraction of the contact that sticks (the sheared result's own
+        statuses: stick over stick and slip); else None."""
+        if self.sheared is None:
+            return None
+        stick = int(np.count_nonzero(self.sheared.stick))
+        return stick / max(1, stick + int(np.count_nonzero(self.sheared.slip)))
+
+    @property
+    def shift(self) -> float | None:
+        """With friction, the shift of the flat along x against the surface's mean (m)."""
+        return None if self.sheared is None else float(self.sheared.shift[0])
+
+    @property
+    def tangential_stiffness(self) -> float | None:
+        """With friction, the secant ``Q / (area shift)`` (Pa/m; None at no shift)."""
+        shift = self.shift
+        if shift is None or not shift > 0:
+            return None
+        area = self.result.load / self.pressure
+        return float(self.sheared.tangential_force[0]) / (area * shift)
 
     def as_record(self) -> dict[str, Any]:
         """A JSON-ready dict of the scalar fields (SI units); the frictional ones with
@@ -307,27 +325,19 @@ def solve_rough_contact(
     ]
     if full is not None:
         points = [
-            _with_shear(point, shearing, area)
-            for point, shearing in zip(points, sheared, strict=True)
+            _with_shear(point, shearing) for point, shearing in zip(points, sheared, strict=True)
         ]
     return RoughContact(
         surface, float(young), float(poisson), points, float(mu), shear if mu > 0 else None
     )
 
 
-def _with_shear(point: LoadPoint, sheared, area: float) -> LoadPoint:
-    """``point`` with its sheared state's fields (see the module notes)."""
-    stick = int(np.count_nonzero(sheared.stick))
-    closed = stick + int(np.count_nonzero(sheared.slip))  # the result's own contact statuses
-    shift = float(sheared.shift[0])
-    force = float(sheared.tangential_force[0])
+def _with_shear(point: LoadPoint, sheared) -> LoadPoint:
+    """``point`` with its sheared state (see the module notes)."""
     return replace(
         point,
         seconds=point.seconds + float(sheared.seconds),
         iterations=point.iterations + int(sheared.iterations),
         certificate=point.certificate and bool(sheared.success),
         sheared=sheared,
-        stick_fraction=stick / max(1, closed),
-        shift=shift,
-        tangential_stiffness=force / (area * shift) if shift > 0 else None,
     )
