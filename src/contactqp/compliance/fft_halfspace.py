@@ -451,7 +451,7 @@ class HalfSpaceOperator(_LatticeOperator):
         self.layer = layer
         self._moduli = (E, nu)
         self._coupling = coupling
-        self._requested = (_workers(workers), fft)
+        self._fft_requested = fft  # None: chosen per grid, the coarse ones' too
         full = components == "full"
         pairs = _FULL_PAIRS if full else (((0, 1.0),),)
         parity = _FULL_PARITY if full else ((0, 0),)
@@ -479,12 +479,12 @@ class HalfSpaceOperator(_LatticeOperator):
         nx, ny = self.grid_shape
         if nx % 2 or ny % 2 or min(nx, ny) < 2 * COARSEST:
             return None
-        (dx, dy), (E, nu), (workers, fft) = self.cell, self._moduli, self._requested
+        (dx, dy), (E, nu) = self.cell, self._moduli
         thickness, base = self.layer if self.layer is not None else (None, "bonded")
         coarse = HalfSpaceOperator(
             nx // 2, ny // 2, 2 * dx, 2 * dy, E, nu, components=self.components,
             coupling=self._coupling, periodic=self.periodic, thickness=thickness, base=base,
-            workers=workers, fft=fft,
+            workers=self._workers, fft=self._fft_requested,
         )  # fmt: skip
         c = self._components
 
