@@ -151,12 +151,14 @@ def _one_by_one(batch, x, tol, max_iter, check_psd, per_contact, start) -> Local
     status = np.empty((P, batch.n_contacts), dtype=np.int64)
     messages = {}
     for p in range(P):
+        if check_psd:  # the check of the compiled route, naming the problem
+            check_positive_semidefinite(batch.W[p], name=f"W[{p}]")
         alone = solve_coulomb(
             batch.problem(p),
             r0=x[p],
             tol=tol,
             max_iter=max_iter,
-            check_psd=check_psd,
+            check_psd=False,
             per_contact=per_contact,
         )
         x[p], u[p], counts[p], status[p] = (
