@@ -58,7 +58,8 @@ pytestmark = pytest.mark.skipif(
 def python_route(problem: LocalProblem) -> LocalProblem:
     """The same problem with the compiled route switched off (its cached arrays set to None)."""
     twin = LocalProblem(problem.W, problem.q, problem.mu, problem.dim, cohesion=problem.cohesion)
-    twin.__dict__["small"] = None  # the cached_property's slot: the Python route is taken
+    # the cached properties' slots: the Python route is taken
+    twin.__dict__["small_W"] = twin.__dict__["small"] = None
     return twin
 
 

@@ -144,6 +144,17 @@ class FrictionLaw:
             facets = int(facets)
         object.__setattr__(self, "facets", facets)
 
+    @classmethod
+    def from_checked(cls, mu: np.ndarray, cohesion: np.ndarray) -> FrictionLaw:
+        """The exact-cone law of arrays already checked as :class:`FrictionLaw` checks them
+        (float, shape (k,), finite, ``>= 0``, cohesion only where ``mu > 0``), stored as they
+        are, without checking them again."""
+        law = object.__new__(cls)
+        object.__setattr__(law, "mu", mu)
+        object.__setattr__(law, "cohesion", cohesion)
+        object.__setattr__(law, "facets", None)
+        return law
+
     @property
     def n_contacts(self) -> int:
         """Number of contacts ``k``."""

@@ -24,18 +24,16 @@ import functools
 import math
 import operator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from .. import kernels
 from ..errors import InvalidInputError, NotPositiveDefiniteError
+from .friction import FrictionLaw, apex_distance
 from .model import finite_array
 from .operators import PSD_SHIFT  # the shift accepted by check_positive_semidefinite
-
-if TYPE_CHECKING:
-    from contactqp.core.friction import FrictionLaw
 
 __all__ = [
     "AccuracyLimits",
@@ -61,6 +59,11 @@ __all__ = [
     "relative_rounding",
     "limits_from_norms",
 ]
+
+
+#: Default relative threshold of :func:`contact_status`: a contact carries a force, and slips,
+#: beyond this share of the problem's force and velocity scales.
+STATUS_RTOL = 1e-6
 
 
 def _check_dim(dim):
@@ -93,6 +96,16 @@ def _as_matrix(name, value):
     if not np.isfinite(data).all():
         raise InvalidInputError(f"{name} contains NaN or inf")
     return mat
+
+
+def _plain_array(value, ndim: int) -> bool:
+    """True when ``value`` is a C-contiguous float64 ndarray of ``ndim`` dimensions."""
+    return (
+        type(value) is np.ndarray
+        and value.dtype == np.float64
+        and value.ndim == ndim
+        and value.flags.c_contiguous
+    )
 
 
 @dataclass(frozen=True)
@@ -158,6 +171,47 @@ class LocalProblem:
     _checks: dict[str, bool] = field(init=False, repr=False, compare=False, default_factory=dict)
 
     def __post_init__(self):
+        if not self._validated_in_one_pass():
+            self._validate()
+
+    def _validated_in_one_pass(self) -> bool:
+        """Validate and store the fields by one compiled pass
+        (:func:`~contactqp.kernels.compiled.local_arrays_valid`) when they are already as
+        stored: C-contiguous float64 arrays, ``W`` dense or a float64 ``csr_matrix``, an int
+        ``dim``, a str ``title``. False, with nothing stored, otherwise or when a check
+        fails: :meth:`_validate` then names what is wrong."""
+        W, q, mu, cohesion, dim = self.W, self.q, self.mu, self.cohesion, self.dim
+        if not (
+            kernels.local_arrays_valid is not None
+            and type(dim) is int
+            and (dim == 2 or dim == 3)
+            and type(self.title) is str
+            and type(self.digits) is dict
+            and _plain_array(q, 1)
+            and _plain_array(mu, 1)
+            and (cohesion is None or _plain_array(cohesion, 1))
+            and q.shape[0] == dim * mu.shape[0]
+            and W.shape == (q.shape[0], q.shape[0])
+        ):
+            return False
+        if isinstance(W, np.ndarray) and _plain_array(W, 2):
+            values = W.reshape(-1)
+        elif type(W) is sp.csr_matrix and _plain_array(W.data, 1):
+            values = W.data
+        else:
+            return False
+        if not kernels.local_arrays_valid(values, q, mu, cohesion):
+            return False
+        if self.digits:
+            object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
+        law = FrictionLaw.from_checked(mu, np.zeros(mu.shape[0]) if cohesion is None else cohesion)
+        object.__setattr__(self, "cohesion", law.cohesion)
+        object.__setattr__(self, "law", law)
+        return True
+
+    def _validate(self) -> None:
+        """Check and store the fields, converting them to their stored types; raise
+        :class:`~contactqp.errors.InvalidInputError` naming the first that is wrong."""
         dim = _check_dim(self.dim)
         object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
         W = _as_matrix("W", self.W)
@@ -180,8 +234,6 @@ class LocalProblem:
                 raise InvalidInputError(
                     f"cohesion must have length n_contacts = {nc}, got shape {given_cohesion.shape}"
                 )
-        from .friction import FrictionLaw  # the law's own checks (mu, cohesion >= 0, apex)
-
         law = FrictionLaw(mu, given_cohesion, n_contacts=nc)
         mu, cohesion = law.mu, law.cohesion
         if not isinstance(self.title, str):
@@ -218,10 +270,26 @@ class LocalProblem:
         """:func:`check_positive_semidefinite` of ``W``, factored once per problem (and its
         :meth:`with_q` twins); raises on every call when ``W`` fails."""
         if not self._checks.get("semidefinite", False):
-            small = self.small  # the same test in C first; numpy and LAPACK for the verdict
-            if small is None or not small_semidefinite(small.W).all():
+            W = self.small_W  # the same test in C first; numpy and LAPACK for the verdict
+            if W is None or not small_semidefinite(W.reshape(1, *W.shape)).all():
                 check_positive_semidefinite(self.W)
             self._checks["semidefinite"] = True
+
+    @functools.cached_property
+    def small_W(self) -> np.ndarray | None:
+        """``W`` as the compiled small-problem route reads it (dense, C-contiguous, shape
+        (m, m), read-only use), or None when ``W`` has more than :data:`SMALL_UNKNOWNS` rows,
+        none, or the compiled kernels are absent: ``W`` itself when it is so stored, else a
+        dense copy made once per problem (and shared by its :meth:`with_q` twins)."""
+        m = self.q.shape[0]
+        if m > SMALL_UNKNOWNS or m == 0 or kernels.small_solve is None:
+            return None
+        W = self.W
+        if type(W) is np.ndarray and W.flags.c_contiguous:
+            return W
+        dense = np.ascontiguousarray(W if isinstance(W, np.ndarray) else W.toarray())
+        dense.flags.writeable = False
+        return dense
 
     @functools.cached_property
     def frictionless(self) -> bool:
@@ -236,12 +304,12 @@ class LocalProblem:
         Computed once per problem (and shared by its :meth:`with_q` twins): a dense copy of a
         sparse ``W``, so that no solve converts it again.
         """
-        m = self.q.shape[0]
-        if m > SMALL_UNKNOWNS or m == 0 or kernels.small_newton is None:
+        W = self.small_W
+        if W is None:
             return None
-        W = self.W if isinstance(self.W, np.ndarray) else self.W.toarray()
+        m = W.shape[0]
         arrays = SmallArrays(
-            W=np.ascontiguousarray(W).reshape(1, m, m),  # float, as validated
+            W=W.reshape(1, m, m),  # float, as validated
             mu=np.ascontiguousarray(self.mu).reshape(1, -1),
             shift=np.ascontiguousarray(self.apex_shift).reshape(1, m),
             data_rounding=(
@@ -286,8 +354,6 @@ class LocalProblem:
         ``r + apex_shift`` lies in the Coulomb cone exactly when ``r`` lies in the Mohr-Coulomb
         cone: the translation that turns a cohesive problem into an FCLIB one.
         """
-        from .friction import apex_distance
-
         shift = np.zeros((self.n_contacts, self.dim))
         if self.law.cohesion.any():
             shift[:, 0] = apex_distance(self.mu, self.law.cohesion)  # the field, as validated
@@ -532,7 +598,7 @@ def limits_from_norms(
 
 
 def certify_small(
-    problem: LocalProblem, r: np.ndarray, *, per_contact: bool = False, rtol: float = 1e-6
+    problem: LocalProblem, r: np.ndarray, *, per_contact: bool = False, rtol: float = STATUS_RTOL
 ) -> tuple[np.ndarray, float, AccuracyLimits, np.ndarray]:
     """``(u, error, limits, status)`` of reactions ``r`` (float, shape (m,)) of a problem with
     :attr:`LocalProblem.small` arrays, in one compiled pass over ``W``.
@@ -1074,7 +1140,7 @@ def _row_squares(x, d):
     return np.einsum("ij,ij->i", X, X)
 
 
-def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.ndarray:
+def contact_status(problem: LocalProblem, r, u=None, rtol: float = STATUS_RTOL) -> np.ndarray:
     """Per-contact status of a solution: open, stick or slip
     (:class:`~contactqp.core.status.ContactStatus` codes).
 
@@ -1104,7 +1170,7 @@ def contact_status(problem: LocalProblem, r, u=None, rtol: float = 1e-6) -> np.n
     return contact_status_unchecked(problem, rv, uv, rtol)
 
 
-def contact_status_unchecked(problem: LocalProblem, r, u, rtol: float = 1e-6) -> np.ndarray:
+def contact_status_unchecked(problem: LocalProblem, r, u, rtol: float = STATUS_RTOL) -> np.ndarray:
     """:func:`contact_status` of float arrays ``r``, ``u`` of shape (m,), without checks (for
     methods, whose arrays are their own)."""
     d = problem.dim

@@ -30,6 +30,8 @@ __all__ = [
     "small_newton",
     "small_certificate",
     "small_semidefinite",
+    "small_solve",
+    "local_arrays_valid",
     "SMALL_REASONS",
     "planar_solve",
     "PLANAR_REASONS",
@@ -57,6 +59,12 @@ IMPLEMENTATION: str
 small_newton: Callable[..., None] | None = None
 small_certificate: Callable[..., None] | None = None
 small_semidefinite: Callable[..., None] | None = None
+#: One small problem in one call (:func:`contactqp.kernels.compiled.small_solve`: the Newton
+#: run and the certificate), and the one-pass check of a local problem's arrays
+#: (:func:`contactqp.kernels.compiled.local_arrays_valid`); None with the pure-numpy kernels,
+#: where the numpy checks and the Python route run instead.
+small_solve: Callable[..., tuple] | None = None
+local_arrays_valid: Callable[..., bool] | None = None
 #: The reasons of :func:`~contactqp.kernels.compiled.small_newton`'s codes (coulomb's Newton run).
 SMALL_REASONS: tuple[str, ...] = ()
 #: The compiled 2-D solve (:func:`contactqp.kernels.compiled.planar_solve`: the Gauss-Seidel
@@ -95,6 +103,8 @@ else:
         small_newton = _compiled.small_newton
         small_certificate = _compiled.small_certificate
         small_semidefinite = _compiled.small_semidefinite
+        small_solve = _compiled.small_solve
+        local_arrays_valid = _compiled.local_arrays_valid
         SMALL_REASONS = _compiled.SMALL_REASONS
         planar_solve = _compiled.planar_solve
         PLANAR_REASONS = _compiled.PLANAR_REASONS

@@ -51,6 +51,23 @@ def small_certificate(
     status: np.ndarray,
 ) -> None: ...
 def small_semidefinite(W: np.ndarray, shift: float, passed: np.ndarray) -> None: ...
+def local_arrays_valid(
+    W_values: np.ndarray, q: np.ndarray, mu: np.ndarray, cohesion: np.ndarray | None
+) -> bool: ...
+def small_solve(
+    W: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    cohesion: np.ndarray,
+    r: np.ndarray,
+    tol: float,
+    max_iter: int,
+    per_contact: bool,
+    floor: float,
+    rtol: float,
+    u: np.ndarray,
+    status: np.ndarray,
+) -> tuple[int, int, float, float, float, float, float]: ...
 def planar_solve(
     W: np.ndarray,
     indptr: np.ndarray,

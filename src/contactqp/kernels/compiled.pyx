@@ -908,6 +908,57 @@ def small_newton(W, q, mu, shift, r, double tol, Py_ssize_t max_iter, bint per_c
         raise MemoryError()
 
 
+cdef void _certify(Small* S, const double* rp, double rtol, double* up, double* md,
+                   Py_ssize_t* std) noexcept nogil:
+    """The certificate of reactions ``rp`` of the problem ``S`` points at (``S.qq`` set):
+    ``up = W rp + q``, ``md`` its four measures and ``std`` the contacts' status codes (see
+    :func:`small_certificate`)."""
+    cdef Py_ssize_t i, j, k, m = S.m, nc = S.nc, d = S.d
+    cdef double total, magnitude, product, largest, force, w, apex, size, aa, slip, carry
+    cdef double residual, error, value
+    product = 0.0
+    w = 0.0
+    for i in range(m):
+        total = 0.0
+        magnitude = 0.0
+        for j in range(m):
+            total += S.W[i * m + j] * rp[j]
+            magnitude += fabs(S.W[i * m + j]) * fabs(rp[j])
+        up[i] = total + S.q[i]
+        if i % d == 0 or S.mu[i // d] != 0.0:  # the certified rows
+            product += magnitude * magnitude
+        w = max(w, fabs(S.W[i * m + i]))
+    if w == 0.0:
+        w = 1.0
+    _natural_error(S, rp, up, &residual, &error)
+    md[0] = error
+    md[1] = sqrt(product)
+    md[2] = sqrt(S.qq)
+    size = 0.0
+    aa = 0.0
+    value = 0.0
+    for i in range(m):
+        size += rp[i] * rp[i]
+        apex = rp[i] + S.shift[i]
+        aa += apex * apex
+        value += up[i] * up[i]
+    md[3] = sqrt(max(S.qq, max(size, value)))
+    largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
+    force = largest if largest > 0.0 else 1.0
+    for i in range(nc):
+        carry = 0.0
+        slip = 0.0
+        for k in range(d):
+            apex = rp[i * d + k] + S.shift[i * d + k]
+            carry += apex * apex
+            if k:
+                slip += up[i * d + k] ** 2
+        if sqrt(carry) > rtol * force:
+            std[i] = 2 if sqrt(slip) > rtol * w * force else 1
+        else:
+            std[i] = 0
+
+
 def small_certificate(W, q, mu, shift, r, bint per_contact, double floor, double rtol, u,
                       measures, status):
     """The certificate of reactions ``r[p]`` of each small dense problem, from ``r`` alone.
@@ -947,10 +998,6 @@ def small_certificate(W, q, mu, shift, r, bint per_contact, double floor, double
     if (sq[0] != P or smu[0] != P or ss[0] != P or sr[0] != P or su[0] != P or sm[0] != P
             or st[0] != P):
         raise ValueError("every argument must hold P = W.shape[0] problems")
-    cdef double total, magnitude, product, largest, force, w, apex, size, aa, slip, carry
-    cdef double residual, error, value
-    cdef const double* rp
-    cdef double* up
     cdef Small S
     cdef double* squares = <double*> malloc(nc * sizeof(double))
     if squares == NULL:
@@ -962,51 +1009,46 @@ def small_certificate(W, q, mu, shift, r, bint per_contact, double floor, double
     with nogil:
         for p in range(P):
             S.W, S.q, S.mu, S.shift = Wd + p * m * m, qd + p * m, mud + p * nc, sd + p * m
-            rp = rd + p * m
-            up = ud + p * m
             S.qq = _dot(S.q, S.q, m)
-            product = 0.0
-            w = 0.0
-            for i in range(m):
-                total = 0.0
-                magnitude = 0.0
-                for j in range(m):
-                    total += S.W[i * m + j] * rp[j]
-                    magnitude += fabs(S.W[i * m + j]) * fabs(rp[j])
-                up[i] = total + S.q[i]
-                if i % d == 0 or S.mu[i // d] != 0.0:  # the certified rows
-                    product += magnitude * magnitude
-                w = max(w, fabs(S.W[i * m + i]))
-            if w == 0.0:
-                w = 1.0
-            _natural_error(&S, rp, up, &residual, &error)
-            md[p * 4 + 0] = error
-            md[p * 4 + 1] = sqrt(product)
-            md[p * 4 + 2] = sqrt(S.qq)
-            size = 0.0
-            aa = 0.0
-            value = 0.0
-            for i in range(m):
-                size += rp[i] * rp[i]
-                apex = rp[i] + S.shift[i]
-                aa += apex * apex
-                value += up[i] * up[i]
-            md[p * 4 + 3] = sqrt(max(S.qq, max(size, value)))
-            largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
-            force = largest if largest > 0.0 else 1.0
-            for i in range(nc):
-                carry = 0.0
-                slip = 0.0
-                for k in range(d):
-                    apex = rp[i * d + k] + S.shift[i * d + k]
-                    carry += apex * apex
-                    if k:
-                        slip += up[i * d + k] ** 2
-                if sqrt(carry) > rtol * force:
-                    std[p * nc + i] = 2 if sqrt(slip) > rtol * w * force else 1
-                else:
-                    std[p * nc + i] = 0
+            _certify(&S, rd + p * m, rtol, ud + p * m, md + p * 4, std + p * nc)
     free(squares)
+
+
+cdef bint _semidefinite(const double* W, Py_ssize_t m, double shift, double* S,
+                        double* scaling, Py_ssize_t* keep) noexcept nogil:
+    """The test of :func:`small_semidefinite` on one row-major ``m x m`` matrix ``W``, in the
+    work arrays ``S`` (``m * m``), ``scaling`` and ``keep`` (``m`` each)."""
+    cdef Py_ssize_t i, j, k, n = 0
+    cdef double value
+    for i in range(m):
+        value = W[i * m + i]
+        if value < 0.0 or not (value >= 0.0):
+            return False
+        elif value > 0.0:
+            keep[n] = i
+            scaling[n] = 1.0 / sqrt(value)
+            n += 1
+        else:  # a zero diagonal entry: its row must be zero
+            for j in range(m):
+                if 0.5 * (W[i * m + j] + W[j * m + i]) != 0.0:
+                    return False
+    for i in range(n):
+        for j in range(n):
+            value = 0.5 * (W[keep[i] * m + keep[j]] + W[keep[j] * m + keep[i]])
+            S[i * n + j] = scaling[i] * value * scaling[j]
+        S[i * n + i] += shift
+    for j in range(n):  # lower Cholesky factor in place, by columns
+        value = S[j * n + j]
+        for k in range(j):
+            value -= S[j * n + k] * S[j * n + k]
+        if not (value > 0.0):
+            return False
+        value = sqrt(value)
+        S[j * n + j] = value
+        for i in range(j + 1, n):
+            S[i * n + j] -= _dot(S + i * n, S + j * n, j)
+            S[i * n + j] /= value
+    return True
 
 
 def small_semidefinite(W, double shift, passed):
@@ -1018,7 +1060,7 @@ def small_semidefinite(W, double shift, passed):
     positive fails) of the Jacobi-scaled ``S`` on the rows with a positive diagonal, plus
     ``shift`` times the identity.
     """
-    cdef Py_ssize_t p, i, j, k, n, P, m
+    cdef Py_ssize_t p, P, m
     cdef Py_ssize_t sw[3]
     cdef Py_ssize_t sp[1]
     cdef const double* Wd = <const double*> _buffer(W, b'd', 3, sw, False, "W")
@@ -1026,53 +1068,127 @@ def small_semidefinite(W, double shift, passed):
     P, m = sw[0], sw[1]
     if sw[2] != m or sp[0] != P:
         raise ValueError("W must be (P, m, m) and passed (P,)")
-    cdef double value
-    cdef bint ok
     cdef double* S = <double*> malloc((m * m + m + 1) * sizeof(double))
     cdef Py_ssize_t* keep = <Py_ssize_t*> malloc((m + 1) * sizeof(Py_ssize_t))
     if S == NULL or keep == NULL:
         free(S)
         free(keep)
         raise MemoryError()
-    cdef double* scaling = S + m * m
     with nogil:
         for p in range(P):
-            ok = True
-            n = 0
-            for i in range(m):
-                value = 0.5 * (Wd[(p * m + i) * m + i] + Wd[(p * m + i) * m + i])
-                if value < 0.0 or not (value >= 0.0):
-                    ok = False
-                elif value > 0.0:
-                    keep[n] = i
-                    scaling[n] = 1.0 / sqrt(value)
-                    n += 1
-                else:  # a zero diagonal entry: its row must be zero
-                    for j in range(m):
-                        if 0.5 * (Wd[(p * m + i) * m + j] + Wd[(p * m + j) * m + i]) != 0.0:
-                            ok = False
-            if ok:
-                for i in range(n):
-                    for j in range(n):
-                        value = 0.5 * (Wd[(p * m + keep[i]) * m + keep[j]]
-                                       + Wd[(p * m + keep[j]) * m + keep[i]])
-                        S[i * n + j] = scaling[i] * value * scaling[j]
-                    S[i * n + i] += shift
-                for j in range(n):  # lower Cholesky factor in place, by columns
-                    value = S[j * n + j]
-                    for k in range(j):
-                        value -= S[j * n + k] * S[j * n + k]
-                    if not (value > 0.0):
-                        ok = False
-                        break
-                    value = sqrt(value)
-                    S[j * n + j] = value
-                    for i in range(j + 1, n):
-                        S[i * n + j] -= _dot(S + i * n, S + j * n, j)
-                        S[i * n + j] /= value
-            pd[p] = 1 if ok else 0
+            pd[p] = 1 if _semidefinite(Wd + p * m * m, m, shift, S, S + m * m, keep) else 0
     free(S)
     free(keep)
+
+
+def local_arrays_valid(W_values, q, mu, cohesion):
+    """True when the C-contiguous float64 arrays of a local problem pass its checks: the
+    entries ``W_values`` of ``W`` (any number, e.g. a dense ``W`` raveled or a sparse one's
+    stored values) and ``q`` finite, ``mu`` finite and ``>= 0``, and ``cohesion`` (same length
+    as ``mu``, or None) finite, ``>= 0`` and positive only where ``mu > 0``: the checks of
+    :class:`~contactqp.core.local_problem.LocalProblem`, in one pass without temporaries.
+    False on any failure, which the caller's own checks then name. Shapes are the caller's.
+    """
+    cdef Py_ssize_t sw[1]
+    cdef Py_ssize_t sq[1]
+    cdef Py_ssize_t smu[1]
+    cdef Py_ssize_t sc[1]
+    cdef const double* Wd = <const double*> _buffer(W_values, b'd', 1, sw, False, "W_values")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 1, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 1, smu, False, "mu")
+    cdef const double* cd = NULL
+    cdef Py_ssize_t i, nc = smu[0]
+    if cohesion is not None:
+        cd = <const double*> _buffer(cohesion, b'd', 1, sc, False, "cohesion")
+        if sc[0] != nc:
+            return False
+    cdef bint ok = True
+    with nogil:
+        for i in range(sw[0]):
+            if not isfinite(Wd[i]):
+                ok = False
+                break
+        for i in range(sq[0]):
+            if not isfinite(qd[i]):
+                ok = False
+        for i in range(nc):
+            if not (mud[i] >= 0.0 and isfinite(mud[i])):
+                ok = False
+            elif cd != NULL and not (
+                    isfinite(cd[i]) and (cd[i] == 0.0 or (cd[i] > 0.0 and mud[i] > 0.0))):
+                ok = False
+    return ok
+
+
+def small_solve(W, q, mu, cohesion, r, double tol, Py_ssize_t max_iter, bint per_contact,
+                double floor, double rtol, u, status):
+    """One small dense problem solved in one call: Coulomb's first Newton run and the
+    certificate of its answer (:func:`small_newton` and :func:`small_certificate` on a batch of
+    one, with the apex shift computed here from ``mu`` and ``cohesion``).
+
+    ``W`` (m, m), ``q`` and ``r`` (m,), ``mu``, ``cohesion`` and ``status`` (k,). ``r`` holds
+    the start (reactions) and receives the reactions returned, ``u`` their ``W r + q`` and
+    ``status`` their contact codes. Returns ``(iterations, reason, run error, error, product,
+    size_q, scale)``: ``reason`` an index of :data:`SMALL_REASONS`, the run error that of the
+    Newton run's point (its own measure) and the last four the certificate's measures
+    (:func:`small_certificate`).
+    """
+    cdef Py_ssize_t sw[2]
+    cdef Py_ssize_t sq[1]
+    cdef Py_ssize_t smu[1]
+    cdef Py_ssize_t sc[1]
+    cdef Py_ssize_t sr[1]
+    cdef Py_ssize_t su[1]
+    cdef Py_ssize_t st[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 2, sw, False, "W")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 1, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 1, smu, False, "mu")
+    cdef const double* cd = <const double*> _buffer(cohesion, b'd', 1, sc, False, "cohesion")
+    cdef double* rd = <double*> _buffer(r, b'd', 1, sr, True, "r")
+    cdef double* ud = <double*> _buffer(u, b'd', 1, su, True, "u")
+    cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 1, st, True, "status")
+    cdef Py_ssize_t i, m = sw[0], nc = smu[0], count = 0, d
+    if nc == 0 or m != (m // nc) * nc:
+        raise ValueError(f"{m} unknowns do not make rows of {nc} contacts")
+    d = m // nc
+    _check_dimension(d)
+    if sw[1] != m or sq[0] != m or sr[0] != m or su[0] != m or sc[0] != nc or st[0] != nc:
+        raise ValueError("inconsistent shapes")
+    if max_iter < 0:
+        raise ValueError("max_iter must be >= 0")
+    cdef Small S
+    cdef double md[4]
+    cdef double run_error = 0.0
+    cdef int reason = _CONVERGED
+    cdef double* block
+    cdef double* work = <double*> malloc((2 * m + 1) * sizeof(double))
+    if work == NULL:
+        raise MemoryError()
+    cdef double* shift = work
+    cdef double* x = work + m
+    with nogil:
+        for i in range(m):
+            shift[i] = 0.0
+        for i in range(nc):
+            if cd[i] > 0.0:
+                shift[i * d] = cd[i] / mud[i]
+        block = _setup(&S, m, nc, max_iter)
+        if block != NULL:
+            S.per_contact = per_contact
+            S.floor = floor
+            _problem(&S, Wd, qd, mud, shift)
+            for i in range(m):
+                x[i] = rd[i] + shift[i]
+            reason = _run(&S, x, tol, max_iter, &count, &run_error)
+            for i in range(m):
+                rd[i] = x[i] - shift[i]
+            _certify(&S, rd, rtol, ud, md, std)
+            free(block)
+            free(S.rows)
+    free(work)
+    if block == NULL:
+        raise MemoryError()
+    return (count, reason, run_error, md[0], md[1], md[2], md[3])
 
 
 # ---------------------------------------------------------------------------------------------

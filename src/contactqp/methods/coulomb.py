@@ -60,16 +60,17 @@ from scipy.sparse.linalg import splu
 from .. import kernels
 from ..core.local_problem import (
     CONTACT_FLOOR,
+    STATUS_RTOL,
     LocalProblem,
-    SmallArrays,
     better_dense,
     column_products,
+    limits_from_norms,
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import Operator
 from ..errors import InvalidInputError
-from .local_global import finish
+from .local_global import certified_result, finish
 from .pgs import GaussSeidel
 
 __all__ = ["solve_coulomb", "solve_on_candidates", "CandidateSolution", "alart_curnier"]
@@ -498,7 +499,7 @@ def _check_options(problem, r0, tol, max_iter):
     m = problem.q.shape[0]
     if r0 is None:
         return np.zeros(m)
-    return warm_start(r0, m)
+    return np.array(warm_start(r0, m))  # a copy: the solvers write in it
 
 
 def solve_coulomb(
@@ -557,11 +558,11 @@ def solve_coulomb(
     """
     start = time.perf_counter()
     r = _check_options(problem, r0, tol, max_iter)
-    small = problem.small
-    if small is not None:
+    small_W = problem.small_W
+    if small_W is not None:
         if check_psd:
             problem.check_semidefinite()  # once per problem and its with_q twins
-        return _solve_small(problem, small, r, tol, max_iter, per_contact, start)
+        return _solve_small(problem, small_W, r, tol, max_iter, per_contact, start)
     W, d, mu = problem.W, problem.dim, problem.mu  # a float ndarray or CSR, as validated
     if sp.issparse(W) and better_dense(W):
         W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
@@ -606,56 +607,56 @@ def solve_coulomb(
 
 def _solve_small(
     problem: LocalProblem,
-    small: SmallArrays,
+    W: np.ndarray,
     r: np.ndarray,
     tol: float,
     max_iter: int,
     per_contact: bool,
     start: float,
 ):
-    """:func:`solve_coulomb` of a small problem from ``r``: its first Newton run compiled
-    (:func:`~contactqp.kernels.compiled.small_newton`, the iterations of ``_Newton.run``); the
+    """:func:`solve_coulomb` of a small problem from ``r`` (``W``: :attr:`LocalProblem.small_W`):
+    its first Newton run and the certificate of its answer in one compiled call
+    (:func:`~contactqp.kernels.compiled.small_solve`, the iterations of ``_Newton.run``); the
     later stages, where that run does not converge, as on any problem."""
-    m = r.shape[0]
-    shift = small.shift[0]
-    x = (r + shift).reshape(1, m)
-    counts = np.empty(1, dtype=np.intp)
-    reasons = np.empty(1, dtype=np.intp)
-    errors = np.empty(1)
-    q = problem.q  # C-contiguous, as validated
-    assert kernels.small_newton is not None  # problem.small exists only with the kernels
-    kernels.small_newton(
-        small.W,
-        q.reshape(1, m),
-        small.mu,
-        small.shift,
-        x,
+    m, nc = r.shape[0], problem.n_contacts
+    u = np.empty(m)
+    status = np.empty(nc, dtype=np.intp)
+    assert kernels.small_solve is not None  # small_W exists only with the kernels
+    k, code, run_error, error, product, size_q, scale = kernels.small_solve(
+        W,
+        problem.q,  # C-contiguous, as validated
+        problem.mu,
+        problem.law.cohesion,
+        r,
         tol,
         min(RUN_ITERATIONS, max_iter),
         per_contact,
         CONTACT_FLOOR,
-        counts,
-        reasons,
-        errors,
+        STATUS_RTOL,
+        u,
+        status,
     )
-    k, reason = int(counts[0]), kernels.SMALL_REASONS[reasons[0]]
+    reason = kernels.SMALL_REASONS[code]
     if reason == "converged":
-        reactions, iterations, stages = x[0] - shift, k, [f"newton {k} it. (converged)"]
-    else:  # the Levenberg-Marquardt run and the later rounds, from where this one stopped
-        W, d, mu = small.W[0], problem.dim, problem.mu
-        q_apex = q - W @ shift if np.any(shift) else q
-
-        def measure(r_apex, u):
-            return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
-
-        first = (x[0], float(errors[0]), k, reason)
-        r_apex, iterations, stages = _rounds(
-            W, q_apex, mu, d, x[0], tol, max_iter, measure, first=first
+        limits = limits_from_norms(product, size_q, scale, problem.digits)
+        detail = f"newton {k} it. (converged)"
+        return certified_result(
+            problem, r, u, error, limits, status, tol, k, start, detail, "coulomb", per_contact
         )
-        reactions = r_apex - shift
+    # the Levenberg-Marquardt run and the later rounds, from where this one stopped
+    shift = problem.apex_shift
+    q_apex = problem.q - W @ shift if np.any(shift) else problem.q
+
+    def measure(r_apex, u):
+        return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
+
+    first = (r + shift, run_error, k, reason)
+    r_apex, iterations, stages = _rounds(
+        W, q_apex, problem.mu, problem.dim, r + shift, tol, max_iter, measure, first=first
+    )
     return finish(
         problem,
-        reactions,
+        r_apex - shift,
         tol,
         iterations,
         start,

@@ -42,7 +42,7 @@ from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .active_set import cold_start
 from .box_qp import solve_box_qp
 
-__all__ = ["certify_global", "finish", "local_result", "solve_frictionless"]
+__all__ = ["certified_result", "certify_global", "finish", "local_result", "solve_frictionless"]
 
 
 def local_result(
@@ -353,6 +353,28 @@ def finish(
             u = product + problem.q
             limits = accuracy_limits(problem, r, u, magnitude=magnitude)
         error = natural_map_residual(problem, r, u, per_contact=per_contact)[1]
+    return certified_result(
+        problem, r, u, error, limits, status, tol, iterations, start, detail, method, per_contact
+    )
+
+
+def certified_result(
+    problem: LocalProblem,
+    r: np.ndarray,
+    u: np.ndarray,
+    error: float,
+    limits: AccuracyLimits,
+    status: np.ndarray | None,
+    tol: float,
+    iterations: int,
+    start: float,
+    detail: str,
+    method: str,
+    per_contact: bool,
+) -> LocalResult:
+    """:func:`finish`'s result of a certificate computed already: ``u = W r + q``, the
+    natural-map ``error``, its ``limits`` and the contact ``status`` codes (None: computed
+    here), all of the given ``r``."""
     converged = bool(error <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     return local_result(

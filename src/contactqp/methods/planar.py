@@ -53,6 +53,7 @@ import scipy.sparse as sp
 from .. import kernels
 from ..core.local_problem import (
     CONTACT_FLOOR,
+    STATUS_RTOL,
     LocalProblem,
     limits_from_norms,
     natural_map_residual,
@@ -91,9 +92,6 @@ ROUTE_MAX_CONTACTS = 1000
 _NO_ROWS = np.empty((0, 0))
 _NO_INDEX = np.empty(0, dtype=np.int64)
 _NO_DATA = np.empty(0)
-#: Relative threshold of "zero" in the contact status (that of
-#: :func:`~contactqp.core.local_problem.contact_status_unchecked`).
-STATUS_RTOL = 1e-6
 
 
 def _kernel_arrays(

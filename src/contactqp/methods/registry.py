@@ -23,6 +23,7 @@ A problem carries its kind as the attribute ``kind``:
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -121,7 +122,7 @@ class Method:
     summary: str
     backend_settings: bool = False
 
-    @property
+    @functools.cached_property
     def option_names(self) -> tuple[str, ...]:
         """The names of :attr:`options`, in order."""
         return tuple(option.name for option in self.options)
