@@ -328,7 +328,7 @@ def test_frictionless_problems_stay_on_the_box_qp():
     assert solution.success and "newton" not in solution.message
     assert np.all(solution.forces.reshape(8, 3)[:, 1:] == 0)
     frictional = solve(random_problem(8, 3, seed=3, mu=0.3))
-    assert frictional.success and "newton" in frictional.message
+    assert frictional.success and frictional.method in ("spatial", "coulomb")  # with friction
 
 
 @pytest.mark.parametrize("symmetric", [True, False])

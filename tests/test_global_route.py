@@ -161,7 +161,7 @@ def test_indefinite_mass_leaves_the_check_of_w_to_run():
 @pytest.mark.parametrize("name", GLOBAL_FILES)
 def test_shared_global_files_keep_their_newton_iterations_and_certificates(name):
     given = read_any(FCLIB / name)
-    result = cq.solve(given)
+    result = cq.solve(given, method="coulomb")
     fresh = read_any(FCLIB / name)
     reference = solve_coulomb(fresh.condense())  # the dense condensation's route
     assert result.success and result.iterations == reference.iterations

@@ -26,12 +26,14 @@ import pytest
 import scipy.sparse as sp
 
 import contactqp as cq
+import contactqp.kernels as kernel_choice
 from contactqp.core.local_problem import GlobalProblem, LocalProblem, natural_map_error
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.io.fclib import read_any
 from contactqp.kernels import pure_numpy
 from contactqp.methods.coulomb import solve_coulomb
-from contactqp.methods.planar import ROUTE_MAX_CONTACTS, SWEEPS, _kernel_arrays, solve_planar
+from contactqp.methods.planar import ROUTE_MAX_CONTACTS, SWEEPS, solve_planar
+from contactqp.methods.sweeps import kernel_arrays
 
 FCLIB = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
 
@@ -61,7 +63,7 @@ def test_one_contact_is_solved_exactly_by_one_sweep(seed):
     problem = LocalProblem(W, q, [rng.uniform(0.0, 1.5)], 2)
     r, u = np.zeros(2), np.empty(2)
     (compiled or pure_numpy).planar_gauss_seidel(
-        *_kernel_arrays(W), W.reshape(1, 4), q, problem.mu, r, u, 0.0, 1, 1, False
+        *kernel_arrays(W), W.reshape(1, 4), q, problem.mu, r, u, 0.0, 1, 1, False
     )
     assert natural_map_error(problem, r) <= 1e-13
 
@@ -72,7 +74,7 @@ def test_compiled_and_pure_numpy_sweeps_agree(sparse, seed):
     if compiled is None:
         pytest.skip("the compiled kernels are not built here")
     problem = planar_problem(nc=9, seed=seed, sparse=sparse)
-    arrays = _kernel_arrays(problem.W)
+    arrays = kernel_arrays(problem.W)
     runs = []
     for kernels in (compiled, pure_numpy):
         blocks = np.empty((9, 4))
@@ -141,7 +143,9 @@ def test_default_route_of_2d_problems_is_planar_and_coulomb_stays_callable():
     assert cq.solve(problem).method == "planar"
     assert cq.solve(problem, method="coulomb").method == "coulomb"
     three_d = LocalProblem(np.eye(3), [-1.0, 0.1, 0.0], [0.3], 3)
-    assert cq.solve(three_d).method == "coulomb"
+    # 3-D: the spatial route where the compiled kernels are built, else coulomb
+    expected = "coulomb" if kernel_choice.spatial_solve is None else "spatial"
+    assert cq.solve(three_d).method == expected
 
 
 def test_global_2d_problem_takes_the_planar_route():

@@ -112,7 +112,7 @@ def test_warm_starts_and_budget():
     short = contactqp.solve(batch, tol=1e-14, max_iter=1)
     assert np.all(short.iterations <= 1)
     for p in range(batch.n_problems):
-        alone = contactqp.solve(batch.problem(p), tol=1e-14, max_iter=1)
+        alone = contactqp.solve(batch.problem(p), "coulomb", tol=1e-14, max_iter=1)
         assert bool(short.success[p]) == alone.success
 
 

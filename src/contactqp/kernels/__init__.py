@@ -35,6 +35,8 @@ __all__ = [
     "SMALL_REASONS",
     "planar_solve",
     "PLANAR_REASONS",
+    "spatial_solve",
+    "SPATIAL_REASONS",
     "IMPLEMENTATION",
     "FORCE_PURE_NUMPY",
     "pure_numpy_forced",
@@ -74,6 +76,12 @@ SMALL_REASONS: tuple[str, ...] = ()
 planar_solve: Callable[..., tuple[int, int]] | None = None
 #: The reasons of :func:`~contactqp.kernels.compiled.planar_solve`'s codes.
 PLANAR_REASONS: tuple[str, ...] = ()
+#: The compiled 3-D solve (:func:`contactqp.kernels.compiled.spatial_solve`: Gauss-Seidel sweeps
+#: with a local solver by cases, and the certificate), None with the pure-numpy kernels, where
+#: :mod:`contactqp.methods.spatial` is the Newton route alone.
+spatial_solve: Callable[..., tuple[int, int]] | None = None
+#: The reasons of :func:`~contactqp.kernels.compiled.spatial_solve`'s codes.
+SPATIAL_REASONS: tuple[str, ...] = ()
 
 if pure_numpy_forced():
     from .pure_numpy import (
@@ -108,6 +116,8 @@ else:
         SMALL_REASONS = _compiled.SMALL_REASONS
         planar_solve = _compiled.planar_solve
         PLANAR_REASONS = _compiled.PLANAR_REASONS
+        spatial_solve = _compiled.spatial_solve
+        SPATIAL_REASONS = _compiled.SPATIAL_REASONS
 
         IMPLEMENTATION = "compiled"
     except ImportError as _missing:

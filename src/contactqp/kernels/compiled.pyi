@@ -20,6 +20,7 @@ __all__ = [
 SMALL_REASONS: tuple[str, ...]
 SMALL_CONSTANTS: dict[str, float]
 PLANAR_REASONS: tuple[str, ...]
+SPATIAL_REASONS: tuple[str, ...]
 PLANAR_EVERY: int
 PLANAR_SPAN: int
 
@@ -69,6 +70,28 @@ def small_solve(
     status: np.ndarray,
 ) -> tuple[int, int, float, float, float, float, float]: ...
 def planar_solve(
+    W: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    q: np.ndarray,
+    mu: np.ndarray,
+    shift: np.ndarray,
+    r: np.ndarray,
+    u: np.ndarray,
+    status: np.ndarray,
+    measures: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    first: int,
+    check_blocks: bool,
+    psd_shift: float,
+    stall_test: bool,
+    per_contact: bool,
+    floor: float,
+    rtol: float,
+) -> tuple[int, int]: ...
+def spatial_solve(
     W: np.ndarray,
     indptr: np.ndarray,
     indices: np.ndarray,

@@ -1344,6 +1344,74 @@ cdef inline void _planar_local_factored(const double* a, const double* f, double
     _planar_local(a[0], a[1], a[2], a[3], bn, bt, mu, rn0, rt0, out)  # none holds: its step
 
 
+cdef void _block_certificate(Small* S, Py_ssize_t d, bint dense, const double* Wd,
+                            const Py_ssize_t* ip, const Py_ssize_t* ix, const double* dv,
+                            const double* diag, const double* x, Py_ssize_t* loaded,
+                            double rtol, double* rd, double* ud, double* md,
+                            Py_ssize_t* std) noexcept nogil:
+    """The certificate of the reactions ``rd = x - shift`` (written) of the sweeps' point ``x``
+    (from the apex), from ``W`` as given: dense ``Wd`` (read over the columns where ``rd`` is
+    not zero, in ``loaded``: the other terms are zero exactly) or CSR ``(ip, ix, dv)``. ``S``
+    points at the problem (``m``, ``nc``, ``d``, ``q``, ``mu``, ``shift``, ``qq`` and the
+    error's settings); ``diag`` holds each contact's ``d x d`` diagonal block. Writes ``ud``,
+    ``md`` and ``std`` as :func:`small_certificate` does."""
+    cdef Py_ssize_t k, j, p, row, i, count = 0, m = S.m, dd = d * d
+    cdef double product = 0.0, w = 0.0, total, magnitude, value, residual, error, size, aa
+    cdef double apex, largest, force, carry, slip
+    for k in range(m):
+        rd[k] = x[k] - S.shift[k]
+        if rd[k] != 0.0:
+            loaded[count] = k
+            count += 1
+    for row in range(m):
+        total = 0.0
+        magnitude = 0.0
+        if dense:
+            for k in range(count):
+                j = loaded[k]
+                value = Wd[row * m + j] * rd[j]
+                total += value
+                magnitude += fabs(value)
+        else:
+            for p in range(ip[row], ip[row + 1]):
+                value = dv[p] * rd[ix[p]]
+                total += value
+                magnitude += fabs(value)
+        ud[row] = total + S.q[row]
+        if row % d == 0 or S.mu[row // d] != 0.0:  # the certified rows
+            product += magnitude * magnitude
+        w = max(w, fabs(diag[dd * (row // d) + (d + 1) * (row % d)]))
+    if w == 0.0:
+        w = 1.0
+    _natural_error(S, rd, ud, &residual, &error)
+    md[0] = error
+    md[1] = sqrt(product)
+    md[2] = sqrt(S.qq)
+    size = 0.0
+    aa = 0.0
+    value = 0.0
+    for k in range(m):
+        size += rd[k] * rd[k]
+        apex = rd[k] + S.shift[k]
+        aa += apex * apex
+        value += ud[k] * ud[k]
+    md[3] = sqrt(max(S.qq, max(size, value)))
+    largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
+    force = largest if largest > 0.0 else 1.0
+    for i in range(S.nc):
+        carry = 0.0
+        slip = 0.0
+        for k in range(d):
+            apex = rd[d * i + k] + S.shift[d * i + k]
+            carry += apex * apex
+            if k:
+                slip += ud[d * i + k] * ud[d * i + k]
+        if sqrt(carry) > rtol * force:
+            std[i] = 2 if sqrt(slip) > rtol * w * force else 1
+        else:
+            std[i] = 0
+
+
 def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures, double tol,
                  Py_ssize_t max_sweeps, Py_ssize_t first, bint check_blocks, double psd_shift,
                  bint stall_test, bint per_contact, double floor, double rtol):
@@ -1400,7 +1468,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     cdef double* ud = <double*> _buffer(u, b'd', 1, su, True, "u")
     cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 1, sst, True, "status")
     cdef double* md = <double*> _buffer(measures, b'd', 1, sm, True, "measures")
-    cdef Py_ssize_t m = sq[0], nc = smu[0], most, nb = 0, i, j, k, l, p, s, c, row
+    cdef Py_ssize_t m = sq[0], nc = smu[0], most, nb = 0, i, j, k, l, p, s, c
     cdef bint dense = sw[0] > 0 or m == 0  # no contacts: nothing to read either way
     if (m != 2 * nc or (ss[0] != m and ss[0] != 0) or sr[0] != m or su[0] != m
             or sst[0] != nc or sm[0] != 4):
@@ -1438,11 +1506,9 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     B.col = index + nc + 1
     cdef Py_ssize_t* mark = B.col + most
     cdef Py_ssize_t* loaded = mark + nc  # the columns where r is not zero
-    cdef Py_ssize_t count
     cdef Small S
     cdef double bn, bt, a00, a01, a10, a11, coupling, change, size, relative, residual, error
-    cdef double ratio = 1.0, rate, total, magnitude, product, w, aa, value, largest, force
-    cdef double carry, slip, apex
+    cdef double ratio = 1.0, rate
     cdef double out[2]
     cdef double* a
     cdef bint shifted = False, zero = True, check
@@ -1582,61 +1648,357 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
             relative = sqrt(change) / (size if size > 0.0 else 1.0)
             check = (sweep <= first or ratio * relative <= tol
                      or sweep - last >= _PLANAR_EVERY or sweep >= max_sweeps)
-        # the certificate, from the reactions and W as given
-        for k in range(m):
-            rd[k] = x[k] - sh[k]
-        product = 0.0
-        w = 0.0
-        count = 0
-        for k in range(m):
-            if rd[k] != 0.0:
-                loaded[count] = k
-                count += 1
-        for row in range(m):
-            total = 0.0
-            magnitude = 0.0
-            if dense:  # over the columns where r is not zero: the other terms are 0 exactly
-                for k in range(count):
-                    j = loaded[k]
-                    value = Wd[row * m + j] * rd[j]
-                    total += value
-                    magnitude += fabs(value)
-            else:
-                for p in range(ip[row], ip[row + 1]):
-                    value = dv[p] * rd[ix[p]]
-                    total += value
-                    magnitude += fabs(value)
-            ud[row] = total + qd[row]
-            if row % 2 == 0 or mud[row // 2] != 0.0:  # the certified rows
-                product += magnitude * magnitude
-            w = max(w, fabs(B.diag[4 * (row // 2) + 3 * (row % 2)]))
-        if w == 0.0:
-            w = 1.0
-        _natural_error(&S, rd, ud, &residual, &error)
-        md[0] = error
-        md[1] = sqrt(product)
-        md[2] = sqrt(S.qq)
-        size = 0.0
-        aa = 0.0
-        value = 0.0
-        for k in range(m):
-            size += rd[k] * rd[k]
-            apex = rd[k] + sh[k]
-            aa += apex * apex
-            value += ud[k] * ud[k]
-        md[3] = sqrt(max(S.qq, max(size, value)))
-        largest = max(max(sqrt(size), sqrt(aa)), max(sqrt(S.qq) / w, sqrt(value) / w))
-        force = largest if largest > 0.0 else 1.0
-        for i in range(nc):
-            apex = rd[2 * i] + sh[2 * i]
-            carry = apex * apex + (rd[2 * i + 1] + sh[2 * i + 1]) ** 2
-            slip = fabs(ud[2 * i + 1])
-            if sqrt(carry) > rtol * force:
-                std[i] = 2 if slip > rtol * w * force else 1
-            else:
-                std[i] = 0
+        _block_certificate(&S, 2, dense, Wd, ip, ix, dv, B.diag, x, loaded, rtol, rd, ud, md,
+                           std)
     free(work)
     free(index)
     free(history)
     free(errors)
+    return sweep, code
+
+
+# ---------------------------------------------------------------------------------------------
+# 3-D contacts: Gauss-Seidel sweeps with a local solver by cases, its certificate included.
+
+#: Why :func:`spatial_solve` stopped, by the code it returns (those of :data:`PLANAR_REASONS`).
+SPATIAL_REASONS = PLANAR_REASONS
+cdef enum:
+    _LOCAL_ITERATIONS = 30  # largest Newton run of one contact's slip
+cdef double _LOCAL_SHARE = 1e-2  # its target: this share of the sweeps' (at least 1e-15)
+
+
+cdef struct Blocks3:
+    # W by 3x3 contact blocks, as Blocks by 2x2 ones: diag[9 i:9 i + 9] contact i's diagonal
+    # block (row-major), the off-diagonal blocks of block row i at slots ptr[i] .. ptr[i + 1] - 1,
+    # col[s] their block column and val[9 s:9 s + 9] their entries
+    Py_ssize_t nc
+    double* diag
+    Py_ssize_t* ptr
+    Py_ssize_t* col
+    double* val
+
+
+cdef inline void _row3(const Blocks3* B, Py_ssize_t i, const double* x, double* b) noexcept nogil:
+    """``b += sum over the off-diagonal blocks of row i of W_ij x_j``."""
+    cdef Py_ssize_t s, j
+    cdef double b0 = b[0], b1 = b[1], b2 = b[2], x0, x1, x2
+    cdef const double* v
+    for s in range(B.ptr[i], B.ptr[i + 1]):
+        j = B.col[s]
+        v = B.val + 9 * s
+        x0 = x[3 * j]
+        x1 = x[3 * j + 1]
+        x2 = x[3 * j + 2]
+        b0 += v[0] * x0 + v[1] * x1 + v[2] * x2
+        b1 += v[3] * x0 + v[4] * x1 + v[5] * x2
+        b2 += v[6] * x0 + v[7] * x1 + v[8] * x2
+    b[0] = b0
+    b[1] = b1
+    b[2] = b2
+
+
+cdef void _product3(const Blocks3* B, const double* x, const double* q, double* u) noexcept nogil:
+    """``u = W x + q`` by blocks."""
+    cdef Py_ssize_t i, k
+    cdef const double* a
+    for i in range(B.nc):
+        a = B.diag + 9 * i
+        for k in range(3):
+            u[3 * i + k] = (q[3 * i + k] + a[3 * k] * x[3 * i] + a[3 * k + 1] * x[3 * i + 1]
+                            + a[3 * k + 2] * x[3 * i + 2])
+        _row3(B, i, x, u + 3 * i)
+
+
+cdef void _inverse3(const double* a, double* f) noexcept nogil:
+    """``f[0:9]`` the inverse of the 3x3 block ``a`` (row-major), ``f[9]`` 1 when it exists
+    (a nonzero determinant), else 0."""
+    cdef double det
+    f[0] = a[4] * a[8] - a[5] * a[7]
+    f[1] = a[2] * a[7] - a[1] * a[8]
+    f[2] = a[1] * a[5] - a[2] * a[4]
+    f[3] = a[5] * a[6] - a[3] * a[8]
+    f[4] = a[0] * a[8] - a[2] * a[6]
+    f[5] = a[2] * a[3] - a[0] * a[5]
+    f[6] = a[3] * a[7] - a[4] * a[6]
+    f[7] = a[1] * a[6] - a[0] * a[7]
+    f[8] = a[0] * a[4] - a[1] * a[3]
+    det = a[0] * f[0] + a[1] * f[3] + a[2] * f[6]
+    if det != 0.0 and isfinite(1.0 / det):
+        for k in range(9):
+            f[k] /= det
+        f[9] = 1.0
+    else:
+        f[9] = 0.0
+
+
+cdef void _spatial_local(Small* L, const double* a, const double* f, const double* b,
+                         const double* mu, const double* zeros, double tol,
+                         double* x) noexcept nogil:
+    """Contact ``i``'s problem ``u = a x + b`` (its block ``a``, ``f`` = :func:`_inverse3` of
+    it, the others' reactions in ``b``, its coefficient ``mu[0]``), solved in place from ``x``,
+    by its cases:
+
+    * open, ``x = 0``, when ``b_N >= 0`` (then ``u = b`` is in the dual cone);
+    * without friction, ``x = (-b_N / a_NN, 0, 0)``;
+    * stick, ``x = -a^-1 b``, when that lies in the cone (``u = 0``);
+    * otherwise a slip: coulomb's Newton run on the one-contact problem from ``x``
+      (:func:`_run` on ``L``, work arrays of one contact, at most ``_LOCAL_ITERATIONS``
+      iterations to the one-contact natural-map error ``tol``), whose best point is kept.
+    """
+    cdef double r0, r1, r2, error
+    cdef Py_ssize_t count
+    if b[0] >= 0.0:
+        x[0] = x[1] = x[2] = 0.0
+        return
+    if mu[0] == 0.0:
+        if a[0] > 0.0:
+            x[0] = -b[0] / a[0]
+            x[1] = x[2] = 0.0
+        return
+    if f[9] != 0.0:
+        r0 = -(f[0] * b[0] + f[1] * b[1] + f[2] * b[2])
+        r1 = -(f[3] * b[0] + f[4] * b[1] + f[5] * b[2])
+        r2 = -(f[6] * b[0] + f[7] * b[1] + f[8] * b[2])
+        if r0 > 0.0 and sqrt(r1 * r1 + r2 * r2) <= mu[0] * r0:
+            x[0] = r0
+            x[1] = r1
+            x[2] = r2
+            return
+    _problem(L, a, b, mu, zeros)
+    _run(L, x, tol, _LOCAL_ITERATIONS, &count, &error)
+
+
+def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures, double tol,
+                  Py_ssize_t max_sweeps, Py_ssize_t first, bint check_blocks, double psd_shift,
+                  bint stall_test, bint per_contact, double floor, double rtol):
+    """The Gauss-Seidel solve of a 3-D local problem and its certificate, in one call.
+
+    The arguments, the evaluations of the error, the stopping rules, the codes and the
+    certificate are those of :func:`planar_solve`, for 3x3 contact blocks; each contact's
+    problem is solved by :func:`_spatial_local` (open, stick or a slip found by a one-contact
+    Newton run). With ``check_blocks`` each diagonal block must pass the test of
+    :func:`small_semidefinite` (with ``psd_shift``), else code 3 with its contact as the count.
+    Returns ``(sweeps, code)``: the index :data:`SPATIAL_REASONS`.
+    """
+    cdef Py_ssize_t sw[2]
+    cdef Py_ssize_t sp_[1]
+    cdef Py_ssize_t si[1]
+    cdef Py_ssize_t sd_[1]
+    cdef Py_ssize_t sq[1]
+    cdef Py_ssize_t smu[1]
+    cdef Py_ssize_t ss[1]
+    cdef Py_ssize_t sr[1]
+    cdef Py_ssize_t su[1]
+    cdef Py_ssize_t sst[1]
+    cdef Py_ssize_t sm[1]
+    cdef const double* Wd = <const double*> _buffer(W, b'd', 2, sw, False, "W")
+    cdef const Py_ssize_t* ip = <const Py_ssize_t*> _buffer(indptr, b'n', 1, sp_, False, "indptr")
+    cdef const Py_ssize_t* ix = <const Py_ssize_t*> _buffer(indices, b'n', 1, si, False,
+                                                            "indices")
+    cdef const double* dv = <const double*> _buffer(data, b'd', 1, sd_, False, "data")
+    cdef const double* qd = <const double*> _buffer(q, b'd', 1, sq, False, "q")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 1, smu, False, "mu")
+    cdef const double* sh = <const double*> _buffer(shift, b'd', 1, ss, False, "shift")
+    cdef double* rd = <double*> _buffer(r, b'd', 1, sr, True, "r")
+    cdef double* ud = <double*> _buffer(u, b'd', 1, su, True, "u")
+    cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 1, sst, True, "status")
+    cdef double* md = <double*> _buffer(measures, b'd', 1, sm, True, "measures")
+    cdef Py_ssize_t m = sq[0], nc = smu[0], most, nb = 0, i, j, k, l, p, s, c, e
+    cdef bint dense = sw[0] > 0 or m == 0
+    if (m != 3 * nc or (ss[0] != m and ss[0] != 0) or sr[0] != m or su[0] != m
+            or sst[0] != nc or sm[0] != 4):
+        raise ValueError("inconsistent shapes")
+    if dense and (sw[0] != m or sw[1] != m) and m > 0:
+        raise ValueError("a dense W must be (m, m)")
+    if not dense and (sp_[0] != m + 1 or si[0] < ip[m] or sd_[0] < ip[m]):
+        raise ValueError("indptr must have m + 1 entries, indices and data indptr[m]")
+    most = nc * nc if dense else (ip[m] if m else 0)
+    cdef double* work = <double*> malloc((30 * nc + 9 * most + 6 * m + 40) * sizeof(double))
+    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((2 * nc + most + m + 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t* history = <Py_ssize_t*> malloc((max_sweeps + 2) * sizeof(Py_ssize_t))
+    cdef double* errors = <double*> malloc((max_sweeps + 2) * sizeof(double))
+    cdef Small L  # one contact's work arrays, for the slips
+    cdef double* local = _setup(&L, 3, 1, _LOCAL_ITERATIONS)
+    if work == NULL or index == NULL or history == NULL or errors == NULL or local == NULL:
+        free(work)
+        free(index)
+        free(history)
+        free(errors)
+        free(local)
+        if local != NULL:
+            free(L.rows)
+        raise MemoryError()
+    L.per_contact = False
+    L.floor = floor
+    cdef Blocks3 B
+    B.nc = nc
+    B.diag = work
+    B.val = work + 9 * nc
+    cdef double* x = B.val + 9 * most  # reactions from the apex
+    cdef double* qa = x + m  # q - W shift
+    cdef double* react = qa + m  # x - shift
+    cdef double* squares = react + m
+    cdef double* zeros = squares + nc  # m + 3 zeros: the shift when none is given
+    cdef double* factors = zeros + m + 3  # 10 per contact: the inverse of its block
+    cdef double* b = factors + 10 * nc  # 3
+    cdef double* scaled = b + 3  # 9 + 3 + 3: the PSD test of one block
+    cdef Py_ssize_t kk
+    for kk in range(m + 3):
+        zeros[kk] = 0.0
+    if ss[0] == 0:
+        sh = zeros
+    B.ptr = index
+    B.col = index + nc + 1
+    cdef Py_ssize_t* mark = B.col + most
+    cdef Py_ssize_t* loaded = mark + nc
+    cdef Py_ssize_t keep[3]
+    cdef Small S
+    cdef double change, size, relative, residual, error, ratio = 1.0, rate, value
+    cdef double* a
+    cdef double old[3]
+    cdef bint shifted = False, zero = True, check
+    cdef Py_ssize_t sweep = 0, checks = 0, last = 0, code = 2, bad = -1
+    cdef double local_tol = max(_LOCAL_SHARE * tol, 1e-15)
+    with nogil:
+        for i in range(nc):
+            mark[i] = -1
+        for i in range(nc):  # W by contact blocks
+            B.ptr[i] = nb
+            a = B.diag + 9 * i
+            for e in range(9):
+                a[e] = 0.0
+            if dense:
+                for j in range(nc):
+                    c = 0
+                    for k in range(3):
+                        for l in range(3):
+                            if Wd[(3 * i + k) * m + 3 * j + l] != 0.0:
+                                c = 1
+                    if j == i:
+                        for k in range(3):
+                            for l in range(3):
+                                a[3 * k + l] = Wd[(3 * i + k) * m + 3 * j + l]
+                    elif c:
+                        B.col[nb] = j
+                        for k in range(3):
+                            for l in range(3):
+                                B.val[9 * nb + 3 * k + l] = Wd[(3 * i + k) * m + 3 * j + l]
+                        nb += 1
+            else:
+                for k in range(3):
+                    for p in range(ip[3 * i + k], ip[3 * i + k + 1]):
+                        c = ix[p]
+                        j = c // 3
+                        l = c - 3 * j
+                        if j == i:
+                            a[3 * k + l] += dv[p]
+                            continue
+                        s = mark[j]
+                        if s < B.ptr[i]:  # no block of j in this row yet
+                            s = nb
+                            mark[j] = nb
+                            B.col[nb] = j
+                            for e in range(9):
+                                B.val[9 * nb + e] = 0.0
+                            nb += 1
+                        B.val[9 * s + 3 * k + l] += dv[p]
+        B.ptr[nc] = nb
+        if check_blocks:
+            for i in range(nc):
+                if not _semidefinite(B.diag + 9 * i, 3, psd_shift, scaled, scaled + 9, keep):
+                    bad = i
+                    break
+    if bad >= 0:
+        free(work)
+        free(index)
+        free(history)
+        free(errors)
+        free(local)
+        free(L.rows)
+        return bad, 3
+    S.m, S.nc, S.d = m, nc, 3
+    S.q, S.mu, S.shift = qd, mud, sh
+    S.per_contact = per_contact
+    S.floor = floor
+    S.squares = squares
+    with nogil:
+        S.qq = _dot(qd, qd, m)
+        for i in range(nc):
+            _inverse3(B.diag + 9 * i, factors + 10 * i)
+        for k in range(m):
+            x[k] = rd[k] + sh[k]
+            if sh[k] != 0.0:
+                shifted = True
+            if x[k] != 0.0:
+                zero = False
+        if shifted:  # q - W shift
+            _product3(&B, sh, qd, qa)
+            for k in range(m):
+                qa[k] = 2.0 * qd[k] - qa[k]
+        else:
+            for k in range(m):
+                qa[k] = qd[k]
+        check = zero
+        relative = 0.0
+        while True:
+            if check:
+                if zero and sweep == 0:
+                    for k in range(m):
+                        ud[k] = qa[k]
+                else:
+                    _product3(&B, x, qa, ud)
+                for k in range(m):
+                    react[k] = x[k] - sh[k]
+                _natural_error(&S, react, ud, &residual, &error)
+                history[checks] = sweep
+                errors[checks] = error
+                checks += 1
+                last = sweep
+                if error <= tol:
+                    code = 0
+                    break
+                if sweep >= max_sweeps:
+                    code = 2
+                    break
+                if relative > 0.0:
+                    ratio = error / relative
+                if stall_test:
+                    for k in range(checks - 2, -1, -1):
+                        if history[k] <= sweep - _PLANAR_SPAN:
+                            rate = (error / errors[k]) ** (1.0 / (sweep - history[k]))
+                            if rate >= 1.0 or sweep + log(tol / error) / log(rate) > max_sweeps:
+                                code = 1
+                            break
+                    if code == 1:
+                        break
+            elif sweep >= max_sweeps:
+                code = 2
+                break
+            change = 0.0
+            size = 0.0
+            for i in range(nc):
+                a = B.diag + 9 * i
+                for k in range(3):
+                    old[k] = x[3 * i + k]
+                    b[k] = qa[3 * i + k]
+                _row3(&B, i, x, b)
+                _spatial_local(&L, a, factors + 10 * i, b, mud + i, zeros, local_tol,
+                               x + 3 * i)
+                for k in range(3):
+                    value = x[3 * i + k]
+                    change += (value - old[k]) ** 2
+                    size += value * value
+            sweep += 1
+            size = sqrt(max(size, S.qq))
+            relative = sqrt(change) / (size if size > 0.0 else 1.0)
+            check = (sweep <= first or ratio * relative <= tol
+                     or sweep - last >= _PLANAR_EVERY or sweep >= max_sweeps)
+        _block_certificate(&S, 3, dense, Wd, ip, ix, dv, B.diag, x, loaded, rtol, rd, ud, md,
+                           std)
+    free(work)
+    free(index)
+    free(history)
+    free(errors)
+    free(local)
+    free(L.rows)
     return sweep, code

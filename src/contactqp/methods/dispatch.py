@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 
+from .. import kernels
 from .frictional import solve_frictional
 from .global_route import condense
 from .local_global import certify_global
@@ -12,12 +13,14 @@ from .registry import (
     FRICTIONLESS_ROUTE,
     METHODS,
     PLANAR_ROUTE,
+    SPATIAL_ROUTE,
     Method,
     check_options,
     get_kind,
     get_method,
     kind_of,
 )
+from .spatial import ROUTE_MAX_CONTACTS as SPATIAL_MAX_CONTACTS
 
 __all__ = ["solve", "resolve"]
 
@@ -43,7 +46,10 @@ def resolve(
     takes; with 2-D contacts (``dim == 2``) a local or global problem of at most
     :data:`~contactqp.methods.planar.ROUTE_MAX_CONTACTS` contacts with no method named takes
     the planar route (:data:`~contactqp.methods.registry.PLANAR_ROUTE`), which
-    takes the same options and hands the default a problem on which it stalls.
+    takes the same options and hands the default a problem on which it stalls; with 3-D
+    contacts, up to :data:`~contactqp.methods.spatial.ROUTE_MAX_CONTACTS`, the spatial route
+    (:data:`~contactqp.methods.registry.SPATIAL_ROUTE`) does the same where the compiled
+    kernels are built.
 
     Raises
     ------
@@ -58,13 +64,15 @@ def resolve(
     if entry.name == spec.default and _is_frictionless(problem, kind):
         entry = METHODS[FRICTIONLESS_ROUTE]
         options = {name: value for name, value in options.items() if name in entry.option_names}
-    elif (
-        method is None
-        and kind in ("local", "global")
-        and problem.dim == 2
-        and problem.n_contacts <= ROUTE_MAX_CONTACTS
-    ):
-        entry = METHODS[PLANAR_ROUTE]  # takes the default's options, hands it a stall
+    elif method is None and kind in ("local", "global"):
+        if problem.dim == 2 and problem.n_contacts <= ROUTE_MAX_CONTACTS:
+            entry = METHODS[PLANAR_ROUTE]  # takes the default's options, hands it a stall
+        elif (
+            problem.dim == 3
+            and problem.n_contacts <= SPATIAL_MAX_CONTACTS
+            and kernels.spatial_solve is not None
+        ):
+            entry = METHODS[SPATIAL_ROUTE]  # the same, in 3-D
     defaults = {name: value for name, value in spec.defaults.items() if name in entry.option_names}
     return kind, entry, {**defaults, **options}
 

@@ -42,28 +42,24 @@ every local method, by the natural-map error of the final ``r`` computed from ``
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import math
 import time
-from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from .. import kernels
 from ..core.local_problem import (
-    CONTACT_FLOOR,
-    STATUS_RTOL,
     LocalProblem,
-    limits_from_norms,
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
 from ..errors import InvalidInputError, NotPositiveDefiniteError
-from .coulomb import MAX_ITER, solve_coulomb
-from .local_global import finish, local_result
+from .coulomb import MAX_ITER
+from .local_global import finish
+from .sweeps import compiled_sweeps, kernel_arrays, newton_after
 
 __all__ = [
     "solve_planar",
@@ -89,26 +85,6 @@ COMPILED_FIRST = 1
 #: sweeps would need thousands of iterations (Siconos' NSGS does not converge in 10,000), and
 #: the stall test there costs 34 sweeps (a few per cent of Newton's time) before Newton solves it.
 ROUTE_MAX_CONTACTS = 1000
-_NO_ROWS = np.empty((0, 0))
-_NO_INDEX = np.empty(0, dtype=np.int64)
-_NO_DATA = np.empty(0)
-
-
-def _kernel_arrays(
-    W: Any, index: type = np.int64
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(dense, indptr, indices, data)`` as the kernels take them: a dense ``W``
-    (C-contiguous), or the CSR arrays of a sparse one, its indices of type ``index``
-    (:func:`~contactqp.kernels.planar_gauss_seidel`: int64; ``planar_solve``: intp)."""
-    if isinstance(W, np.ndarray):
-        return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
-    csr = sp.csr_matrix(W)
-    return (
-        _NO_ROWS,
-        np.ascontiguousarray(csr.indptr, dtype=index),
-        np.ascontiguousarray(csr.indices, dtype=index),
-        np.ascontiguousarray(csr.data, dtype=float),
-    )
 
 
 def check_contact_blocks(blocks: np.ndarray) -> None:
@@ -235,13 +211,27 @@ def solve_planar(
     given = np.zeros(m) if r0 is None else warm_start(r0, m)
     budget = min(SWEEPS, max_iter)
     if kernels.planar_solve is not None:
-        result, sweeps = _solve_compiled(
-            problem, given.copy(), tol, budget, max_iter, check_psd, per_contact, start
+        result, sweeps = compiled_sweeps(
+            problem,
+            kernels.planar_solve,
+            kernels.PLANAR_REASONS,
+            "planar",
+            functools.partial(_bad_block, problem=problem),
+            given.copy(),
+            tol,
+            budget,
+            COMPILED_FIRST,
+            max_iter,
+            check_psd,
+            per_contact,
+            start,
         )
         if result is not None:
             return result
-        return _newton(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps)
-    arrays = _kernel_arrays(problem.W)
+        return newton_after(
+            problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps
+        )
+    arrays = kernel_arrays(problem.W)
     blocks = np.empty((problem.n_contacts, 4))
     kernels.planar_blocks(*arrays, blocks)
     if check_psd:
@@ -279,102 +269,15 @@ def solve_planar(
             per_contact=per_contact,
             products=(product, magnitude),
         )
-    return _newton(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps)
+    return newton_after(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps)
 
 
-def _newton(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps):
-    """The stalled sweeps' hand-over: :func:`~contactqp.methods.coulomb.solve_coulomb` from
-    the caller's start, ``sweeps`` counted in its iterations and message."""
-    newton = solve_coulomb(
-        problem,
-        r0=None if r0 is None else given,
-        tol=tol,
-        max_iter=max_iter - sweeps,
-        check_psd=check_psd,  # all of W: Newton factors it
-        per_contact=per_contact,
+def _bad_block(contact: int, problem: LocalProblem) -> None:
+    """Raise for ``contact``, whose diagonal block failed the compiled solve's test."""
+    blocks = np.empty((problem.n_contacts, 4))
+    kernels.planar_blocks(*kernel_arrays(problem.W), blocks)
+    check_contact_blocks(blocks)  # raises, naming the block and its entries
+    raise NotPositiveDefiniteError(  # a block of duplicate entries, which the kernel sums
+        f"W is not positive semidefinite: the symmetric part of contact {contact}'s "
+        f"diagonal block (its duplicate entries summed) is not"
     )
-    return dataclasses.replace(
-        newton,
-        iterations=newton.iterations + sweeps,
-        seconds=time.perf_counter() - start,
-        message=f"gauss-seidel {sweeps} sweeps (stalled), then {newton.message}",
-    )
-
-
-def _solve_compiled(
-    problem: LocalProblem,
-    r: np.ndarray,
-    tol: float,
-    budget: int,
-    max_iter: int,
-    check_psd: bool,
-    per_contact: bool,
-    start: float,
-) -> tuple[LocalResult | None, int]:
-    """The sweeps and the certificate in one compiled call
-    (:func:`~contactqp.kernels.compiled.planar_solve`), from ``r`` (overwritten).
-
-    Returns ``(result, sweeps)``: the result is None when the sweeps stopped short of ``tol``
-    (stalled, or :data:`SWEEPS` spent) with iterations left for Newton.
-    """
-    assert kernels.planar_solve is not None  # the caller's test
-    nc = problem.n_contacts
-    arrays = _kernel_arrays(problem.W, np.intp)
-    u = np.empty(r.shape[0])
-    status = np.empty(nc, dtype=np.intp)
-    measures = np.empty(4)
-    sweeps, code = kernels.planar_solve(
-        *arrays,
-        problem.q,  # C-contiguous, as validated
-        np.ascontiguousarray(problem.mu),  # a view of the caller's array, perhaps strided
-        problem.apex_shift if np.count_nonzero(problem.law.cohesion) else _NO_DATA,  # empty: none
-        r,
-        u,
-        status,
-        measures,
-        tol,
-        budget,
-        COMPILED_FIRST,
-        check_psd,
-        PSD_SHIFT,
-        True,
-        per_contact,
-        CONTACT_FLOOR,
-        STATUS_RTOL,
-    )
-    reason = kernels.PLANAR_REASONS[code]
-    if reason == "diagonal block not semidefinite":  # sweeps is then the contact's index
-        blocks = np.empty((nc, 4))
-        kernels.planar_blocks(*_kernel_arrays(problem.W), blocks)
-        check_contact_blocks(blocks)  # raises, naming the block and its entries
-        raise NotPositiveDefiniteError(  # a block of duplicate entries, which the kernel sums
-            f"W is not positive semidefinite: the symmetric part of contact {sweeps}'s "
-            f"diagonal block (its duplicate entries summed) is not"
-        )
-    if reason != "converged" and sweeps < max_iter:
-        return None, sweeps
-    error, product, size_q, scale = measures.tolist()
-    limits = limits_from_norms(product, size_q, scale, problem.digits)
-    converged = error <= tol
-    verdict = "converged" if converged else f"not converged to {tol:g}"
-    message = (
-        f"{verdict}: gauss-seidel {sweeps} sweeps"
-        + ("" if reason == "converged" else " (budget spent)")
-        + f"; natural-map error {error:.2e}"
-        + (" (largest of the problem's and each contact's)" if per_contact else "")
-    )
-    notes = limits.describe(tol) if max(limits.rounding, limits.data) > tol else ""
-    return local_result(
-        problem,
-        r,
-        u,
-        converged=bool(converged),
-        error=error,
-        tol=tol,
-        iterations=sweeps,
-        seconds=time.perf_counter() - start,
-        message=f"{message}; {notes}" if notes else message,
-        method="planar",
-        limits=limits,
-        contact_status=status,
-    ), sweeps

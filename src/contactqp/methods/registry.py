@@ -42,6 +42,8 @@ from .local_global import solve_frictionless
 from .planar import SWEEPS, solve_planar
 from .polygonal import solve_polygonal
 from .qp import DEFAULT_BACKEND, solve_qp
+from .spatial import SWEEPS as SPATIAL_SWEEPS
+from .spatial import solve_spatial
 from .surface_active_set import solve_surface_active_set
 from .surface_dual_active_set import MAX_CG, solve_dual_active_set
 from .tangential_fista import MAX_ITER as FISTA_MAX_ITER
@@ -66,6 +68,7 @@ __all__ = [
     "check_options",
     "FRICTIONLESS_ROUTE",
     "PLANAR_ROUTE",
+    "SPATIAL_ROUTE",
 ]
 
 #: The method :func:`~contactqp.solve` takes instead of a kind's default when ``mu = 0`` on
@@ -75,6 +78,10 @@ FRICTIONLESS_ROUTE = "normal-qp"
 #: The method :func:`~contactqp.solve` takes instead of a local or global problem's default
 #: when its contacts are 2-D (``dim == 2``); it hands a stalled problem to the default.
 PLANAR_ROUTE = "planar"
+
+#: The same for 3-D contacts (``dim == 3``), up to
+#: :data:`~contactqp.methods.spatial.ROUTE_MAX_CONTACTS` contacts.
+SPATIAL_ROUTE = "spatial"
 
 
 @dataclass(frozen=True)
@@ -268,6 +275,33 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 None,
                 "exact",
                 "2-D contacts: Gauss-Seidel with the exact planar local solver, then coulomb "
+                "(taken for the default)",
+            ),
+            Method(
+                "spatial",
+                ("local", "global"),
+                solve_spatial,
+                (
+                    _R0_LOCAL,
+                    _local_tol(1e-8),
+                    Option(
+                        "max_iter",
+                        int,
+                        MAX_ITER,
+                        f"budget of Gauss-Seidel sweeps (at most {SPATIAL_SWEEPS}) and, after a "
+                        f"stall, of the coulomb method",
+                    ),
+                    Option(
+                        "check_psd",
+                        bool,
+                        True,
+                        "check W's contact blocks (all of W when coulomb takes over)",
+                    ),
+                    _PER_CONTACT,
+                ),
+                None,
+                "exact",
+                "3-D contacts: Gauss-Seidel with a local solver by cases, then coulomb "
                 "(taken for the default)",
             ),
             Method(

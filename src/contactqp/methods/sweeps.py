@@ -1,0 +1,164 @@
+"""The compiled Gauss-Seidel routes' shared driver: one kernel call, its result, Newton on a stall.
+
+:mod:`~contactqp.methods.planar` (2-D, exact local solver) and
+:mod:`~contactqp.methods.spatial` (3-D, local solver by cases) each run their whole solve in one
+compiled call (:func:`~contactqp.kernels.compiled.planar_solve`,
+:func:`~contactqp.kernels.compiled.spatial_solve`): ``W`` read once into contact blocks, the
+sweeps, and the certificate from the final ``r`` and ``W`` as given. :func:`compiled_sweeps`
+makes that call and its :class:`~contactqp.core.result.LocalResult`; when the sweeps stop short
+(a stall, or their budget spent with iterations left), :func:`newton_after` hands the problem
+to :func:`~contactqp.methods.coulomb.solve_coulomb` from the caller's start.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..core.local_problem import (
+    CONTACT_FLOOR,
+    STATUS_RTOL,
+    LocalProblem,
+    limits_from_norms,
+)
+from ..core.operators import PSD_SHIFT
+from ..core.result import LocalResult
+from .coulomb import solve_coulomb
+from .local_global import local_result
+
+__all__ = ["compiled_sweeps", "kernel_arrays", "newton_after"]
+
+_NO_ROWS = np.empty((0, 0))
+_NO_INDEX = np.empty(0, dtype=np.int64)
+_NO_DATA = np.empty(0)
+
+
+def kernel_arrays(
+    W: Any, index: type = np.int64
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(dense, indptr, indices, data)`` as the kernels take them: a dense ``W``
+    (C-contiguous), or the CSR arrays of a sparse one, its indices of type ``index``
+    (:func:`~contactqp.kernels.planar_gauss_seidel`: int64; the solve kernels: intp)."""
+    if isinstance(W, np.ndarray):
+        return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
+    csr = sp.csr_matrix(W)
+    return (
+        _NO_ROWS,
+        np.ascontiguousarray(csr.indptr, dtype=index),
+        np.ascontiguousarray(csr.indices, dtype=index),
+        np.ascontiguousarray(csr.data, dtype=float),
+    )
+
+
+def compiled_sweeps(
+    problem: LocalProblem,
+    kernel: Callable[..., tuple[int, int]],
+    reasons: tuple[str, ...],
+    method: str,
+    bad_block: Callable[[int], None],
+    r: np.ndarray,
+    tol: float,
+    budget: int,
+    first: int,
+    max_iter: int,
+    check_psd: bool,
+    per_contact: bool,
+    start: float,
+) -> tuple[LocalResult | None, int]:
+    """The sweeps and the certificate in one call of ``kernel`` from ``r`` (overwritten), at
+    most ``budget`` sweeps, the error evaluated after each of the ``first``.
+
+    ``reasons`` names the kernel's codes; ``bad_block(contact)`` raises
+    :class:`~contactqp.errors.NotPositiveDefiniteError` for the contact whose diagonal block
+    failed the kernel's test (``check_psd``). Returns ``(result, sweeps)``: the result is None
+    when the sweeps stopped short of ``tol`` (stalled, or ``budget`` spent) with iterations
+    left for Newton.
+    """
+    nc = problem.n_contacts
+    u = np.empty(r.shape[0])
+    status = np.empty(nc, dtype=np.intp)
+    measures = np.empty(4)
+    sweeps, code = kernel(
+        *kernel_arrays(problem.W, np.intp),
+        problem.q,  # C-contiguous, as validated
+        np.ascontiguousarray(problem.mu),  # a view of the caller's array, perhaps strided
+        problem.apex_shift if np.count_nonzero(problem.law.cohesion) else _NO_DATA,  # empty: none
+        r,
+        u,
+        status,
+        measures,
+        tol,
+        budget,
+        first,
+        check_psd,
+        PSD_SHIFT,
+        True,
+        per_contact,
+        CONTACT_FLOOR,
+        STATUS_RTOL,
+    )
+    reason = reasons[code]
+    if reason == "diagonal block not semidefinite":  # sweeps is then the contact's index
+        bad_block(sweeps)
+    if reason != "converged" and sweeps < max_iter:
+        return None, sweeps
+    error, product, size_q, scale = measures.tolist()
+    limits = limits_from_norms(product, size_q, scale, problem.digits)
+    converged = error <= tol
+    verdict = "converged" if converged else f"not converged to {tol:g}"
+    message = (
+        f"{verdict}: gauss-seidel {sweeps} sweeps"
+        + ("" if reason == "converged" else " (budget spent)")
+        + f"; natural-map error {error:.2e}"
+        + (" (largest of the problem's and each contact's)" if per_contact else "")
+    )
+    notes = limits.describe(tol) if max(limits.rounding, limits.data) > tol else ""
+    return local_result(
+        problem,
+        r,
+        u,
+        converged=bool(converged),
+        error=error,
+        tol=tol,
+        iterations=sweeps,
+        seconds=time.perf_counter() - start,
+        message=f"{message}; {notes}" if notes else message,
+        method=method,
+        limits=limits,
+        contact_status=status,
+    ), sweeps
+
+
+def newton_after(
+    problem: LocalProblem,
+    r0,
+    given: np.ndarray,
+    tol: float,
+    max_iter: int,
+    check_psd: bool,
+    per_contact: bool,
+    start: float,
+    sweeps: int,
+) -> LocalResult:
+    """The stalled sweeps' hand-over: :func:`~contactqp.methods.coulomb.solve_coulomb` from
+    the caller's start (``given``; none when ``r0`` is None), ``sweeps`` counted in its
+    iterations and message."""
+    newton = solve_coulomb(
+        problem,
+        r0=None if r0 is None else given,
+        tol=tol,
+        max_iter=max_iter - sweeps,
+        check_psd=check_psd,  # all of W: Newton factors it
+        per_contact=per_contact,
+    )
+    return dataclasses.replace(
+        newton,
+        iterations=newton.iterations + sweeps,
+        seconds=time.perf_counter() - start,
+        message=f"gauss-seidel {sweeps} sweeps (stalled), then {newton.message}",
+    )
