@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 
 from .frictional import solve_frictional
-from .global_route import condense
+from .global_route import condense, solve_compiled
 from .local_global import certify_global
 from .planar import ROUTE_MAX_CONTACTS
 from .registry import (
@@ -20,6 +20,10 @@ from .registry import (
 )
 
 __all__ = ["solve", "resolve"]
+
+#: The method whose answers to small global problems
+#: :func:`~contactqp.methods.global_route.solve_compiled` gives in one compiled call.
+COMPILED_GLOBAL = "coulomb"
 
 
 def _is_frictionless(problem, kind: str) -> bool:
@@ -123,6 +127,10 @@ def solve(problem, method: str | None = None, **options):
         return solve_frictional(problem, entry, options)
     if kind == "global":
         start = time.perf_counter()
+        if entry.name == COMPILED_GLOBAL:  # small problems: one compiled call, or None
+            result = solve_compiled(problem, start, **options)
+            if result is not None:
+                return result
         condensed = condense(problem)  # M factored once, by its structure
         if condensed.factor.positive_definite and "check_psd" in entry.option_names:
             options = {**options, "check_psd": False}  # W = H^T M^-1 H, M checked SPD

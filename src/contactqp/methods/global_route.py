@@ -17,6 +17,15 @@ diagonal: there ``M^{-1}`` is known exactly and ``W`` is a sparse product.
   costs on the small finite-element files);
 * otherwise the problem's own sparse LU factorisation and condensation.
 
+A small problem (at most :data:`COMPILED_UNKNOWNS` contact unknowns, ``M`` block diagonal or
+of at most :data:`DENSE_FREEDOMS` freedoms) solved by the default method is done in one
+compiled call (:func:`solve_compiled`): the same factorisation of ``M`` (LAPACK's, through
+scipy), the condensation, coulomb's Newton run on each group of contacts that ``W`` couples
+(contacts that share no body are solved apart) and the certificate on the global equations.
+Whatever that call does not finish (a larger group, a singular ``M``, a ``W`` that fails the
+semidefiniteness test, a Newton run that does not converge) is done again by the general
+route, from the start.
+
 Each factor records the Jacobi scaling ``s = |diag M|^{-1/2}`` and the exact 1-norm condition of
 the scaled ``M``, and refuses a singular ``M`` (a singular block, or an LU pivot below
 ``ndof * eps`` of the largest) with :class:`~contactqp.errors.NotPositiveDefiniteError`, as
@@ -29,6 +38,7 @@ must both meet ``tol``.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,11 +46,26 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from ..core.local_problem import DENSE_FILL, DENSE_SIZE, GlobalProblem, LocalProblem, better_dense
+from .. import kernels
+from ..core.local_problem import (
+    CONTACT_FLOOR,
+    DENSE_FILL,
+    DENSE_SIZE,
+    SMALL_UNKNOWNS,
+    GlobalProblem,
+    LocalProblem,
+    better_dense,
+    relative_rounding,
+)
+from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.operators import PSD_SHIFT
+from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
+from .local_global import compiled_global_result
 
 __all__ = [
     "BLOCK_MAX",
+    "COMPILED_UNKNOWNS",
     "DENSE_ENTRIES",
     "DENSE_FREEDOMS",
     "BlockDiagonalMass",
@@ -50,11 +75,17 @@ __all__ = [
     "block_size",
     "condense",
     "factor_mass",
+    "solve_compiled",
 ]
 
 BLOCK_MAX = 12  #: largest diagonal block of a block-diagonal ``M`` inverted block by block
 DENSE_FREEDOMS = 400  #: a general ``M`` of at most this many freedoms is factored dense
 DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries are read dense
+#: Most contact unknowns ``m`` of a problem that :func:`solve_compiled` takes (``W`` is formed
+#: dense there: 2.9 MB)
+COMPILED_UNKNOWNS = 600
+#: The rtol of :func:`~contactqp.core.local_problem.contact_status_unchecked`
+_STATUS_RTOL = 1e-6
 _EPS = float(np.finfo(float).eps)
 
 
@@ -367,3 +398,91 @@ def condense(problem: GlobalProblem) -> Condensed:
             f"M ({M.shape[0]}x{M.shape[0]}) is singular: the solve is not finite"
         )
     return Condensed(LocalProblem(W, q, problem.mu, problem.dim, problem.title), factor)
+
+
+def _csr_arrays(A) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(indptr, indices, data)`` of ``A`` in compressed rows, indices as intp."""
+    csr: Any = A if sp.issparse(A) else sp.csr_matrix(A)
+    return (
+        np.asarray(csr.indptr, dtype=np.intp),
+        np.asarray(csr.indices, dtype=np.intp),
+        np.ascontiguousarray(csr.data, dtype=float),
+    )
+
+
+def solve_compiled(
+    problem: GlobalProblem,
+    start: float,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = 800,
+    check_psd: bool = True,
+    per_contact: bool = False,
+) -> LocalResult | None:
+    """``coulomb``'s answer to a small global problem in one compiled call, or None when the
+    general route must give it (see the module notes).
+
+    The options are ``coulomb``'s (:func:`~contactqp.methods.coulomb.solve_coulomb`), checked
+    alike; ``start`` is the ``time.perf_counter()`` of the solve. The answer is that of the
+    general route up to rounding: the same factorisation of ``M`` and condensation, the same
+    Newton iterations (on each group of contacts that ``W`` couples, to ``tol / sqrt(3)`` when
+    there are several, which bounds the whole problem's error by ``tol``), and the certificate
+    of :meth:`~contactqp.core.local_problem.GlobalProblem.certify` computed from ``r``.
+
+    Raises
+    ------
+    InvalidInputError
+        On a bad ``tol``, ``max_iter`` or ``r0``.
+    """
+    global_small = kernels.global_small
+    if global_small is None:
+        return None
+    M, H = problem.M, problem.H
+    ndof, m = H.shape
+    if ndof == 0 or m == 0 or m > COMPILED_UNKNOWNS:
+        return None
+    if not (type(tol) is float and 0.0 < tol < math.inf):
+        tol = positive_tolerance(tol)
+    if not (type(max_iter) is int and max_iter >= 1):
+        max_iter = iteration_cap(max_iter)
+    from .coulomb import RUN_ITERATIONS  # the length of coulomb's first Newton run
+
+    r = np.zeros(m) if r0 is None else np.array(warm_start(r0, m), dtype=float)
+    digits = problem.digits
+    rel = np.array(
+        [relative_rounding(digits.get(name)) for name in ("M", "H", "f", "w")]
+        if digits
+        else [0.0, 0.0, 0.0, 0.0]
+    )
+    u, v = np.empty(m), np.empty(ndof)
+    status = np.empty(problem.n_contacts, dtype=np.intp)
+    measures = np.empty(len(kernels.GLOBAL_MEASURES))
+    code = global_small(
+        *_csr_arrays(M),
+        *_csr_arrays(H),
+        np.ascontiguousarray(problem.f),
+        np.ascontiguousarray(problem.w),
+        np.ascontiguousarray(problem.mu),
+        r,
+        tol,
+        min(RUN_ITERATIONS, max_iter),
+        bool(per_contact),
+        CONTACT_FLOOR,
+        bool(check_psd),
+        PSD_SHIFT,
+        rel,
+        _STATUS_RTOL,
+        True,
+        COMPILED_UNKNOWNS,
+        DENSE_FREEDOMS,
+        BLOCK_MAX,
+        SMALL_UNKNOWNS,
+        u,
+        v,
+        status,
+        measures,
+    )
+    if code:
+        return None
+    return compiled_global_result(problem, r, u, v, status, measures, tol, bool(per_contact), start)
