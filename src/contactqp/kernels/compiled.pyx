@@ -1569,6 +1569,25 @@ cdef _potrf_t _dpotrf = NULL
 cdef _potrs_t _dpotrs = NULL
 cdef _gecon_t _dgecon = NULL
 cdef _gecon_t _dpocon = NULL  # the same argument types as gecon's (uplo for norm)
+ctypedef void (*_gbtrf_t)(int* m, int* n, int* kl, int* ku, double* ab, int* ldab, int* ipiv,
+                          int* info) noexcept nogil
+ctypedef void (*_gbtrs_t)(char* trans, int* n, int* kl, int* ku, int* nrhs, double* ab,
+                          int* ldab, int* ipiv, double* b, int* ldb, int* info) noexcept nogil
+ctypedef void (*_gbcon_t)(char* norm, int* n, int* kl, int* ku, double* ab, int* ldab,
+                          int* ipiv, double* anorm, double* rcond, double* work, int* iwork,
+                          int* info) noexcept nogil
+ctypedef void (*_pbtrf_t)(char* uplo, int* n, int* kd, double* ab, int* ldab,
+                          int* info) noexcept nogil
+ctypedef void (*_pbtrs_t)(char* uplo, int* n, int* kd, int* nrhs, double* ab, int* ldab,
+                          double* b, int* ldb, int* info) noexcept nogil
+ctypedef void (*_pbcon_t)(char* uplo, int* n, int* kd, double* ab, int* ldab, double* anorm,
+                          double* rcond, double* work, int* iwork, int* info) noexcept nogil
+cdef _gbtrf_t _dgbtrf = NULL
+cdef _gbtrs_t _dgbtrs = NULL
+cdef _gbcon_t _dgbcon = NULL
+cdef _pbtrf_t _dpbtrf = NULL
+cdef _pbtrs_t _dpbtrs = NULL
+cdef _pbcon_t _dpbcon = NULL
 cdef double _G_EPS = 2.220446049250313e-16
 
 
@@ -1581,6 +1600,7 @@ cdef int _load_lapack() except -1:
     """Point at scipy's LAPACK (:mod:`scipy.linalg.cython_lapack`, read at run time: no build
     dependency on scipy), the library that ``scipy.linalg`` calls."""
     global _dgetrf, _dgetrs, _dpotrf, _dpotrs, _dgecon, _dpocon
+    global _dgbtrf, _dgbtrs, _dgbcon, _dpbtrf, _dpbtrs, _dpbcon
     if _dgetrf != NULL:
         return 0
     from scipy.linalg import cython_lapack
@@ -1590,6 +1610,12 @@ cdef int _load_lapack() except -1:
     _dpotrs = <_potrs_t> _lapack_function(capi, "dpotrs")
     _dgecon = <_gecon_t> _lapack_function(capi, "dgecon")
     _dpocon = <_gecon_t> _lapack_function(capi, "dpocon")
+    _dgbtrf = <_gbtrf_t> _lapack_function(capi, "dgbtrf")
+    _dgbtrs = <_gbtrs_t> _lapack_function(capi, "dgbtrs")
+    _dgbcon = <_gbcon_t> _lapack_function(capi, "dgbcon")
+    _dpbtrf = <_pbtrf_t> _lapack_function(capi, "dpbtrf")
+    _dpbtrs = <_pbtrs_t> _lapack_function(capi, "dpbtrs")
+    _dpbcon = <_pbcon_t> _lapack_function(capi, "dpbcon")
     _dgetrf = <_getrf_t> _lapack_function(capi, "dgetrf")
     return 0
 
@@ -1602,6 +1628,8 @@ cdef struct Mass:
     double* factor  # k == 0: Cholesky (upper) or LU factor of S M S, column-major
     int* pivots  # LU pivots (LAPACK's, 1-based)
     bint cholesky
+    bint band  # factor in LAPACK's band storage (kl, ku diagonals, leading dimension ld)
+    Py_ssize_t kl, ku, ld
     bint positive_definite
     double condition  # 1-norm condition number of S M S (LAPACK's estimate when dense)
 
@@ -1700,7 +1728,7 @@ cdef int _mass_factor(Mass* F, const Py_ssize_t* Mp, const Py_ssize_t* Mi, const
                       double* work) noexcept nogil:
     """Factor ``M`` as :func:`contactqp.methods.global_route.factor_mass` does (``F.k`` set by
     the caller; arrays allocated by it); ``_G_SOLVED`` or ``_G_SINGULAR``. ``work``: at
-    least ``4 n + 2 k^2`` doubles (dense: ``n^2 + 4 n``)."""
+    least ``4 n + 2 k^2`` doubles (dense: ``n^2 + 6 n``)."""
     cdef Py_ssize_t n = F.n, k = F.k, i, j, p, b, nb, c
     cdef double value, norm, inverse_norm, column, low, high
     cdef double* block
@@ -1769,59 +1797,123 @@ cdef int _mass_factor(Mass* F, const Py_ssize_t* Mp, const Py_ssize_t* Mi, const
         if not isfinite(F.condition) or F.condition * n * _G_EPS >= 1.0:
             return _G_SINGULAR
         return _G_SOLVED
-    # dense: Cholesky of S M S when M is exactly symmetric, else LU (column-major)
-    scaled = work  # n * n
-    iwork = <int*> (work + n * n + 3 * n)  # n ints in the last n doubles
-    for i in range(n * n):
-        scaled[i] = 0.0
+    # dense: Cholesky of S M S when M is exactly symmetric, else LU with partial pivoting, in
+    # LAPACK's band storage when M's nonzeros lie in a narrow band (the same factors: the
+    # pivots are looked for among the same rows, the others being zero) and full otherwise
+    _dense_factor(F, Mp, Mi, Mx, work)
+    if F.condition < 0.0:
+        return _G_SINGULAR
+    return _G_SOLVED
+
+
+cdef void _dense_factor(Mass* F, const Py_ssize_t* Mp, const Py_ssize_t* Mi, const double* Mx,
+                        double* work) noexcept nogil:
+    """The dense branch of :func:`_mass_factor`; ``F.condition`` < 0 when ``M`` is singular.
+    ``work``: ``n^2 + 6 n`` doubles."""
+    cdef Py_ssize_t n = F.n, i, j, p, kl = 0, ku = 0, kd, ld, row, step
+    cdef double value, norm, low, high, rcond
+    cdef double* A = work  # M (then S M S) in full or band storage
+    cdef double* column_sums = work + n * n
+    cdef double* lapack_work = column_sums + n  # 4 n
+    cdef int* iwork = <int*> (lapack_work + 4 * n)  # n ints
+    cdef int info, size = <int> n, lower, upper, diagonals, lead
+    cdef char uplo = b'U'
+    cdef char which = b'1'
+    F.condition = -1.0
     for i in range(n):
+        F.s[i] = 0.0
+        column_sums[i] = 0.0
         for p in range(Mp[i], Mp[i + 1]):
-            scaled[i + Mi[p] * n] += Mx[p]
+            if Mx[p] != 0.0:
+                j = Mi[p]
+                kl = max(kl, i - j)
+                ku = max(ku, j - i)
+            if Mi[p] == i:
+                F.s[i] += Mx[p]
     for i in range(n):
-        for j in range(i):
-            if scaled[i + j * n] != scaled[j + i * n]:
-                F.positive_definite = False
-    for i in range(n):
-        F.s[i] = _scale_of(scaled[i + i * n])
+        F.s[i] = _scale_of(F.s[i])
+    F.band = 2 * (2 * kl + ku + 1) <= n
+    F.kl, F.ku = kl, ku
+    ld = 2 * kl + ku + 1 if F.band else n
+    F.ld = ld
+    for i in range(ld * n):
+        A[i] = 0.0
+    for i in range(n):  # A(i, j) at A[i + j n], or at A[kl + ku + i - j + j ld] in a band
+        for p in range(Mp[i], Mp[i + 1]):
+            if Mx[p] != 0.0:
+                j = Mi[p]
+                A[(kl + ku + i - j if F.band else i) + j * ld] += Mx[p]
+    row = kl + ku if F.band else 0  # A(i, j) = A[row + i - j + j step]
+    step = ld if F.band else n + 1
+    F.positive_definite = kl == ku
+    if F.positive_definite:
+        for j in range(n):
+            for i in range(max(0, j - ku), j):
+                if A[row + i - j + j * step] != A[row + j - i + i * step]:
+                    F.positive_definite = False
+                    break
+            if not F.positive_definite:
+                break
+    for j in range(n):
+        for i in range(max(0, j - ku), min(n, j + kl + 1)):
+            value = F.s[i] * A[row + i - j + j * step] * F.s[j]
+            A[row + i - j + j * step] = value
+            column_sums[j] += fabs(value)
     norm = 0.0
     for j in range(n):
-        column = 0.0
-        for i in range(n):
-            scaled[i + j * n] = F.s[i] * scaled[i + j * n] * F.s[j]
-            column += fabs(scaled[i + j * n])
-        norm = max(norm, column)
-    size = <int> n
+        norm = max(norm, column_sums[j])
     F.cholesky = False
+    kd = ku
     if F.positive_definite:
-        for i in range(n * n):
-            F.factor[i] = scaled[i]
-        _dpotrf(&uplo, &size, F.factor, &size, &info)
+        if F.band:  # the upper triangle, row kd the diagonal
+            for j in range(n):
+                for i in range(max(0, j - kd), j + 1):
+                    F.factor[kd + i - j + j * (kd + 1)] = A[row + i - j + j * step]
+            diagonals = <int> kd
+            lead = <int> (kd + 1)
+            _dpbtrf(&uplo, &size, &diagonals, F.factor, &lead, &info)
+        else:
+            for i in range(n * n):
+                F.factor[i] = A[i]
+            _dpotrf(&uplo, &size, F.factor, &size, &info)
         F.cholesky = info == 0
     F.positive_definite = F.cholesky
     if not F.cholesky:
-        for i in range(n * n):
-            F.factor[i] = scaled[i]
-        _dgetrf(&size, &size, F.factor, &size, F.pivots, &info)
+        for i in range(ld * n):
+            F.factor[i] = A[i]
+        if F.band:
+            lower = <int> kl
+            upper = <int> ku
+            lead = <int> ld
+            _dgbtrf(&size, &size, &lower, &upper, F.factor, &lead, F.pivots, &info)
+        else:
+            _dgetrf(&size, &size, F.factor, &size, F.pivots, &info)
         if info < 0:
-            return _G_SINGULAR
+            return
     low = INFINITY
     high = 0.0
     for i in range(n):
-        value = fabs(F.factor[i + i * n])
         if F.cholesky:
-            value = value * value
+            value = F.factor[(kd + i * (kd + 1)) if F.band else i + i * n] ** 2
+        else:
+            value = fabs(F.factor[(kl + ku + i * ld) if F.band else i + i * n])
         if not isfinite(value):
-            return _G_SINGULAR
+            return
         low = min(low, value)
         high = max(high, value)
     if low <= n * _G_EPS * high:
-        return _G_SINGULAR
-    if F.cholesky:
-        _dpocon(&uplo, &size, F.factor, &size, &norm, &rcond, work + n * n, iwork, &info)
+        return
+    if F.cholesky and F.band:
+        _dpbcon(&uplo, &size, &diagonals, F.factor, &lead, &norm, &rcond, lapack_work, iwork,
+                &info)
+    elif F.cholesky:
+        _dpocon(&uplo, &size, F.factor, &size, &norm, &rcond, lapack_work, iwork, &info)
+    elif F.band:
+        _dgbcon(&which, &size, &lower, &upper, F.factor, &lead, F.pivots, &norm, &rcond,
+                lapack_work, iwork, &info)
     else:
-        _dgecon(&which, &size, F.factor, &size, &norm, &rcond, work + n * n, iwork, &info)
+        _dgecon(&which, &size, F.factor, &size, &norm, &rcond, lapack_work, iwork, &info)
     F.condition = 1.0 / rcond if rcond > 0.0 else INFINITY
-    return _G_SOLVED
 
 
 cdef void _mass_solve(const Mass* F, double* x, Py_ssize_t nrhs, double* work) noexcept nogil:
@@ -1851,8 +1943,15 @@ cdef void _mass_solve(const Mass* F, double* x, Py_ssize_t nrhs, double* work) n
     for c in range(nrhs):
         for i in range(n):
             x[c * n + i] *= F.s[i]
-    if F.cholesky:
+    cdef int lower = <int> F.kl, upper = <int> F.ku, lead = <int> F.ld
+    cdef int diagonals = <int> F.ku, lead_cholesky = <int> (F.ku + 1)
+    if F.cholesky and F.band:
+        _dpbtrs(&uplo, &size, &diagonals, &count, F.factor, &lead_cholesky, x, &size, &info)
+    elif F.cholesky:
         _dpotrs(&uplo, &size, &count, F.factor, &size, x, &size, &info)
+    elif F.band:
+        _dgbtrs(&trans, &size, &lower, &upper, &count, F.factor, &lead, F.pivots, x, &size,
+                &info)
     else:
         _dgetrs(&trans, &size, &count, F.factor, &size, F.pivots, x, &size, &info)
     for c in range(nrhs):
@@ -2033,7 +2132,7 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     if F.k == 0 and n > max_dense:
         return _G_NOT_HANDLED
     cdef Py_ssize_t k = F.k, g = max_group
-    cdef Py_ssize_t n_work = n * n + 4 * n if k == 0 else 4 * n + 2 * k * k
+    cdef Py_ssize_t n_work = n * n + 6 * n if k == 0 else 4 * n + 2 * k * k
     cdef Py_ssize_t n_b = n * (m + 1) if k == 0 else n
     cdef Py_ssize_t total = (n + (n * n if k == 0 else n * k) + n_work + m * m + m + n_b
                              + 5 * n + 3 * m + 3 * g * g + 4 * g + nc)
