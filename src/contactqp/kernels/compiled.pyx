@@ -1993,6 +1993,42 @@ cdef Py_ssize_t _root(Py_ssize_t* parent, Py_ssize_t i) noexcept nogil:
     return i
 
 
+cdef const void* _int_view(object array, str name, Py_ssize_t* size, int* itemsize) except NULL:
+    """The data of a C-contiguous 1-D array of 32- or 64-bit ints (scipy's index arrays are
+    either), its length written to ``size`` and its item size to ``itemsize``; the buffer is
+    released at once (the caller holds the array for the call)."""
+    cdef Py_buffer view
+    PyObject_GetBuffer(array, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT)
+    cdef char code = 0
+    cdef const void* data = view.buf
+    if view.format != NULL:
+        code = view.format[0]
+        if code == b'@' or code == b'=' or code == b'<':
+            code = view.format[1]
+    cdef bint ok = view.ndim == 1 and (
+        (view.itemsize == 4 and code == b'i')
+        or (view.itemsize == 8 and (code == b'q' or code == b'l' or code == b'n'))
+    )
+    if ok:
+        size[0] = view.shape[0]
+        itemsize[0] = <int> view.itemsize
+    PyBuffer_Release(&view)
+    if not ok:
+        raise ValueError(f"{name} must be a C-contiguous 1-D array of 32- or 64-bit ints")
+    return data if data != NULL else <const void*> size
+
+
+cdef void _copy_ints(const void* source, int itemsize, Py_ssize_t n,
+                     Py_ssize_t* target) noexcept nogil:
+    cdef Py_ssize_t i
+    if itemsize == 4:
+        for i in range(n):
+            target[i] = (<const int*> source)[i]
+    else:
+        for i in range(n):
+            target[i] = (<const int64_t*> source)[i]
+
+
 cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, const double* Hx,
                    const double* f, const double* w, Py_ssize_t m, double* W, double* q,
                    double* B, double* work) noexcept nogil:
@@ -2091,11 +2127,12 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     cdef Py_ssize_t sv[1]
     cdef Py_ssize_t sst[1]
     cdef Py_ssize_t sme[1]
-    cdef const Py_ssize_t* Mp = <const Py_ssize_t*> _buffer(M_indptr, b'n', 1, smp, False, "M_indptr")
-    cdef const Py_ssize_t* Mi = <const Py_ssize_t*> _buffer(M_indices, b'n', 1, smi, False, "M_indices")
+    cdef int imp, imi, ihp, ihi
+    cdef const void* vmp = _int_view(M_indptr, "M_indptr", smp, &imp)
+    cdef const void* vmi = _int_view(M_indices, "M_indices", smi, &imi)
+    cdef const void* vhp = _int_view(H_indptr, "H_indptr", shp, &ihp)
+    cdef const void* vhi = _int_view(H_indices, "H_indices", shi, &ihi)
     cdef const double* Mx = <const double*> _buffer(M_data, b'd', 1, smx, False, "M_data")
-    cdef const Py_ssize_t* Hp = <const Py_ssize_t*> _buffer(H_indptr, b'n', 1, shp, False, "H_indptr")
-    cdef const Py_ssize_t* Hi = <const Py_ssize_t*> _buffer(H_indices, b'n', 1, shi, False, "H_indices")
     cdef const double* Hx = <const double*> _buffer(H_data, b'd', 1, shx, False, "H_data")
     cdef const double* fd = <const double*> _buffer(f, b'd', 1, sf, False, "f")
     cdef const double* wd = <const double*> _buffer(w, b'd', 1, sw, False, "w")
@@ -2109,10 +2146,47 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     cdef Py_ssize_t n = sf[0], m = sw[0], nc = smu[0], d, i
     if smp[0] != n + 1 or shp[0] != n + 1 or sv[0] != n:
         raise ValueError("M_indptr and H_indptr must have n + 1 entries and v n, n = len(f)")
-    if smi[0] != smx[0] or smi[0] < Mp[n] or shi[0] != shx[0] or shi[0] < Hp[n]:
-        raise ValueError("indices and data must hold indptr[-1] entries")
     if sr[0] != m or su[0] != m or sst[0] != nc or sme[0] != _G_MEASURES or sdg[0] != 4:
         raise ValueError("inconsistent shapes")
+    cdef Py_ssize_t* indices = <Py_ssize_t*> malloc(
+        (smp[0] + smi[0] + shp[0] + shi[0] + 1) * sizeof(Py_ssize_t)
+    )
+    if indices == NULL:
+        raise MemoryError()
+    cdef Py_ssize_t* Mp = indices
+    cdef Py_ssize_t* Mi = Mp + smp[0]
+    cdef Py_ssize_t* Hp = Mi + smi[0]
+    cdef Py_ssize_t* Hi = Hp + shp[0]
+    _copy_ints(vmp, imp, smp[0], Mp)
+    _copy_ints(vmi, imi, smi[0], Mi)
+    _copy_ints(vhp, ihp, shp[0], Hp)
+    _copy_ints(vhi, ihi, shi[0], Hi)
+    try:
+        return _global_small(
+            Mp, Mi, Mx, Hp, Hi, Hx, fd, wd, mud, rd, tol, max_iter, per_contact, floor,
+            check_psd, psd_shift, dg, rtol, solve, max_unknowns, max_dense, max_block,
+            max_group, ud, vd, std, md, n, m, nc, smi[0], smx[0], shi[0], shx[0]
+        )
+    finally:
+        free(indices)
+
+
+cdef int _global_small(
+    const Py_ssize_t* Mp, const Py_ssize_t* Mi, const double* Mx, const Py_ssize_t* Hp,
+    const Py_ssize_t* Hi, const double* Hx, const double* fd, const double* wd,
+    const double* mud, double* rd, double tol, Py_ssize_t max_iter, bint per_contact,
+    double floor, bint check_psd, double psd_shift, const double* dg, double rtol, bint solve,
+    Py_ssize_t max_unknowns, Py_ssize_t max_dense, Py_ssize_t max_block, Py_ssize_t max_group,
+    double* ud, double* vd, Py_ssize_t* std, double* md, Py_ssize_t n, Py_ssize_t m,
+    Py_ssize_t nc, Py_ssize_t n_mi, Py_ssize_t n_mx, Py_ssize_t n_hi, Py_ssize_t n_hx,
+) except -2:
+    """:func:`global_small` on its arrays' data (the index arrays as Py_ssize_t)."""
+    cdef Py_ssize_t d, i
+    if n_mi != n_mx or n_mi < Mp[n] or n_hi != n_hx or n_hi < Hp[n] or Mp[0] != 0 or Hp[0] != 0:
+        raise ValueError("indices and data must hold indptr[-1] entries")
+    for i in range(n):
+        if Mp[i] > Mp[i + 1] or Hp[i] > Hp[i + 1]:
+            raise ValueError("indptr must not decrease")
     for i in range(Mp[n]):
         if Mi[i] < 0 or Mi[i] >= n:
             raise ValueError("M_indices out of range")
@@ -2214,7 +2288,7 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
                     members[cursor[parent[i]]] = i
                     cursor[parent[i]] += 1
                 for i in range(nc):
-                    if (start[i + 1] - start[i]) * d > g:
+                    if solve and (start[i + 1] - start[i]) * d > g:
                         code = _G_NOT_HANDLED
             if code == _G_SOLVED and solve:
                 tol_group = tol if groups == 1 else tol / sqrt(3.0)

@@ -52,6 +52,8 @@ from ..core.local_problem import (
     DENSE_FILL,
     DENSE_SIZE,
     SMALL_UNKNOWNS,
+    AccuracyLimits,
+    GlobalCertificate,
     GlobalProblem,
     LocalProblem,
     better_dense,
@@ -61,6 +63,7 @@ from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
+from .coulomb import RUN_ITERATIONS
 from .local_global import compiled_global_result
 
 __all__ = [
@@ -73,6 +76,7 @@ __all__ = [
     "DenseMass",
     "MassFactor",
     "block_size",
+    "certify_compiled",
     "condense",
     "factor_mass",
     "solve_compiled",
@@ -401,13 +405,10 @@ def condense(problem: GlobalProblem) -> Condensed:
 
 
 def _csr_arrays(A) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(indptr, indices, data)`` of ``A`` in compressed rows, indices as intp."""
+    """``(indptr, indices, data)`` of ``A`` in compressed rows (scipy's int32 or int64
+    indices, as stored)."""
     csr: Any = A if sp.issparse(A) else sp.csr_matrix(A)
-    return (
-        np.asarray(csr.indptr, dtype=np.intp),
-        np.asarray(csr.indices, dtype=np.intp),
-        np.ascontiguousarray(csr.data, dtype=float),
-    )
+    return csr.indptr, csr.indices, csr.data
 
 
 def solve_compiled(
@@ -438,42 +439,82 @@ def solve_compiled(
     global_small = kernels.global_small
     if global_small is None:
         return None
-    M, H = problem.M, problem.H
-    ndof, m = H.shape
+    ndof, m = problem.H.shape
     if ndof == 0 or m == 0 or m > COMPILED_UNKNOWNS:
         return None
     if not (type(tol) is float and 0.0 < tol < math.inf):
         tol = positive_tolerance(tol)
     if not (type(max_iter) is int and max_iter >= 1):
         max_iter = iteration_cap(max_iter)
-    from .coulomb import RUN_ITERATIONS  # the length of coulomb's first Newton run
-
     r = np.zeros(m) if r0 is None else np.array(warm_start(r0, m), dtype=float)
+    outputs = _run_kernel(
+        global_small, problem, r, tol, min(RUN_ITERATIONS, max_iter), per_contact, check_psd, True
+    )
+    if outputs is None:
+        return None
+    return compiled_global_result(problem, r, *outputs, tol, bool(per_contact), start)
+
+
+def certify_compiled(problem: GlobalProblem, r) -> GlobalCertificate | None:
+    """:meth:`~contactqp.core.local_problem.GlobalProblem.certify` of reactions ``r`` with the
+    factorisation of ``M`` that :func:`condense` makes, computed by the compiled route's kernel;
+    None where that route does not take ``problem`` (or without the compiled kernels).
+
+    The same figures up to rounding (the sums in another order): what the compiled route's
+    answers carry, and what its tests compare with the Python certificate.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``r`` has the wrong length or is not finite.
+    """
+    global_small = kernels.global_small
+    m = problem.H.shape[1]
+    rv = np.array(warm_start(r, m, "r"), dtype=float)
+    if global_small is None or problem.H.shape[0] == 0 or m == 0 or m > COMPILED_UNKNOWNS:
+        return None
+    outputs = _run_kernel(global_small, problem, rv, 1.0, 1, False, False, False)
+    if outputs is None:
+        return None
+    u, v, _, measures = outputs
+    error, equilibrium, rounding, data, condition = measures[:5].tolist()
+    limits = AccuracyLimits(
+        rounding=rounding, data=data, condition=condition, digits=dict(problem.digits)
+    )
+    return GlobalCertificate(v=v, u=u, error=error, equilibrium=equilibrium, limits=limits)
+
+
+def _run_kernel(
+    global_small, problem: GlobalProblem, r, tol, max_iter, per_contact, check_psd, solve
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(u, v, status, measures)`` of :func:`~contactqp.kernels.compiled.global_small` on
+    ``problem`` from ``r`` (overwritten by the reactions), or None when it did not finish."""
+    ndof, m = problem.H.shape
     digits = problem.digits
-    rel = np.array(
-        [relative_rounding(digits.get(name)) for name in ("M", "H", "f", "w")]
+    rel = (
+        np.array([relative_rounding(digits.get(name)) for name in ("M", "H", "f", "w")])
         if digits
-        else [0.0, 0.0, 0.0, 0.0]
+        else np.zeros(4)
     )
     u, v = np.empty(m), np.empty(ndof)
     status = np.empty(problem.n_contacts, dtype=np.intp)
     measures = np.empty(len(kernels.GLOBAL_MEASURES))
     code = global_small(
-        *_csr_arrays(M),
-        *_csr_arrays(H),
+        *_csr_arrays(problem.M),
+        *_csr_arrays(problem.H),
         np.ascontiguousarray(problem.f),
         np.ascontiguousarray(problem.w),
         np.ascontiguousarray(problem.mu),
         r,
         tol,
-        min(RUN_ITERATIONS, max_iter),
+        max_iter,
         bool(per_contact),
         CONTACT_FLOOR,
         bool(check_psd),
         PSD_SHIFT,
         rel,
         _STATUS_RTOL,
-        True,
+        solve,
         COMPILED_UNKNOWNS,
         DENSE_FREEDOMS,
         BLOCK_MAX,
@@ -483,6 +524,4 @@ def solve_compiled(
         status,
         measures,
     )
-    if code:
-        return None
-    return compiled_global_result(problem, r, u, v, status, measures, tol, bool(per_contact), start)
+    return None if code else (u, v, status, measures)

@@ -43,6 +43,9 @@ from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .active_set import cold_start
 from .box_qp import solve_box_qp
 
+#: Machine epsilon (the rounding of :func:`~contactqp.core.local_problem.limits_from_norms`)
+_EPS = float(np.finfo(float).eps)
+
 __all__ = [
     "certify_global",
     "compiled_global_result",
@@ -389,6 +392,8 @@ def finish(
 
 
 def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
+    if limits.rounding <= tol and limits.data <= tol:  # no note (describe's test)
+        return message
     notes = limits.describe(tol)
     return f"{message}; {notes}" if notes else message
 
@@ -475,18 +480,17 @@ def compiled_global_result(
     limits = AccuracyLimits(
         rounding=rounding, data=data, condition=condition, digits=dict(problem.digits)
     )
-    local_limits = limits_from_norms(local_product, local_size_q, local_scale, {}, (0.0, 0.0))
     k = int(iterations)
     detail = f"newton {k} it. (converged)"
     if groups > 1:
         detail += f" on {int(groups)} groups of contacts that W does not couple"
     local_verdict = "converged" if local_error <= tol else f"not converged to {tol:g}"
-    local_message = _with_limits(
-        f"{local_verdict}: {detail}; natural-map error {local_error:.2e}"
-        + (" (largest of the problem's and each contact's)" if per_contact else ""),
-        local_limits,
-        tol,
+    local_message = f"{local_verdict}: {detail}; natural-map error {local_error:.2e}" + (
+        " (largest of the problem's and each contact's)" if per_contact else ""
     )
+    if _EPS * (local_product + local_size_q) > tol * (local_scale or 1.0):  # a note (finish's)
+        local_limits = limits_from_norms(local_product, local_size_q, local_scale, {}, (0.0, 0.0))
+        local_message = _with_limits(local_message, local_limits, tol)
     converged = bool(error <= tol and equilibrium <= tol)
     verdict = "converged" if converged else f"not converged to {tol:g}"
     message = (
