@@ -2076,10 +2076,7 @@ cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, co
         q[i] += w[i]
         if not isfinite(q[i]):
             return _G_SINGULAR
-    for i in range(m * m):
-        if not isfinite(W[i]):
-            return _G_SINGULAR
-    return _G_SOLVED
+    return _G_SOLVED  # W's entries are checked finite by the caller's pass over them
 
 
 def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w, mu, r,
@@ -2246,7 +2243,7 @@ cdef int _global_small(
     cdef Py_ssize_t* keep = members + nc  # g
     cdef Py_ssize_t* cursor = keep + g  # nc
     cdef int code = _G_SOLVED, reason
-    cdef Py_ssize_t a, b, c, p, j, groups = 0, size, mg, ncg, iterations = 0, count, root
+    cdef Py_ssize_t a, b, c, p, j, groups = 0, size, mg, ncg, iterations = 0, count, root, first
     cdef double tol_group, value, error, residual, eq, sizes, product, magnitude, rr, uu, qq
     cdef double size_h, size_y, transported, scale, largest, force, wdiag, carry, slip
     cdef double rel_m = dg[0], rel_h = dg[1], rel_f = dg[2], rel_w = dg[3], data = 0.0
@@ -2262,16 +2259,31 @@ cdef int _global_small(
             if code == _G_SOLVED:
                 code = _condense(&F, Hp, Hi, Hx, fd, wd, m, W, q, B, work)
             if code == _G_SOLVED:
-                # the groups of contacts that W couples
+                # the groups of contacts that W couples: with a block-diagonal M, those that
+                # H puts on one block (W is zero between the others: no entry is written); with
+                # a dense M, those of W's nonzero entries
                 for i in range(nc):
                     parent[i] = i
-                for a in range(m):
-                    for b in range(m):
-                        if W[a * m + b] != 0.0 and a // d != b // d:
-                            i = _root(parent, a // d)
-                            j = _root(parent, b // d)
-                            if i != j:
-                                parent[max(i, j)] = min(i, j)
+                if k > 0:
+                    for b in range(n // k):
+                        first = -1
+                        for i in range(b * k, b * k + k):
+                            for p in range(Hp[i], Hp[i + 1]):
+                                if first < 0:
+                                    first = _root(parent, Hi[p] // d)
+                                    continue
+                                j = _root(parent, Hi[p] // d)
+                                if j != first:
+                                    parent[max(first, j)] = min(first, j)
+                                    first = min(first, j)
+                else:
+                    for a in range(m):
+                        for b in range(m):
+                            if W[a * m + b] != 0.0 and a // d != b // d:
+                                i = _root(parent, a // d)
+                                j = _root(parent, b // d)
+                                if i != j:
+                                    parent[max(i, j)] = min(i, j)
                 for i in range(nc):
                     parent[i] = _root(parent, i)
                     if parent[i] == i:
@@ -2290,6 +2302,13 @@ cdef int _global_small(
                 for i in range(nc):
                     if solve and (start[i + 1] - start[i]) * d > g:
                         code = _G_NOT_HANDLED
+                for a in range(m):  # W is zero outside its groups' blocks: the rest finite?
+                    root = parent[a // d]
+                    for p in range(start[root], start[root + 1]):
+                        j = members[p] * d
+                        for b in range(j, j + d):
+                            if not isfinite(W[a * m + b]):
+                                code = _G_SINGULAR
             if code == _G_SOLVED and solve:
                 tol_group = tol if groups == 1 else tol / sqrt(3.0)
                 for root in range(nc):
@@ -2336,12 +2355,15 @@ cdef int _global_small(
                 # the condensed problem's certificate (the route's local message)
                 product = 0.0
                 wdiag = 0.0
-                for a in range(m):
+                for a in range(m):  # over the columns of a's group: W is zero elsewhere
                     value = 0.0
                     magnitude = 0.0
-                    for b in range(m):
-                        value += W[a * m + b] * rd[b]
-                        magnitude += fabs(W[a * m + b]) * fabs(rd[b])
+                    root = parent[a // d]
+                    for p in range(start[root], start[root + 1]):
+                        j = members[p] * d
+                        for b in range(j, j + d):
+                            value += W[a * m + b] * rd[b]
+                            magnitude += fabs(W[a * m + b]) * fabs(rd[b])
                     ul[a] = value + q[a]
                     if a % d == 0 or mud[a // d] != 0.0:
                         product += magnitude * magnitude
