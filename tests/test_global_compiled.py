@@ -404,3 +404,28 @@ def test_pure_numpy_route_runs_without_the_kernel():
     )
     assert done.returncode == 0, done.stderr
     assert int(done.stdout.split()[-1]) >= 1
+
+
+def test_two_dimensional_contacts(monkeypatch):
+    """2-D contacts (``coulomb`` named, so that the planar route does not take them)."""
+    rng = np.random.default_rng(11)
+    ndof, nc = 12, 4
+    B = rng.standard_normal((ndof, ndof))
+    M = B @ B.T / ndof + np.eye(ndof)
+    H = rng.standard_normal((ndof, 2 * nc)) * (rng.uniform(size=(ndof, 2 * nc)) < 0.5)
+    w = np.tile([-0.2, 0.05], nc)
+    problem = GlobalProblem(
+        sp.csr_matrix(M), sp.csr_matrix(H), rng.standard_normal(ndof), w, np.full(nc, 0.5), 2
+    )
+    result = cq.solve(fresh(problem), "coulomb", tol=1e-10)
+    reference = general(problem, monkeypatch, method="coulomb", tol=1e-10)
+    assert result.success and reference.success
+    assert result.iterations == reference.iterations
+    np.testing.assert_allclose(
+        result.forces, reference.forces, rtol=0, atol=1e-8 * np.abs(reference.forces).max()
+    )
+    assert_same_certificate(
+        certify_compiled(fresh(problem), result.forces),
+        python_certificate(problem, result.forces),
+        problem,
+    )
