@@ -53,8 +53,9 @@ GLOBAL_FILES = [
 #: the files the compiled route takes (every M block diagonal or at most 400 freedoms, m <= 600)
 EPS = np.finfo(float).eps
 
-pytestmark = pytest.mark.skipif(
-    kernels.global_small is None, reason="the compiled kernels are not built"
+#: the compiled route's tests need its kernel (the pure-numpy run's test does not)
+needs_kernels = pytest.mark.skipif(
+    kernels.global_small is None, reason="the compiled kernels are not in use"
 )
 
 
@@ -134,6 +135,7 @@ def assert_same_certificate(compiled, reference, problem):
 
 
 @pytest.mark.parametrize("name", GLOBAL_FILES)
+@needs_kernels
 def test_shared_files_are_solved_as_by_the_general_route(name, files, monkeypatch):
     problem = files[name]
     calls = []
@@ -164,6 +166,7 @@ def test_shared_files_are_solved_as_by_the_general_route(name, files, monkeypatc
 
 
 @pytest.mark.parametrize("name", GLOBAL_FILES)
+@needs_kernels
 def test_compiled_certificate_equals_the_python_one_on_the_shared_files(name, files):
     problem = files[name]
     result = cq.solve(fresh(problem), tol=1e-8)
@@ -182,6 +185,7 @@ def test_compiled_certificate_equals_the_python_one_on_the_shared_files(name, fi
 
 
 @pytest.mark.parametrize("name", GLOBAL_FILES)
+@needs_kernels
 def test_compiled_certificate_of_perturbed_reactions(name, files):
     problem = files[name]
     r = cq.solve(fresh(problem), tol=1e-8).forces
@@ -234,6 +238,7 @@ KINDS = ["diagonal", "blocks", "symmetric", "unsymmetric", "band-symmetric", "ba
 
 
 @pytest.mark.parametrize("kind", KINDS)
+@needs_kernels
 def test_every_structure_of_m(kind, monkeypatch):
     problem = structured(kind)
     result = cq.solve(fresh(problem), tol=1e-10)
@@ -254,6 +259,7 @@ def test_every_structure_of_m(kind, monkeypatch):
 
 
 @pytest.mark.parametrize("kind", ["blocks", "unsymmetric"])
+@needs_kernels
 def test_written_digits_give_the_same_data_limit(kind):
     problem = structured(kind, digits={"M": 6, "H": 5, "f": 7, "w": 4})
     r = cq.solve(fresh(problem), tol=1e-10).forces
@@ -262,6 +268,7 @@ def test_written_digits_give_the_same_data_limit(kind):
     assert_same_certificate(certify_compiled(fresh(problem), r), reference, problem)
 
 
+@needs_kernels
 def test_dense_arrays_and_wide_indices_give_the_same_answer():
     problem = structured("blocks", seed=4)
     sparse = cq.solve(fresh(problem), tol=1e-10)
@@ -283,6 +290,7 @@ def test_dense_arrays_and_wide_indices_give_the_same_answer():
         assert other.iterations == sparse.iterations
 
 
+@needs_kernels
 def test_uncoupled_contacts_are_solved_apart(monkeypatch):
     """Contacts on different bodies (a block-diagonal M, each contact on its own body) make
     uncoupled groups: each is solved on its own, and the whole meets tol."""
@@ -316,6 +324,7 @@ def test_uncoupled_contacts_are_solved_apart(monkeypatch):
 
 
 @pytest.mark.filterwarnings("ignore::scipy.linalg.LinAlgWarning")  # the general route's LU
+@needs_kernels
 def test_singular_m_is_refused_as_by_the_general_route(monkeypatch):
     problem = structured("symmetric")
     M = problem.M.toarray()
@@ -331,6 +340,7 @@ def test_singular_m_is_refused_as_by_the_general_route(monkeypatch):
         cq.solve(GlobalProblem(zero, problem.H, problem.f, problem.w, problem.mu, 3), tol=1e-8)
 
 
+@needs_kernels
 def test_indefinite_w_of_an_unsymmetric_m_is_refused():
     """``M = [[1, 5, 0], [0, 1, 0], [0, 0, 1]]`` (unsymmetric, not positive definite) and
     ``H = I`` give ``W = M^-1`` whose symmetric part has the eigenvalues 1 +- 2.5: the
@@ -352,6 +362,7 @@ def test_indefinite_w_of_an_unsymmetric_m_is_refused():
     assert np.all(np.isfinite(result.forces))
 
 
+@needs_kernels
 def test_options_are_checked_as_by_coulomb():
     problem = structured("diagonal")
     with pytest.raises(InvalidInputError, match="tol"):
@@ -364,6 +375,7 @@ def test_options_are_checked_as_by_coulomb():
         certify_compiled(fresh(problem), np.zeros(5))
 
 
+@needs_kernels
 def test_warm_start_and_per_contact(monkeypatch):
     problem = structured("unsymmetric", seed=5)
     cold = cq.solve(fresh(problem), tol=1e-10)
@@ -375,6 +387,7 @@ def test_warm_start_and_per_contact(monkeypatch):
     assert "each contact's" in strict.message
 
 
+@needs_kernels
 def test_problems_it_does_not_take_go_to_the_general_route(monkeypatch):
     """More contact unknowns than COMPILED_UNKNOWNS: the general route answers (the kernel is
     not called)."""
@@ -406,6 +419,7 @@ def test_pure_numpy_route_runs_without_the_kernel():
     assert int(done.stdout.split()[-1]) >= 1
 
 
+@needs_kernels
 def test_two_dimensional_contacts(monkeypatch):
     """2-D contacts (``coulomb`` named, so that the planar route does not take them)."""
     rng = np.random.default_rng(11)
