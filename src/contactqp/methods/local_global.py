@@ -9,7 +9,8 @@ part is the bound-constrained QP
 
 A global problem is solved through its condensed form and the answer certified on the global
 equations as written (:func:`certify_global`,
-:meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
+:meth:`~contactqp.core.local_problem.GlobalProblem.certify`; of a small one, in the compiled
+route's one call, :func:`compiled_global_result`).
 Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far
 rounding (the conditioning of ``M``) and the data's written digits limit its error.
 """
