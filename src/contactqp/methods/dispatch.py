@@ -101,8 +101,8 @@ def solve(problem, method: str | None = None, **options):
     (:func:`~contactqp.methods.global_route.condense`: block-diagonal ``M`` inverted exactly,
     small ones factored dense), and the answer certified on the global equations with the same
     factorisation; a small one solved by ``coulomb`` goes through all of this in one compiled
-    call (:func:`~contactqp.methods.global_route.solve_compiled`). The methods, their kinds and options: :mod:`the registry
-    <contactqp.methods.registry>`, or ``contactqp methods``.
+    call (:func:`~contactqp.methods.global_route.solve_compiled`). The methods, their kinds and
+    options: :mod:`the registry <contactqp.methods.registry>`, or ``contactqp methods``.
 
     Parameters
     ----------
