@@ -140,3 +140,19 @@ else:
             stacklevel=2,
         )
         del _missing
+
+#: The compiled small global route (:func:`contactqp.kernels.compiled.global_small`: the
+#: factorisation of ``M``, the condensation, the Newton runs and the global certificate in one
+#: call), None with the pure-numpy kernels: its oracle is the general route of
+#: :func:`contactqp.solve` (condensation, ``coulomb`` and
+#: :meth:`~contactqp.core.local_problem.GlobalProblem.certify`), which runs where it is None.
+global_small: Callable[..., int] | None = None
+#: The reasons of :func:`~contactqp.kernels.compiled.global_small`'s codes, and the names of
+#: its measures.
+GLOBAL_CODES: tuple[str, ...] = ()
+GLOBAL_MEASURES: tuple[str, ...] = ()
+if IMPLEMENTATION == "compiled":
+    global_small = _compiled.global_small
+    GLOBAL_CODES = _compiled.GLOBAL_CODES
+    GLOBAL_MEASURES = _compiled.GLOBAL_MEASURES
+__all__ += ["global_small", "GLOBAL_CODES", "GLOBAL_MEASURES"]

@@ -167,3 +167,36 @@ def row_products(
     product: np.ndarray,
     magnitude: np.ndarray,
 ) -> None: ...
+
+GLOBAL_CODES: tuple[str, ...]
+GLOBAL_MEASURES: tuple[str, ...]
+
+def global_small(
+    M_indptr: np.ndarray,
+    M_indices: np.ndarray,
+    M_data: np.ndarray,
+    H_indptr: np.ndarray,
+    H_indices: np.ndarray,
+    H_data: np.ndarray,
+    f: np.ndarray,
+    w: np.ndarray,
+    mu: np.ndarray,
+    r: np.ndarray,
+    tol: float,
+    max_iter: int,
+    per_contact: bool,
+    floor: float,
+    check_psd: bool,
+    psd_shift: float,
+    digits: np.ndarray,
+    rtol: float,
+    solve: bool,
+    max_unknowns: int,
+    max_dense: int,
+    max_block: int,
+    max_group: int,
+    u: np.ndarray,
+    v: np.ndarray,
+    status: np.ndarray,
+    measures: np.ndarray,
+) -> int: ...

@@ -2002,3 +2002,917 @@ def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures
     free(local)
     free(L.rows)
     return sweep, code
+
+
+# ---------------------------------------------------------------------------------------------
+# Small global problems M v = H r + f, u = H^T v + w: the factorisation of M, the condensation
+# W = H^T M^-1 H, the Newton runs on the condensed problem and the certificate on the global
+# equations as written, in one call (contactqp.methods.global_route.solve_compiled).
+
+from cpython.pycapsule cimport PyCapsule_GetName, PyCapsule_GetPointer
+from libc.math cimport INFINITY
+
+__all__ += ["global_small", "GLOBAL_CODES", "GLOBAL_MEASURES"]
+
+#: What :func:`global_small` returns, by code: "solved" (the certificate is in ``measures``),
+#: else why the caller must take the general route instead.
+GLOBAL_CODES = ("solved", "not handled", "singular M", "not semidefinite", "not converged")
+cdef enum:
+    _G_SOLVED = 0
+    _G_NOT_HANDLED = 1
+    _G_SINGULAR = 2
+    _G_NOT_PSD = 3
+    _G_NOT_CONVERGED = 4
+
+#: The entries of :func:`global_small`'s ``measures``, in order.
+GLOBAL_MEASURES = (
+    "error", "equilibrium", "rounding", "data", "condition", "local_error", "local_product",
+    "local_size_q", "local_scale", "iterations", "groups", "positive_definite",
+)
+cdef Py_ssize_t _G_MEASURES = 12
+
+ctypedef void (*_getrf_t)(int* m, int* n, double* a, int* lda, int* ipiv,
+                          int* info) noexcept nogil
+ctypedef void (*_getrs_t)(char* trans, int* n, int* nrhs, double* a, int* lda, int* ipiv,
+                          double* b, int* ldb, int* info) noexcept nogil
+ctypedef void (*_potrf_t)(char* uplo, int* n, double* a, int* lda, int* info) noexcept nogil
+ctypedef void (*_potrs_t)(char* uplo, int* n, int* nrhs, double* a, int* lda, double* b,
+                          int* ldb, int* info) noexcept nogil
+ctypedef void (*_gecon_t)(char* norm, int* n, double* a, int* lda, double* anorm,
+                          double* rcond, double* work, int* iwork, int* info) noexcept nogil
+
+cdef _getrf_t _dgetrf = NULL
+cdef _getrs_t _dgetrs = NULL
+cdef _potrf_t _dpotrf = NULL
+cdef _potrs_t _dpotrs = NULL
+cdef _gecon_t _dgecon = NULL
+cdef _gecon_t _dpocon = NULL  # the same argument types as gecon's (uplo for norm)
+ctypedef void (*_gbtrf_t)(int* m, int* n, int* kl, int* ku, double* ab, int* ldab, int* ipiv,
+                          int* info) noexcept nogil
+ctypedef void (*_gbtrs_t)(char* trans, int* n, int* kl, int* ku, int* nrhs, double* ab,
+                          int* ldab, int* ipiv, double* b, int* ldb, int* info) noexcept nogil
+ctypedef void (*_gbcon_t)(char* norm, int* n, int* kl, int* ku, double* ab, int* ldab,
+                          int* ipiv, double* anorm, double* rcond, double* work, int* iwork,
+                          int* info) noexcept nogil
+ctypedef void (*_pbtrf_t)(char* uplo, int* n, int* kd, double* ab, int* ldab,
+                          int* info) noexcept nogil
+ctypedef void (*_pbtrs_t)(char* uplo, int* n, int* kd, int* nrhs, double* ab, int* ldab,
+                          double* b, int* ldb, int* info) noexcept nogil
+ctypedef void (*_pbcon_t)(char* uplo, int* n, int* kd, double* ab, int* ldab, double* anorm,
+                          double* rcond, double* work, int* iwork, int* info) noexcept nogil
+cdef _gbtrf_t _dgbtrf = NULL
+cdef _gbtrs_t _dgbtrs = NULL
+cdef _gbcon_t _dgbcon = NULL
+cdef _pbtrf_t _dpbtrf = NULL
+cdef _pbtrs_t _dpbtrs = NULL
+cdef _pbcon_t _dpbcon = NULL
+cdef double _G_EPS = 2.220446049250313e-16
+
+
+cdef void* _lapack_function(dict capi, str name) except NULL:
+    capsule = capi[name]
+    return PyCapsule_GetPointer(capsule, PyCapsule_GetName(capsule))
+
+
+cdef int _load_lapack() except -1:
+    """Point at scipy's LAPACK (:mod:`scipy.linalg.cython_lapack`, read at run time: no build
+    dependency on scipy), the library that ``scipy.linalg`` calls."""
+    global _dgetrf, _dgetrs, _dpotrf, _dpotrs, _dgecon, _dpocon
+    global _dgbtrf, _dgbtrs, _dgbcon, _dpbtrf, _dpbtrs, _dpbcon
+    if _dgetrf != NULL:
+        return 0
+    from scipy.linalg import cython_lapack
+    capi = cython_lapack.__pyx_capi__
+    _dgetrs = <_getrs_t> _lapack_function(capi, "dgetrs")
+    _dpotrf = <_potrf_t> _lapack_function(capi, "dpotrf")
+    _dpotrs = <_potrs_t> _lapack_function(capi, "dpotrs")
+    _dgecon = <_gecon_t> _lapack_function(capi, "dgecon")
+    _dpocon = <_gecon_t> _lapack_function(capi, "dpocon")
+    _dgbtrf = <_gbtrf_t> _lapack_function(capi, "dgbtrf")
+    _dgbtrs = <_gbtrs_t> _lapack_function(capi, "dgbtrs")
+    _dgbcon = <_gbcon_t> _lapack_function(capi, "dgbcon")
+    _dpbtrf = <_pbtrf_t> _lapack_function(capi, "dpbtrf")
+    _dpbtrs = <_pbtrs_t> _lapack_function(capi, "dpbtrs")
+    _dpbcon = <_pbcon_t> _lapack_function(capi, "dpbcon")
+    _dgetrf = <_getrf_t> _lapack_function(capi, "dgetrf")
+    return 0
+
+
+cdef struct Mass:
+    # an exact factorisation of M (n x n), as contactqp.methods.global_route's factors
+    Py_ssize_t n, k  # freedoms; diagonal block size (0: dense)
+    double* s  # Jacobi scaling |diag M|^-1/2 (1 on zeros)
+    double* inverse  # k > 0: the n / k blocks of M^-1, row-major
+    double* factor  # k == 0: Cholesky (upper) or LU factor of S M S, column-major
+    int* pivots  # LU pivots (LAPACK's, 1-based)
+    bint cholesky
+    bint band  # factor in LAPACK's band storage (kl, ku diagonals, leading dimension ld)
+    Py_ssize_t kl, ku, ld
+    bint positive_definite
+    double condition  # 1-norm condition number of S M S (LAPACK's estimate when dense)
+
+
+cdef inline double _scale_of(double diagonal) noexcept nogil:
+    return 1.0 / sqrt(fabs(diagonal)) if diagonal != 0.0 else 1.0
+
+
+cdef bint _invert(double* a, Py_ssize_t k, double* inv) noexcept nogil:
+    """``inv = a^-1`` (row-major k x k) by Gauss-Jordan with partial pivoting (``a`` is
+    overwritten); False when a pivot is exactly zero (numpy.linalg.inv's LinAlgError)."""
+    cdef Py_ssize_t i, j, c, p
+    cdef double big, value, pivot
+    for i in range(k):
+        for j in range(k):
+            inv[i * k + j] = 1.0 if i == j else 0.0
+    for c in range(k):
+        p = c
+        big = fabs(a[c * k + c])
+        for i in range(c + 1, k):
+            if fabs(a[i * k + c]) > big:
+                big = fabs(a[i * k + c])
+                p = i
+        if a[p * k + c] == 0.0:
+            return False
+        if p != c:
+            for j in range(k):
+                value = a[c * k + j]
+                a[c * k + j] = a[p * k + j]
+                a[p * k + j] = value
+                value = inv[c * k + j]
+                inv[c * k + j] = inv[p * k + j]
+                inv[p * k + j] = value
+        pivot = 1.0 / a[c * k + c]
+        for j in range(k):
+            a[c * k + j] *= pivot
+            inv[c * k + j] *= pivot
+        for i in range(k):
+            if i != c and a[i * k + c] != 0.0:
+                value = a[i * k + c]
+                for j in range(k):
+                    a[i * k + j] -= value * a[c * k + j]
+                    inv[i * k + j] -= value * inv[c * k + j]
+    return True
+
+
+cdef bint _cholesky_ok(const double* a, Py_ssize_t k, double* work) noexcept nogil:
+    """Whether the symmetric row-major ``a`` (k x k) has a Cholesky factorisation (every
+    pivot positive, LAPACK's test)."""
+    cdef Py_ssize_t i, j, c
+    cdef double value
+    for i in range(k * k):
+        work[i] = a[i]
+    for j in range(k):
+        value = work[j * k + j]
+        for c in range(j):
+            value -= work[j * k + c] * work[j * k + c]
+        if not (value > 0.0):
+            return False
+        value = sqrt(value)
+        work[j * k + j] = value
+        for i in range(j + 1, k):
+            work[i * k + j] = (work[i * k + j] - _dot(work + i * k, work + j * k, j)) / value
+    return True
+
+
+cdef Py_ssize_t _mass_structure(const Py_ssize_t* Mp, const Py_ssize_t* Mi, const double* Mx,
+                                Py_ssize_t n, Py_ssize_t max_block) noexcept nogil:
+    """The smallest ``k <= max_block`` dividing ``n`` such that the nonzero entries of ``M``
+    lie in its diagonal ``k x k`` blocks (1: diagonal), else 0 (global_route.block_size)."""
+    cdef Py_ssize_t i, p, j, k, spread = 0
+    cdef bint fits
+    for i in range(n):
+        for p in range(Mp[i], Mp[i + 1]):
+            if Mx[p] != 0.0:
+                spread = max(spread, i - Mi[p] if i > Mi[p] else Mi[p] - i)
+    if spread == 0:
+        return 1
+    for k in range(max(2, spread + 1), max_block + 1):
+        if n % k:
+            continue
+        fits = True
+        for i in range(n):
+            for p in range(Mp[i], Mp[i + 1]):
+                if Mx[p] != 0.0 and i // k != Mi[p] // k:
+                    fits = False
+                    break
+            if not fits:
+                break
+        if fits:
+            return k
+    return 0
+
+
+cdef int _mass_factor(Mass* F, const Py_ssize_t* Mp, const Py_ssize_t* Mi, const double* Mx,
+                      double* work) noexcept nogil:
+    """Factor ``M`` as :func:`contactqp.methods.global_route.factor_mass` does (``F.k`` set by
+    the caller; arrays allocated by it); ``_G_SOLVED`` or ``_G_SINGULAR``. ``work``: at
+    least ``4 n + 2 k^2`` doubles (dense: ``n^2 + 6 n``)."""
+    cdef Py_ssize_t n = F.n, k = F.k, i, j, p, b, nb, c
+    cdef double value, norm, inverse_norm, column, low, high
+    cdef double* block
+    cdef double* scaled
+    cdef int info, size, one = 1
+    cdef int* iwork
+    cdef double rcond
+    cdef char uplo = b'U'
+    cdef char which = b'1'
+    F.positive_definite = True
+    if k == 1:
+        for i in range(n):
+            value = 0.0
+            for p in range(Mp[i], Mp[i + 1]):
+                if Mi[p] == i:
+                    value += Mx[p]
+            if value == 0.0:
+                return _G_SINGULAR
+            F.s[i] = _scale_of(value)
+            F.inverse[i] = 1.0 / value
+            if not (value > 0.0):
+                F.positive_definite = False
+        F.condition = 1.0
+        return _G_SOLVED
+    if k > 1:
+        nb = n // k
+        for i in range(n * k):
+            F.inverse[i] = 0.0
+        for i in range(n):  # the blocks, row-major, into F.inverse first
+            b = i // k
+            for p in range(Mp[i], Mp[i + 1]):
+                if Mi[p] // k == b:
+                    F.inverse[b * k * k + (i % k) * k + Mi[p] % k] += Mx[p]
+        for i in range(n):
+            F.s[i] = _scale_of(F.inverse[(i // k) * k * k + (i % k) * (k + 1)])
+        norm = 0.0
+        inverse_norm = 0.0
+        scaled = work
+        block = work + k * k
+        for b in range(nb):
+            for i in range(k):
+                for j in range(k):
+                    scaled[i * k + j] = (F.s[b * k + i] * F.inverse[b * k * k + i * k + j]
+                                         * F.s[b * k + j])
+                    if F.inverse[b * k * k + i * k + j] != F.inverse[b * k * k + j * k + i]:
+                        F.positive_definite = False
+            for j in range(k):
+                column = 0.0
+                for i in range(k):
+                    column += fabs(scaled[i * k + j])
+                norm = max(norm, column)
+            if F.positive_definite and not _cholesky_ok(scaled, k, block):
+                F.positive_definite = False
+            if not _invert(scaled, k, block):
+                return _G_SINGULAR
+            for j in range(k):
+                column = 0.0
+                for i in range(k):
+                    column += fabs(block[i * k + j])
+                inverse_norm = max(inverse_norm, column)
+            for i in range(k):
+                for j in range(k):
+                    F.inverse[b * k * k + i * k + j] = (F.s[b * k + i] * block[i * k + j]
+                                                        * F.s[b * k + j])
+        F.condition = norm * inverse_norm
+        if not isfinite(F.condition) or F.condition * n * _G_EPS >= 1.0:
+            return _G_SINGULAR
+        return _G_SOLVED
+    # dense: Cholesky of S M S when M is exactly symmetric, else LU with partial pivoting, in
+    # LAPACK's band storage when M's nonzeros lie in a narrow band (the same factors: the
+    # pivots are looked for among the same rows, the others being zero) and full otherwise
+    _dense_factor(F, Mp, Mi, Mx, work)
+    if F.condition < 0.0:
+        return _G_SINGULAR
+    return _G_SOLVED
+
+
+cdef void _dense_factor(Mass* F, const Py_ssize_t* Mp, const Py_ssize_t* Mi, const double* Mx,
+                        double* work) noexcept nogil:
+    """The dense branch of :func:`_mass_factor`; ``F.condition`` < 0 when ``M`` is singular.
+    ``work``: ``n^2 + 6 n`` doubles."""
+    cdef Py_ssize_t n = F.n, i, j, p, kl = 0, ku = 0, kd, ld, row, step
+    cdef double value, norm, low, high, rcond
+    cdef double* A = work  # M (then S M S) in full or band storage
+    cdef double* column_sums = work + n * n
+    cdef double* lapack_work = column_sums + n  # 4 n
+    cdef int* iwork = <int*> (lapack_work + 4 * n)  # n ints
+    cdef int info, size = <int> n, lower, upper, diagonals, lead
+    cdef char uplo = b'U'
+    cdef char which = b'1'
+    F.condition = -1.0
+    for i in range(n):
+        F.s[i] = 0.0
+        column_sums[i] = 0.0
+        for p in range(Mp[i], Mp[i + 1]):
+            if Mx[p] != 0.0:
+                j = Mi[p]
+                kl = max(kl, i - j)
+                ku = max(ku, j - i)
+            if Mi[p] == i:
+                F.s[i] += Mx[p]
+    for i in range(n):
+        F.s[i] = _scale_of(F.s[i])
+    F.band = 2 * (2 * kl + ku + 1) <= n
+    F.kl, F.ku = kl, ku
+    ld = 2 * kl + ku + 1 if F.band else n
+    F.ld = ld
+    for i in range(ld * n):
+        A[i] = 0.0
+    for i in range(n):  # A(i, j) at A[i + j n], or at A[kl + ku + i - j + j ld] in a band
+        for p in range(Mp[i], Mp[i + 1]):
+            if Mx[p] != 0.0:
+                j = Mi[p]
+                A[(kl + ku + i - j if F.band else i) + j * ld] += Mx[p]
+    row = kl + ku if F.band else 0  # A(i, j) = A[row + i - j + j step]
+    step = ld if F.band else n + 1
+    F.positive_definite = kl == ku
+    if F.positive_definite:
+        for j in range(n):
+            for i in range(max(0, j - ku), j):
+                if A[row + i - j + j * step] != A[row + j - i + i * step]:
+                    F.positive_definite = False
+                    break
+            if not F.positive_definite:
+                break
+    for j in range(n):
+        for i in range(max(0, j - ku), min(n, j + kl + 1)):
+            value = F.s[i] * A[row + i - j + j * step] * F.s[j]
+            A[row + i - j + j * step] = value
+            column_sums[j] += fabs(value)
+    norm = 0.0
+    for j in range(n):
+        norm = max(norm, column_sums[j])
+    F.cholesky = False
+    kd = ku
+    if F.positive_definite:
+        if F.band:  # the upper triangle, row kd the diagonal
+            for j in range(n):
+                for i in range(max(0, j - kd), j + 1):
+                    F.factor[kd + i - j + j * (kd + 1)] = A[row + i - j + j * step]
+            diagonals = <int> kd
+            lead = <int> (kd + 1)
+            _dpbtrf(&uplo, &size, &diagonals, F.factor, &lead, &info)
+        else:
+            for i in range(n * n):
+                F.factor[i] = A[i]
+            _dpotrf(&uplo, &size, F.factor, &size, &info)
+        F.cholesky = info == 0
+    F.positive_definite = F.cholesky
+    if not F.cholesky:
+        for i in range(ld * n):
+            F.factor[i] = A[i]
+        if F.band:
+            lower = <int> kl
+            upper = <int> ku
+            lead = <int> ld
+            _dgbtrf(&size, &size, &lower, &upper, F.factor, &lead, F.pivots, &info)
+        else:
+            _dgetrf(&size, &size, F.factor, &size, F.pivots, &info)
+        if info < 0:
+            return
+    low = INFINITY
+    high = 0.0
+    for i in range(n):
+        if F.cholesky:
+            value = F.factor[(kd + i * (kd + 1)) if F.band else i + i * n] ** 2
+        else:
+            value = fabs(F.factor[(kl + ku + i * ld) if F.band else i + i * n])
+        if not isfinite(value):
+            return
+        low = min(low, value)
+        high = max(high, value)
+    if low <= n * _G_EPS * high:
+        return
+    if F.cholesky and F.band:
+        _dpbcon(&uplo, &size, &diagonals, F.factor, &lead, &norm, &rcond, lapack_work, iwork,
+                &info)
+    elif F.cholesky:
+        _dpocon(&uplo, &size, F.factor, &size, &norm, &rcond, lapack_work, iwork, &info)
+    elif F.band:
+        _dgbcon(&which, &size, &lower, &upper, F.factor, &lead, F.pivots, &norm, &rcond,
+                lapack_work, iwork, &info)
+    else:
+        _dgecon(&which, &size, F.factor, &size, &norm, &rcond, lapack_work, iwork, &info)
+    F.condition = 1.0 / rcond if rcond > 0.0 else INFINITY
+
+
+cdef void _mass_solve(const Mass* F, double* x, Py_ssize_t nrhs, double* work) noexcept nogil:
+    """``x = M^-1 x`` in place, ``x`` column-major n x nrhs; ``work``: n doubles."""
+    cdef Py_ssize_t n = F.n, k = F.k, c, b, i, j
+    cdef double value
+    cdef int size = <int> n, count = <int> nrhs, info
+    cdef char uplo = b'U'
+    cdef char trans = b'N'
+    cdef double* column
+    if k > 0:
+        for c in range(nrhs):
+            column = x + c * n
+            if k == 1:
+                for i in range(n):
+                    column[i] *= F.inverse[i]
+                continue
+            for b in range(n // k):
+                for i in range(k):
+                    value = 0.0
+                    for j in range(k):
+                        value += F.inverse[b * k * k + i * k + j] * column[b * k + j]
+                    work[i] = value
+                for i in range(k):
+                    column[b * k + i] = work[i]
+        return
+    for c in range(nrhs):
+        for i in range(n):
+            x[c * n + i] *= F.s[i]
+    cdef int lower = <int> F.kl, upper = <int> F.ku, lead = <int> F.ld
+    cdef int diagonals = <int> F.ku, lead_cholesky = <int> (F.ku + 1)
+    if F.cholesky and F.band:
+        _dpbtrs(&uplo, &size, &diagonals, &count, F.factor, &lead_cholesky, x, &size, &info)
+    elif F.cholesky:
+        _dpotrs(&uplo, &size, &count, F.factor, &size, x, &size, &info)
+    elif F.band:
+        _dgbtrs(&trans, &size, &lower, &upper, &count, F.factor, &lead, F.pivots, x, &size,
+                &info)
+    else:
+        _dgetrs(&trans, &size, &count, F.factor, &size, F.pivots, x, &size, &info)
+    for c in range(nrhs):
+        for i in range(n):
+            x[c * n + i] *= F.s[i]
+
+
+cdef Py_ssize_t _root(Py_ssize_t* parent, Py_ssize_t i) noexcept nogil:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+cdef const void* _int_view(object array, str name, Py_ssize_t* size, int* itemsize) except NULL:
+    """The data of a C-contiguous 1-D array of 32- or 64-bit ints (scipy's index arrays are
+    either), its length written to ``size`` and its item size to ``itemsize``; the buffer is
+    released at once (the caller holds the array for the call)."""
+    cdef Py_buffer view
+    PyObject_GetBuffer(array, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT)
+    cdef char code = 0
+    cdef const void* data = view.buf
+    if view.format != NULL:
+        code = view.format[0]
+        if code == b'@' or code == b'=' or code == b'<':
+            code = view.format[1]
+    cdef bint ok = view.ndim == 1 and (
+        (view.itemsize == 4 and code == b'i')
+        or (view.itemsize == 8 and (code == b'q' or code == b'l' or code == b'n'))
+    )
+    if ok:
+        size[0] = view.shape[0]
+        itemsize[0] = <int> view.itemsize
+    PyBuffer_Release(&view)
+    if not ok:
+        raise ValueError(f"{name} must be a C-contiguous 1-D array of 32- or 64-bit ints")
+    return data if data != NULL else <const void*> size
+
+
+cdef void _copy_ints(const void* source, int itemsize, Py_ssize_t n,
+                     Py_ssize_t* target) noexcept nogil:
+    cdef Py_ssize_t i
+    if itemsize == 4:
+        for i in range(n):
+            target[i] = (<const int*> source)[i]
+    else:
+        for i in range(n):
+            target[i] = (<const int64_t*> source)[i]
+
+
+cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, const double* Hx,
+                   const double* f, const double* w, Py_ssize_t m, double* W, double* q,
+                   double* B, double* work) noexcept nogil:
+    """``W = H^T M^-1 H`` (row-major m x m) and ``q = H^T M^-1 f + w``; ``B``: n (m + 1)
+    doubles (dense M) or n. ``_G_SINGULAR`` when they are not finite."""
+    cdef Py_ssize_t n = F.n, k = F.k, i, i1, i2, p1, p2, b, a, row
+    cdef double value
+    cdef const double* inverse
+    for i in range(m * m):
+        W[i] = 0.0
+    for i in range(m):
+        q[i] = 0.0
+    if k == 0:
+        for i in range(n * (m + 1)):
+            B[i] = 0.0
+        for i in range(n):
+            for p1 in range(Hp[i], Hp[i + 1]):
+                B[i + Hi[p1] * n] += Hx[p1]
+            B[i + m * n] = f[i]
+        _mass_solve(F, B, m + 1, work)
+        for i in range(n):
+            for p1 in range(Hp[i], Hp[i + 1]):
+                a = Hi[p1]
+                value = Hx[p1]
+                for b in range(m):
+                    W[a * m + b] += value * B[i + b * n]
+                q[a] += value * B[i + m * n]
+    else:
+        for b in range(n // k):
+            inverse = F.inverse + b * k * k
+            for i1 in range(b * k, b * k + k):
+                for p1 in range(Hp[i1], Hp[i1 + 1]):
+                    row = Hi[p1] * m
+                    for i2 in range(b * k, b * k + k):
+                        value = Hx[p1] * inverse[(i1 - b * k) * k + i2 - b * k]
+                        for p2 in range(Hp[i2], Hp[i2 + 1]):
+                            W[row + Hi[p2]] += value * Hx[p2]
+        for i in range(n):
+            B[i] = f[i]
+        _mass_solve(F, B, 1, work)
+        for i in range(n):
+            for p1 in range(Hp[i], Hp[i + 1]):
+                q[Hi[p1]] += Hx[p1] * B[i]
+    for i in range(m):
+        q[i] += w[i]
+        if not isfinite(q[i]):
+            return _G_SINGULAR
+    return _G_SOLVED  # W's entries are checked finite by the caller's pass over them
+
+
+def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w, mu, r,
+                 double tol, Py_ssize_t max_iter, bint per_contact, double floor,
+                 bint check_psd, double psd_shift, digits, double rtol, bint solve,
+                 Py_ssize_t max_unknowns, Py_ssize_t max_dense, Py_ssize_t max_block,
+                 Py_ssize_t max_group, u, v, status, measures):
+    """A small global problem ``M v = H r + f``, ``u = H^T v + w`` solved and certified in C.
+
+    ``M`` (n x n) and ``H`` (n x m) in compressed rows (int64 ``indptr``, ``indices``; float64
+    ``data``), ``mu`` (nc,), ``m = d nc``. ``M`` is factored as
+    :func:`contactqp.methods.global_route.factor_mass` does: block diagonal (blocks of at most
+    ``max_block``, inverted exactly) or, up to ``max_dense`` freedoms, dense (LAPACK: Cholesky
+    of the Jacobi-scaled ``M`` when it is exactly symmetric, else LU). ``W = H^T M^-1 H`` and
+    ``q = H^T M^-1 f + w`` are formed dense; the contacts fall into the groups that ``W``
+    couples (its nonzero blocks), each of at most ``max_group`` unknowns, and with ``solve``
+    each group is solved from ``r`` by coulomb's first Newton run (that of
+    :func:`small_newton`, to ``tol`` for one group, else ``tol / sqrt(3)``, which bounds the
+    whole problem's error by ``tol``), after the semidefiniteness test of
+    :func:`small_semidefinite` on each group's ``W`` (``check_psd``, unless ``M`` was found
+    symmetric positive definite). ``r`` receives the reactions.
+
+    The certificate of ``r`` is that of
+    :meth:`~contactqp.core.local_problem.GlobalProblem.certify`: ``v`` solves ``M v = H r + f``,
+    ``u = H^T v + w``, ``measures`` the figures named by :data:`GLOBAL_MEASURES` (``digits``:
+    the relative roundings of ``M``, ``H``, ``f``, ``w``), ``status`` the open / stick / slip
+    code of each contact by the rule of
+    :func:`~contactqp.core.local_problem.contact_status_unchecked` (``rtol``) on the condensed
+    problem. Returns the index of :data:`GLOBAL_CODES`: 0 when all this was done, else why not
+    (the structure or sizes are not the small route's, ``M`` is singular, a group's ``W``
+    fails the test, a Newton run did not converge); the outputs are then not to be read.
+    """
+    cdef Py_ssize_t smp[1]
+    cdef Py_ssize_t smi[1]
+    cdef Py_ssize_t smx[1]
+    cdef Py_ssize_t shp[1]
+    cdef Py_ssize_t shi[1]
+    cdef Py_ssize_t shx[1]
+    cdef Py_ssize_t sf[1]
+    cdef Py_ssize_t sw[1]
+    cdef Py_ssize_t smu[1]
+    cdef Py_ssize_t sr[1]
+    cdef Py_ssize_t sdg[1]
+    cdef Py_ssize_t su[1]
+    cdef Py_ssize_t sv[1]
+    cdef Py_ssize_t sst[1]
+    cdef Py_ssize_t sme[1]
+    cdef int imp, imi, ihp, ihi
+    cdef const void* vmp = _int_view(M_indptr, "M_indptr", smp, &imp)
+    cdef const void* vmi = _int_view(M_indices, "M_indices", smi, &imi)
+    cdef const void* vhp = _int_view(H_indptr, "H_indptr", shp, &ihp)
+    cdef const void* vhi = _int_view(H_indices, "H_indices", shi, &ihi)
+    cdef const double* Mx = <const double*> _buffer(M_data, b'd', 1, smx, False, "M_data")
+    cdef const double* Hx = <const double*> _buffer(H_data, b'd', 1, shx, False, "H_data")
+    cdef const double* fd = <const double*> _buffer(f, b'd', 1, sf, False, "f")
+    cdef const double* wd = <const double*> _buffer(w, b'd', 1, sw, False, "w")
+    cdef const double* mud = <const double*> _buffer(mu, b'd', 1, smu, False, "mu")
+    cdef double* rd = <double*> _buffer(r, b'd', 1, sr, True, "r")
+    cdef const double* dg = <const double*> _buffer(digits, b'd', 1, sdg, False, "digits")
+    cdef double* ud = <double*> _buffer(u, b'd', 1, su, True, "u")
+    cdef double* vd = <double*> _buffer(v, b'd', 1, sv, True, "v")
+    cdef Py_ssize_t* std = <Py_ssize_t*> _buffer(status, b'n', 1, sst, True, "status")
+    cdef double* md = <double*> _buffer(measures, b'd', 1, sme, True, "measures")
+    cdef Py_ssize_t n = sf[0], m = sw[0], nc = smu[0], d, i
+    if smp[0] != n + 1 or shp[0] != n + 1 or sv[0] != n:
+        raise ValueError("M_indptr and H_indptr must have n + 1 entries and v n, n = len(f)")
+    if sr[0] != m or su[0] != m or sst[0] != nc or sme[0] != _G_MEASURES or sdg[0] != 4:
+        raise ValueError("inconsistent shapes")
+    cdef Py_ssize_t* indices = <Py_ssize_t*> malloc(
+        (smp[0] + smi[0] + shp[0] + shi[0] + 1) * sizeof(Py_ssize_t)
+    )
+    if indices == NULL:
+        raise MemoryError()
+    cdef Py_ssize_t* Mp = indices
+    cdef Py_ssize_t* Mi = Mp + smp[0]
+    cdef Py_ssize_t* Hp = Mi + smi[0]
+    cdef Py_ssize_t* Hi = Hp + shp[0]
+    _copy_ints(vmp, imp, smp[0], Mp)
+    _copy_ints(vmi, imi, smi[0], Mi)
+    _copy_ints(vhp, ihp, shp[0], Hp)
+    _copy_ints(vhi, ihi, shi[0], Hi)
+    try:
+        return _global_small(
+            Mp, Mi, Mx, Hp, Hi, Hx, fd, wd, mud, rd, tol, max_iter, per_contact, floor,
+            check_psd, psd_shift, dg, rtol, solve, max_unknowns, max_dense, max_block,
+            max_group, ud, vd, std, md, n, m, nc, smi[0], smx[0], shi[0], shx[0]
+        )
+    finally:
+        free(indices)
+
+
+cdef int _global_small(
+    const Py_ssize_t* Mp, const Py_ssize_t* Mi, const double* Mx, const Py_ssize_t* Hp,
+    const Py_ssize_t* Hi, const double* Hx, const double* fd, const double* wd,
+    const double* mud, double* rd, double tol, Py_ssize_t max_iter, bint per_contact,
+    double floor, bint check_psd, double psd_shift, const double* dg, double rtol, bint solve,
+    Py_ssize_t max_unknowns, Py_ssize_t max_dense, Py_ssize_t max_block, Py_ssize_t max_group,
+    double* ud, double* vd, Py_ssize_t* std, double* md, Py_ssize_t n, Py_ssize_t m,
+    Py_ssize_t nc, Py_ssize_t n_mi, Py_ssize_t n_mx, Py_ssize_t n_hi, Py_ssize_t n_hx,
+) except -2:
+    """:func:`global_small` on its arrays' data (the index arrays as Py_ssize_t)."""
+    cdef Py_ssize_t d, i
+    if n_mi != n_mx or n_mi < Mp[n] or n_hi != n_hx or n_hi < Hp[n] or Mp[0] != 0 or Hp[0] != 0:
+        raise ValueError("indices and data must hold indptr[-1] entries")
+    for i in range(n):
+        if Mp[i] > Mp[i + 1] or Hp[i] > Hp[i + 1]:
+            raise ValueError("indptr must not decrease")
+    for i in range(Mp[n]):
+        if Mi[i] < 0 or Mi[i] >= n:
+            raise ValueError("M_indices out of range")
+    for i in range(Hp[n]):
+        if Hi[i] < 0 or Hi[i] >= m:
+            raise ValueError("H_indices out of range")
+    if n == 0 or nc == 0 or m > max_unknowns:
+        return _G_NOT_HANDLED
+    d = m // nc
+    if d * nc != m:
+        raise ValueError(f"{m} unknowns do not make rows of {nc} contacts")
+    _check_dimension(d)
+    _load_lapack()
+    cdef Mass F
+    F.n = n
+    F.k = _mass_structure(Mp, Mi, Mx, n, max_block)
+    if F.k == 0 and n > max_dense:
+        return _G_NOT_HANDLED
+    cdef Py_ssize_t k = F.k, g = max_group
+    cdef Py_ssize_t n_work = n * n + 6 * n if k == 0 else 4 * n + 2 * k * k
+    cdef Py_ssize_t n_b = n * (m + 1) if k == 0 else n
+    cdef Py_ssize_t total = (n + (n * n if k == 0 else n * k) + n_work + m * m + m + n_b
+                             + 5 * n + 3 * m + 3 * g * g + 4 * g + nc)
+    cdef double* block = <double*> malloc(total * sizeof(double))
+    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((4 * nc + 1 + g) * sizeof(Py_ssize_t))
+    cdef int* pivots = <int*> malloc((n + 1) * sizeof(int))
+    if block == NULL or index == NULL or pivots == NULL:
+        free(block)
+        free(index)
+        free(pivots)
+        raise MemoryError()
+    F.s = block
+    F.inverse = block + n
+    F.factor = F.inverse
+    F.pivots = pivots
+    cdef double* work = F.inverse + (n * n if k == 0 else n * k)
+    cdef double* W = work + n_work
+    cdef double* q = W + m * m
+    cdef double* B = q + m
+    cdef double* Hr = B + n_b
+    cdef double* Mv = Hr + n
+    cdef double* zeros = Mv + n  # m: the apex shift of every contact (no cohesion)
+    cdef double* ul = zeros + m
+    cdef double* transport = ul + m
+    cdef double* Wc = transport + m  # g * g
+    cdef double* Sc = Wc + g * g  # 2 g * g
+    cdef double* qc = Sc + 2 * g * g
+    cdef double* rc = qc + g
+    cdef double* scaling = rc + g
+    cdef double* muc = scaling + g  # g (of at most g contacts)
+    cdef double* squares = muc + g  # nc
+    cdef double* v_scaled = squares + nc  # n
+    cdef double* forcing = v_scaled + n  # n
+    cdef Py_ssize_t* parent = index
+    cdef Py_ssize_t* start = index + nc  # nc + 1
+    cdef Py_ssize_t* members = start + nc + 1
+    cdef Py_ssize_t* keep = members + nc  # g
+    cdef Py_ssize_t* cursor = keep + g  # nc
+    cdef int code = _G_SOLVED, reason
+    cdef Py_ssize_t a, b, c, p, j, groups = 0, size, mg, ncg, iterations = 0, count, root, first
+    cdef double tol_group, value, error, residual, eq, sizes, product, magnitude, rr, uu, qq
+    cdef double size_h, size_y, transported, scale, largest, force, wdiag, carry, slip
+    cdef double rel_m = dg[0], rel_h = dg[1], rel_f = dg[2], rel_w = dg[3], data = 0.0
+    cdef double sm, shr, sf2
+    cdef Small S
+    cdef Small L
+    cdef double* work_newton
+    try:
+        with nogil:
+            for i in range(m):
+                zeros[i] = 0.0
+            code = _mass_factor(&F, Mp, Mi, Mx, work)
+            if code == _G_SOLVED:
+                code = _condense(&F, Hp, Hi, Hx, fd, wd, m, W, q, B, work)
+            if code == _G_SOLVED:
+                # the groups of contacts that W couples: with a block-diagonal M, those that
+                # H puts on one block (W is zero between the others: no entry is written); with
+                # a dense M, those of W's nonzero entries
+                for i in range(nc):
+                    parent[i] = i
+                if k > 0:
+                    for b in range(n // k):
+                        first = -1
+                        for i in range(b * k, b * k + k):
+                            for p in range(Hp[i], Hp[i + 1]):
+                                if first < 0:
+                                    first = _root(parent, Hi[p] // d)
+                                    continue
+                                j = _root(parent, Hi[p] // d)
+                                if j != first:
+                                    parent[max(first, j)] = min(first, j)
+                                    first = min(first, j)
+                else:
+                    for a in range(m):
+                        for b in range(m):
+                            if W[a * m + b] != 0.0 and a // d != b // d:
+                                i = _root(parent, a // d)
+                                j = _root(parent, b // d)
+                                if i != j:
+                                    parent[max(i, j)] = min(i, j)
+                for i in range(nc):
+                    parent[i] = _root(parent, i)
+                    if parent[i] == i:
+                        groups += 1
+                for i in range(nc + 1):
+                    start[i] = 0
+                for i in range(nc):
+                    start[parent[i] + 1] += 1
+                for i in range(nc):
+                    start[i + 1] += start[i]
+                for i in range(nc):
+                    cursor[i] = start[i]
+                for i in range(nc):  # each group's contacts in increasing order
+                    members[cursor[parent[i]]] = i
+                    cursor[parent[i]] += 1
+                for i in range(nc):
+                    if solve and (start[i + 1] - start[i]) * d > g:
+                        code = _G_NOT_HANDLED
+                for a in range(m):  # W is zero outside its groups' blocks: the rest finite?
+                    root = parent[a // d]
+                    for p in range(start[root], start[root + 1]):
+                        j = members[p] * d
+                        for b in range(j, j + d):
+                            if not isfinite(W[a * m + b]):
+                                code = _G_SINGULAR
+            if code == _G_SOLVED and solve:
+                tol_group = tol if groups == 1 else tol / sqrt(3.0)
+                for root in range(nc):
+                    if parent[root] != root:
+                        continue
+                    ncg = start[root + 1] - start[root]
+                    mg = ncg * d
+                    for a in range(mg):
+                        i = members[start[root] + a // d] * d + a % d
+                        for b in range(mg):
+                            j = members[start[root] + b // d] * d + b % d
+                            Wc[a * mg + b] = W[i * m + j]
+                        qc[a] = q[i]
+                        rc[a] = rd[i]
+                    for a in range(ncg):
+                        muc[a] = mud[members[start[root] + a]]
+                    if check_psd and not F.positive_definite and not _semidefinite(
+                        Wc, mg, psd_shift, Sc, scaling, keep
+                    ):
+                        code = _G_NOT_PSD
+                        break
+                    work_newton = _setup(&S, mg, ncg, max_iter)
+                    if work_newton == NULL:
+                        code = -1
+                        break
+                    S.per_contact = per_contact
+                    S.floor = floor
+                    _problem(&S, Wc, qc, muc, zeros)
+                    reason = _run(&S, rc, tol_group, max_iter, &count, &error)
+                    free(work_newton)
+                    free(S.rows)
+                    iterations = max(iterations, count)
+                    if reason != _CONVERGED:
+                        code = _G_NOT_CONVERGED
+                        break
+                    for a in range(mg):
+                        rd[members[start[root] + a // d] * d + a % d] = rc[a]
+            if code == _G_SOLVED:
+                L.m, L.nc, L.d = m, nc, d
+                L.q, L.mu, L.shift, L.squares = q, mud, zeros, squares
+                L.floor = floor
+                L.qq = _dot(q, q, m)
+                qq = L.qq
+                # the condensed problem's certificate (the route's local message)
+                product = 0.0
+                wdiag = 0.0
+                for a in range(m):  # over the columns of a's group: W is zero elsewhere
+                    value = 0.0
+                    magnitude = 0.0
+                    root = parent[a // d]
+                    for p in range(start[root], start[root + 1]):
+                        j = members[p] * d
+                        for b in range(j, j + d):
+                            value += W[a * m + b] * rd[b]
+                            magnitude += fabs(W[a * m + b]) * fabs(rd[b])
+                    ul[a] = value + q[a]
+                    if a % d == 0 or mud[a // d] != 0.0:
+                        product += magnitude * magnitude
+                    wdiag = max(wdiag, fabs(W[a * m + a]))
+                L.per_contact = per_contact
+                _natural_error(&L, rd, ul, &residual, &error)
+                md[5] = error
+                md[6] = sqrt(product)
+                md[7] = sqrt(qq)
+                rr = _dot(rd, rd, m)
+                md[8] = sqrt(max(qq, max(rr, _dot(ul, ul, m))))
+                # the global certificate: v solves M v = H r + f, u = H^T v + w
+                for i in range(n):
+                    value = 0.0
+                    magnitude = 0.0
+                    for p in range(Hp[i], Hp[i + 1]):
+                        value += Hx[p] * rd[Hi[p]]
+                        magnitude += fabs(Hx[p]) * fabs(rd[Hi[p]])
+                    Hr[i] = value
+                    forcing[i] = rel_h * magnitude + rel_f * fabs(fd[i])
+                    vd[i] = value + fd[i]
+                _mass_solve(&F, vd, 1, work)
+                sm = 0.0
+                shr = 0.0
+                sf2 = 0.0
+                eq = 0.0
+                size_h = 0.0
+                size_y = 0.0
+                for i in range(n):
+                    value = 0.0
+                    magnitude = 0.0
+                    for p in range(Mp[i], Mp[i + 1]):
+                        value += Mx[p] * vd[Mi[p]]
+                        magnitude += fabs(Mx[p]) * fabs(vd[Mi[p]])
+                    forcing[i] += rel_m * magnitude
+                    sm += (F.s[i] * value) ** 2
+                    shr += (F.s[i] * Hr[i]) ** 2
+                    sf2 += (F.s[i] * fd[i]) ** 2
+                    eq += (F.s[i] * (value - Hr[i] - fd[i])) ** 2
+                    size_y += (vd[i] / F.s[i]) ** 2
+                    for p in range(Hp[i], Hp[i + 1]):
+                        size_h += (F.s[i] * Hx[p]) ** 2
+                sizes = sqrt(max(sm, max(shr, sf2)))
+                md[1] = sqrt(eq) / (sizes if sizes > 0.0 else 1.0)
+                for a in range(m):
+                    ud[a] = 0.0
+                    transport[a] = 0.0
+                for i in range(n):
+                    for p in range(Hp[i], Hp[i + 1]):
+                        ud[Hi[p]] += Hx[p] * vd[i]
+                        transport[Hi[p]] += fabs(Hx[p]) * fabs(vd[i])
+                for a in range(m):
+                    ud[a] += wd[a]
+                L.per_contact = False
+                _natural_error(&L, rd, ud, &residual, &error)
+                md[0] = error
+                uu = _dot(ud, ud, m)
+                scale = sqrt(max(qq, max(rr, uu)))
+                if scale == 0.0:
+                    scale = 1.0
+                transported = sqrt(_dot(transport, transport, m)) + sqrt(_dot(wd, wd, m))
+                md[2] = (F.condition * _G_EPS * sqrt(size_h) * sqrt(size_y)
+                         + _G_EPS * transported) / scale
+                if rel_m != 0.0 or rel_h != 0.0 or rel_f != 0.0 or rel_w != 0.0:
+                    _mass_solve(&F, forcing, 1, work)
+                    for a in range(m):
+                        ul[a] = 0.0
+                    for i in range(n):
+                        for p in range(Hp[i], Hp[i + 1]):
+                            ul[Hi[p]] += Hx[p] * forcing[i]
+                    data = (sqrt(_dot(ul, ul, m))
+                            + rel_h * sqrt(_dot(transport, transport, m))
+                            + rel_w * sqrt(_dot(wd, wd, m))) / scale
+                md[3] = data
+                md[4] = F.condition
+                md[9] = <double> iterations
+                md[10] = <double> groups
+                md[11] = 1.0 if F.positive_definite else 0.0
+                # status, on the condensed problem (contact_status_unchecked)
+                if wdiag == 0.0:
+                    wdiag = 1.0
+                largest = max(sqrt(rr), max(sqrt(qq) / wdiag, sqrt(uu) / wdiag))
+                force = largest if largest > 0.0 else 1.0
+                for i in range(nc):
+                    carry = 0.0
+                    slip = 0.0
+                    for c in range(d):
+                        carry += rd[i * d + c] ** 2
+                        if c:
+                            slip += ud[i * d + c] ** 2
+                    if sqrt(carry) > rtol * force:
+                        std[i] = 2 if sqrt(slip) > rtol * wdiag * force else 1
+                    else:
+                        std[i] = 0
+    finally:
+        free(block)
+        free(index)
+        free(pivots)
+    if code == -1:
+        raise MemoryError()
+    return code

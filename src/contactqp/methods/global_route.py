@@ -17,6 +17,15 @@ diagonal: there ``M^{-1}`` is known exactly and ``W`` is a sparse product.
   costs on the small finite-element files);
 * otherwise the problem's own sparse LU factorisation and condensation.
 
+A small problem (at most :data:`COMPILED_UNKNOWNS` contact unknowns, ``M`` block diagonal or
+of at most :data:`DENSE_FREEDOMS` freedoms) solved by the default method is done in one
+compiled call (:func:`solve_compiled`): the same factorisation of ``M`` (LAPACK's, through
+scipy), the condensation, coulomb's Newton run on each group of contacts that ``W`` couples
+(contacts that share no body are solved apart) and the certificate on the global equations.
+Whatever that call does not finish (a larger group, a singular ``M``, a ``W`` that fails the
+semidefiniteness test, a Newton run that does not converge) is done again by the general
+route, from the start.
+
 Each factor records the Jacobi scaling ``s = |diag M|^{-1/2}`` and the exact 1-norm condition of
 the scaled ``M``, and refuses a singular ``M`` (a singular block, or an LU pivot below
 ``ndof * eps`` of the largest) with :class:`~contactqp.errors.NotPositiveDefiniteError`, as
@@ -29,6 +38,7 @@ must both meet ``tol``.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,11 +46,29 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from ..core.local_problem import DENSE_FILL, DENSE_SIZE, GlobalProblem, LocalProblem, better_dense
+from .. import kernels
+from ..core.local_problem import (
+    CONTACT_FLOOR,
+    DENSE_FILL,
+    DENSE_SIZE,
+    SMALL_UNKNOWNS,
+    AccuracyLimits,
+    GlobalCertificate,
+    GlobalProblem,
+    LocalProblem,
+    better_dense,
+    relative_rounding,
+)
+from ..core.model import iteration_cap, positive_tolerance, warm_start
+from ..core.operators import PSD_SHIFT
+from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
+from .coulomb import RUN_ITERATIONS
+from .local_global import compiled_global_result
 
 __all__ = [
     "BLOCK_MAX",
+    "COMPILED_UNKNOWNS",
     "DENSE_ENTRIES",
     "DENSE_FREEDOMS",
     "BlockDiagonalMass",
@@ -48,13 +76,20 @@ __all__ = [
     "DenseMass",
     "MassFactor",
     "block_size",
+    "certify_compiled",
     "condense",
     "factor_mass",
+    "solve_compiled",
 ]
 
 BLOCK_MAX = 12  #: largest diagonal block of a block-diagonal ``M`` inverted block by block
 DENSE_FREEDOMS = 400  #: a general ``M`` of at most this many freedoms is factored dense
 DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries are read dense
+#: Most contact unknowns ``m`` of a problem that :func:`solve_compiled` takes (``W`` is formed
+#: dense there: 2.9 MB)
+COMPILED_UNKNOWNS = 600
+#: The rtol of :func:`~contactqp.core.local_problem.contact_status_unchecked`
+_STATUS_RTOL = 1e-6
 _EPS = float(np.finfo(float).eps)
 
 
@@ -367,3 +402,126 @@ def condense(problem: GlobalProblem) -> Condensed:
             f"M ({M.shape[0]}x{M.shape[0]}) is singular: the solve is not finite"
         )
     return Condensed(LocalProblem(W, q, problem.mu, problem.dim, problem.title), factor)
+
+
+def _csr_arrays(A) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(indptr, indices, data)`` of ``A`` in compressed rows (scipy's int32 or int64
+    indices, as stored)."""
+    csr: Any = A if sp.issparse(A) else sp.csr_matrix(A)
+    return csr.indptr, csr.indices, csr.data
+
+
+def solve_compiled(
+    problem: GlobalProblem,
+    start: float,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = 800,
+    check_psd: bool = True,
+    per_contact: bool = False,
+) -> LocalResult | None:
+    """``coulomb``'s answer to a small global problem in one compiled call, or None when the
+    general route must give it (see the module notes).
+
+    The options are ``coulomb``'s (:func:`~contactqp.methods.coulomb.solve_coulomb`), checked
+    alike; ``start`` is the ``time.perf_counter()`` of the solve. The answer is that of the
+    general route up to rounding: the same factorisation of ``M`` and condensation, the same
+    Newton iterations (on each group of contacts that ``W`` couples, to ``tol / sqrt(3)`` when
+    there are several, which bounds the whole problem's error by ``tol``), and the certificate
+    of :meth:`~contactqp.core.local_problem.GlobalProblem.certify` computed from ``r``.
+
+    Raises
+    ------
+    InvalidInputError
+        On a bad ``tol``, ``max_iter`` or ``r0``.
+    """
+    global_small = kernels.global_small
+    if global_small is None:
+        return None
+    ndof, m = problem.H.shape
+    if ndof == 0 or m == 0 or m > COMPILED_UNKNOWNS:
+        return None
+    if not (type(tol) is float and 0.0 < tol < math.inf):
+        tol = positive_tolerance(tol)
+    if not (type(max_iter) is int and max_iter >= 1):
+        max_iter = iteration_cap(max_iter)
+    r = np.zeros(m) if r0 is None else np.array(warm_start(r0, m), dtype=float)
+    outputs = _run_kernel(
+        global_small, problem, r, tol, min(RUN_ITERATIONS, max_iter), per_contact, check_psd, True
+    )
+    if outputs is None:
+        return None
+    return compiled_global_result(problem, r, *outputs, tol, bool(per_contact), start)
+
+
+def certify_compiled(problem: GlobalProblem, r) -> GlobalCertificate | None:
+    """:meth:`~contactqp.core.local_problem.GlobalProblem.certify` of reactions ``r`` with the
+    factorisation of ``M`` that :func:`condense` makes, computed by the compiled route's kernel;
+    None where that route does not take ``problem`` (or without the compiled kernels).
+
+    The same figures up to rounding (the sums in another order): what the compiled route's
+    answers carry, and what its tests compare with the Python certificate.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``r`` has the wrong length or is not finite.
+    """
+    global_small = kernels.global_small
+    m = problem.H.shape[1]
+    rv = np.array(warm_start(r, m, "r"), dtype=float)
+    if global_small is None or problem.H.shape[0] == 0 or m == 0 or m > COMPILED_UNKNOWNS:
+        return None
+    outputs = _run_kernel(global_small, problem, rv, 1.0, 1, False, False, False)
+    if outputs is None:
+        return None
+    u, v, _, measures = outputs
+    error, equilibrium, rounding, data, condition = measures[:5].tolist()
+    limits = AccuracyLimits(
+        rounding=rounding, data=data, condition=condition, digits=dict(problem.digits)
+    )
+    return GlobalCertificate(v=v, u=u, error=error, equilibrium=equilibrium, limits=limits)
+
+
+def _run_kernel(
+    global_small, problem: GlobalProblem, r, tol, max_iter, per_contact, check_psd, solve
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(u, v, status, measures)`` of :func:`~contactqp.kernels.compiled.global_small` on
+    ``problem`` from ``r`` (overwritten by the reactions), or None when it did not finish."""
+    ndof, m = problem.H.shape
+    digits = problem.digits
+    rel = (
+        np.array([relative_rounding(digits.get(name)) for name in ("M", "H", "f", "w")])
+        if digits
+        else np.zeros(4)
+    )
+    u, v = np.empty(m), np.empty(ndof)
+    status = np.empty(problem.n_contacts, dtype=np.intp)
+    measures = np.empty(len(kernels.GLOBAL_MEASURES))
+    code = global_small(
+        *_csr_arrays(problem.M),
+        *_csr_arrays(problem.H),
+        np.ascontiguousarray(problem.f),
+        np.ascontiguousarray(problem.w),
+        np.ascontiguousarray(problem.mu),
+        r,
+        tol,
+        max_iter,
+        bool(per_contact),
+        CONTACT_FLOOR,
+        bool(check_psd),
+        PSD_SHIFT,
+        rel,
+        _STATUS_RTOL,
+        solve,
+        COMPILED_UNKNOWNS,
+        DENSE_FREEDOMS,
+        BLOCK_MAX,
+        SMALL_UNKNOWNS,
+        u,
+        v,
+        status,
+        measures,
+    )
+    return None if code else (u, v, status, measures)

@@ -9,7 +9,8 @@ part is the bound-constrained QP
 
 A global problem is solved through its condensed form and the answer certified on the global
 equations as written (:func:`certify_global`,
-:meth:`~contactqp.core.local_problem.GlobalProblem.certify`).
+:meth:`~contactqp.core.local_problem.GlobalProblem.certify`; of a small one, in the compiled
+route's one call, :func:`compiled_global_result`).
 Every solution carries its :class:`~contactqp.core.local_problem.AccuracyLimits`: how far
 rounding (the conditioning of ``M``) and the data's written digits limit its error.
 """
@@ -32,6 +33,7 @@ from ..core.local_problem import (
     check_diagonal,
     column_products,
     contact_status_unchecked,
+    limits_from_norms,
     natural_map_error,
     natural_map_residual,
 )
@@ -42,11 +44,21 @@ from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .active_set import cold_start
 from .box_qp import solve_box_qp
 
-__all__ = ["certified_result", "certify_global", "finish", "local_result", "solve_frictionless"]
+#: Machine epsilon (the rounding of :func:`~contactqp.core.local_problem.limits_from_norms`)
+_EPS = float(np.finfo(float).eps)
+
+__all__ = [
+    "certified_result",
+    "certify_global",
+    "compiled_global_result",
+    "finish",
+    "local_result",
+    "solve_frictionless",
+]
 
 
 def local_result(
-    problem: LocalProblem,
+    problem: LocalProblem | GlobalProblem,
     r,
     u,
     *,
@@ -68,7 +80,8 @@ def local_result(
     computes it).
 
     ``error`` (natural-map), ``equilibrium``, ``limits`` and ``tol`` make its certificate;
-    ``converged`` is the method's verdict (status 0, else 1).
+    ``converged`` is the method's verdict (status 0, else 1). A global ``problem`` needs its
+    ``contact_status`` given (it is computed on the condensed problem).
     """
     r = np.asarray(r, dtype=float)
     u = np.asarray(u, dtype=float)
@@ -83,9 +96,7 @@ def local_result(
         forces=r,
         nodal_forces=r,
         gaps=u[:: problem.dim],
-        contact_status=(
-            contact_status_unchecked(problem, r, u) if contact_status is None else contact_status
-        ),
+        contact_status=(contact_status if contact_status is not None else _status(problem, r, u)),
         energy=float("nan"),
         success=bool(converged),
         status=SUCCESS if converged else NOT_CONVERGED,
@@ -96,6 +107,12 @@ def local_result(
         certificate=certificate,
         v=v,
     )
+
+
+def _status(problem: LocalProblem | GlobalProblem, r, u) -> np.ndarray:
+    if not isinstance(problem, LocalProblem):
+        raise InvalidInputError("the contact status of a global problem must be given")
+    return contact_status_unchecked(problem, r, u)
 
 
 def _polish(problem, W_nn, q_n, normal, start, steps: int = 10):
@@ -399,6 +416,8 @@ def certified_result(
 
 
 def _with_limits(message: str, limits: AccuracyLimits, tol: float) -> str:
+    if limits.rounding <= tol and limits.data <= tol:  # no note (describe's test)
+        return message
     notes = limits.describe(tol)
     return f"{message}; {notes}" if notes else message
 
@@ -446,4 +465,75 @@ def certify_global(
         limits=certificate.limits,
         equilibrium=equilibrium,
         v=certificate.v,
+    )
+
+
+def compiled_global_result(
+    problem: GlobalProblem,
+    r: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    status: np.ndarray,
+    measures: np.ndarray,
+    tol: float,
+    per_contact: bool,
+    start: float,
+) -> LocalResult:
+    """The :class:`~contactqp.core.result.LocalResult` of the compiled small global route
+    (:func:`contactqp.methods.global_route.solve_compiled`), from what
+    :func:`~contactqp.kernels.compiled.global_small` computed: the same fields, verdict and
+    message as :func:`certify_global` gives the general route's answer.
+
+    ``measures`` holds the figures named by
+    :data:`~contactqp.kernels.compiled.GLOBAL_MEASURES`; ``status`` the contact status.
+    """
+    (
+        error,
+        equilibrium,
+        rounding,
+        data,
+        condition,
+        local_error,
+        local_product,
+        local_size_q,
+        local_scale,
+        iterations,
+        groups,
+        _,
+    ) = measures.tolist()
+    limits = AccuracyLimits(
+        rounding=rounding, data=data, condition=condition, digits=dict(problem.digits)
+    )
+    k = int(iterations)
+    detail = f"newton {k} it. (converged)"
+    if groups > 1:
+        detail += f" on {int(groups)} groups of contacts that W does not couple"
+    local_verdict = "converged" if local_error <= tol else f"not converged to {tol:g}"
+    local_message = f"{local_verdict}: {detail}; natural-map error {local_error:.2e}" + (
+        " (largest of the problem's and each contact's)" if per_contact else ""
+    )
+    if _EPS * (local_product + local_size_q) > tol * (local_scale or 1.0):  # a note (finish's)
+        local_limits = limits_from_norms(local_product, local_size_q, local_scale, {}, (0.0, 0.0))
+        local_message = _with_limits(local_message, local_limits, tol)
+    converged = bool(error <= tol and equilibrium <= tol)
+    verdict = "converged" if converged else f"not converged to {tol:g}"
+    message = (
+        f"{verdict} on the global equations as written: natural-map error {error:.2e}, "
+        f"equilibrium residual {equilibrium:.1e} (condensed problem: {local_message})"
+    )
+    return local_result(
+        problem,
+        r,
+        u,
+        converged=converged,
+        error=error,
+        tol=tol,
+        iterations=k,
+        seconds=time.perf_counter() - start,
+        method="coulomb",
+        message=_with_limits(message, limits, tol),
+        limits=limits,
+        equilibrium=equilibrium,
+        v=v,
+        contact_status=status,
     )
