@@ -87,9 +87,9 @@ def test_closed_forms_of_one_contact():
     assert_matches_one_by_one(batch, result, tol=1e-12)
 
 
-def test_hard_problems_take_every_stage_as_alone():
+def test_problems_newton_stops_short_on_take_the_sweeps():
     # a wide draw of one-contact problems (ill-conditioned W, mu up to 1): some stall in the
-    # first Newton run and go on to Levenberg-Marquardt and Gauss-Seidel, as they do alone
+    # first Newton run; the compiled sweeps then solve them from their start, as alone
     rng = np.random.default_rng(0)
     P = 3000
     A = rng.standard_normal((P, 3, 3))
@@ -98,6 +98,9 @@ def test_hard_problems_take_every_stage_as_alone():
     result = contactqp.solve(batch)
     if kernels.small_newton is not None:
         assert result.messages, "expected some problems beyond the first Newton run"
+        for p, message in result.messages.items():
+            assert message.startswith("newton ") and "(stopped short), then converged" in message
+            assert result.iterations[p] > int(message.split()[1])  # Newton's, then the sweeps'
     chosen = sorted(result.messages)[:5] + [0, 1, 2]
     sub = LocalBatch(W[chosen], batch.q[chosen], batch.mu[chosen], 3)
     assert_matches_one_by_one(sub, contactqp.solve(sub), tol=1e-8)

@@ -105,6 +105,45 @@ def test_one_contact_cases():
     np.testing.assert_allclose(slipping.forces, r, rtol=1e-10)
 
 
+def newton_stops_short(W, q, mu):
+    """The problems (index) of a one-contact batch on which the compiled Newton run stops
+    short of 1e-12 in 50 iterations."""
+    P = q.shape[0]
+    counts, reasons, errors = np.empty(P, np.intp), np.empty(P, np.intp), np.empty(P)
+    r = np.zeros((P, 3))
+    kernels.small_newton(
+        W, q, mu, np.zeros((P, 3)), r, 1e-12, 50, False, 1e-3, counts, reasons, errors
+    )
+    return np.flatnonzero(reasons != 0)
+
+
+@compiled
+def test_a_slip_newton_misses_is_found_by_its_direction():
+    # ill-conditioned one-contact problems with mu near 1: the one-contact Newton run stalls on
+    # some; the local solver's cases solve each in the first sweep, a slip by its direction
+    rng = np.random.default_rng(3)
+    P = 4000
+    A = rng.standard_normal((P, 3, 3))
+    W = A @ A.transpose(0, 2, 1) + 0.5 * np.eye(3)
+    q, mu = rng.standard_normal((P, 3)), rng.uniform(0.5, 1.0, (P, 1))
+    hard = newton_stops_short(W, q, mu)
+    slips = 0
+    for p in hard:
+        problem = LocalProblem(W[p], q[p], mu[p], 3)
+        result = solve_spatial(problem, tol=1e-12)
+        assert result.method == "spatial" and result.iterations == 1, result.message
+        r = result.forces
+        assert natural_map_error(problem, r) <= 1e-12  # recomputed from the problem
+        if result.status_labels == ["slip"]:  # on the cone, u_N = 0, u_T along -r_T
+            slips += 1
+            u, scale = W[p] @ r + q[p], np.abs(q[p]).max()
+            assert np.hypot(r[1], r[2]) == pytest.approx(mu[p, 0] * r[0], rel=1e-12)
+            assert abs(u[0]) <= 1e-12 * scale
+            assert abs(u[1] * r[2] - u[2] * r[1]) <= 1e-12 * scale * np.abs(r).max()
+            assert u[1:] @ r[1:] < 0
+    assert slips >= 2  # the draw has slips that Newton misses
+
+
 @compiled
 def test_stalled_sweeps_hand_over_to_newton(monkeypatch):
     problem = random_problem(1, 30)

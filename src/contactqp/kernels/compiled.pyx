@@ -16,7 +16,7 @@ types and the row length (2 or 3: a ``ValueError`` otherwise, not a buffer overr
 :mod:`contactqp.core.local_problem` and :mod:`contactqp.methods.coulomb` are their callers.
 """
 
-from libc.math cimport copysign, fabs, isfinite, log, sqrt
+from libc.math cimport INFINITY, copysign, cos, fabs, isfinite, log, sin, sqrt
 from libc.stdlib cimport free, malloc
 from cpython.buffer cimport (
     PyBUF_C_CONTIGUOUS, PyBUF_FORMAT, PyBUF_WRITABLE, PyBuffer_Release, PyObject_GetBuffer
@@ -1731,6 +1731,77 @@ cdef void _inverse3(const double* a, double* f) noexcept nogil:
         f[9] = 0.0
 
 
+cdef enum:
+    _SLIP_SAMPLES = 96  # slip directions sampled by _slip3 (its residual has at most 4 roots)
+
+
+cdef inline double _slip_residual(const double* a, const double* b, double mu, double c,
+                                  double s, double* normal, double* speed) noexcept nogil:
+    """:func:`_slip3`'s residual at the slip direction ``d = (c, s)``, with the normal reaction
+    ``normal`` and the slip speed ``speed`` that the normal law gives there."""
+    cdef double g0 = a[0] - mu * (a[1] * c + a[2] * s)
+    cdef double g1 = a[3] - mu * (a[4] * c + a[5] * s)
+    cdef double g2 = a[6] - mu * (a[7] * c + a[8] * s)
+    cdef double along = g1 * c + g2 * s, across = g2 * c - g1 * s
+    cdef double b_along = b[1] * c + b[2] * s, b_across = b[2] * c - b[1] * s
+    normal[0] = -b[0] / g0 if g0 != 0.0 else -1.0
+    speed[0] = normal[0] * along + b_along
+    return g0 * b_across - b[0] * across
+
+
+cdef bint _slip3(const double* a, const double* b, double mu, double* x) noexcept nogil:
+    """One contact's slip ``u = a x + b`` exactly, by its direction: ``x`` becomes the slip
+    nearest to it, and True, when there is one.
+
+    A slip in the direction ``d = (cos t, sin t)`` has ``x = x_N (1, -mu d)``, ``u_N = 0``
+    and ``u_T = lambda d``: given ``t``, the normal row fixes ``x_N`` and ``u_T . d`` gives
+    ``lambda``; the slip holds where ``u_T`` has no component across ``d``, which (times the
+    normal row's coefficient) is a trigonometric polynomial in ``t`` of degree 2. Its sign changes
+    over :data:`_SLIP_SAMPLES` directions are bisected to rounding; a root is a slip when
+    ``x_N > 0`` and ``lambda >= 0``. Roots closer than the sampling are missed (then the caller
+    keeps its point)."""
+    cdef double step = 6.283185307179586 / _SLIP_SAMPLES, low, high, mid, f_low, f_mid
+    cdef double normal, speed, best = INFINITY, distance, c, s
+    cdef double found[3]
+    cdef Py_ssize_t k, n
+    f_low = _slip_residual(a, b, mu, 1.0, 0.0, &normal, &speed)
+    for k in range(_SLIP_SAMPLES):
+        low = k * step
+        high = low + step
+        f_mid = _slip_residual(a, b, mu, cos(high), sin(high), &normal, &speed)
+        if (f_low < 0.0) == (f_mid < 0.0) and f_mid != 0.0:
+            f_low = f_mid
+            continue
+        f_mid, f_low = f_low, f_mid  # f_mid: at low; f_low: at high, for the next interval
+        for n in range(60):
+            mid = 0.5 * (low + high)
+            if mid == low or mid == high:
+                break
+            if (_slip_residual(a, b, mu, cos(mid), sin(mid), &normal, &speed) < 0.0) == (
+                f_mid < 0.0
+            ):
+                low = mid
+            else:
+                high = mid
+        c = cos(0.5 * (low + high))
+        s = sin(0.5 * (low + high))
+        _slip_residual(a, b, mu, c, s, &normal, &speed)
+        if normal > 0.0 and speed >= 0.0 and isfinite(normal):
+            distance = ((normal - x[0]) ** 2 + (mu * normal * c + x[1]) ** 2
+                        + (mu * normal * s + x[2]) ** 2)
+            if distance < best:
+                best = distance
+                found[0] = normal
+                found[1] = -mu * normal * c
+                found[2] = -mu * normal * s
+    if best == INFINITY:
+        return False
+    x[0] = found[0]
+    x[1] = found[1]
+    x[2] = found[2]
+    return True
+
+
 cdef void _spatial_local(Small* L, const double* a, const double* f, const double* b,
                          const double* mu, const double* zeros, double tol,
                          double* x) noexcept nogil:
@@ -1743,7 +1814,8 @@ cdef void _spatial_local(Small* L, const double* a, const double* f, const doubl
     * stick, ``x = -a^-1 b``, when that lies in the cone (``u = 0``);
     * otherwise a slip: coulomb's Newton run on the one-contact problem from ``x``
       (:func:`_run` on ``L``, work arrays of one contact, at most ``_LOCAL_ITERATIONS``
-      iterations to the one-contact natural-map error ``tol``), whose best point is kept.
+      iterations to the one-contact natural-map error ``tol``), whose best point is kept;
+      where it stops short, the slip found by its direction (:func:`_slip3`).
     """
     cdef double r0, r1, r2, error
     cdef Py_ssize_t count
@@ -1765,7 +1837,8 @@ cdef void _spatial_local(Small* L, const double* a, const double* f, const doubl
             x[2] = r2
             return
     _problem(L, a, b, mu, zeros)
-    _run(L, x, tol, _LOCAL_ITERATIONS, &count, &error)
+    if _run(L, x, tol, _LOCAL_ITERATIONS, &count, &error) != _CONVERGED:
+        _slip3(a, b, mu[0], x)  # Newton stopped short: the slip by its direction
 
 
 def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures, double tol,
@@ -2010,7 +2083,6 @@ def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures
 # equations as written, in one call (contactqp.methods.global_route.solve_compiled).
 
 from cpython.pycapsule cimport PyCapsule_GetName, PyCapsule_GetPointer
-from libc.math cimport INFINITY
 
 __all__ += ["global_small", "GLOBAL_CODES", "GLOBAL_MEASURES"]
 

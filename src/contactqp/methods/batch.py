@@ -1,10 +1,14 @@
 """``coulomb-batch``: a :class:`~contactqp.core.local_batch.LocalBatch` solved in one compiled
 loop.
 
-Each problem runs the iterations :func:`~contactqp.methods.coulomb.solve_coulomb` runs on it
-alone: its first Newton run in C (:func:`~contactqp.kernels.compiled.small_newton`), and, for
-the few problems where that run stops short, :func:`~contactqp.methods.coulomb.solve_coulomb`
-itself (the Levenberg-Marquardt and Gauss-Seidel stages). Every problem is then certified in one
+Each problem runs the first Newton run :func:`~contactqp.methods.coulomb.solve_coulomb` runs on
+it alone, in C (:func:`~contactqp.kernels.compiled.small_newton`). The few problems where that
+run stops short (on the ill-conditioned one-contact problems of a wide draw, about 1 in 400)
+are solved again from their start by the compiled Gauss-Seidel route of their dimension
+(:func:`~contactqp.methods.spatial.solve_spatial`,
+:func:`~contactqp.methods.planar.solve_planar`, whose local solver is exact on one contact) with
+the iterations left, and these hand their own stalls to
+:func:`~contactqp.methods.coulomb.solve_coulomb`. Every problem is then certified in one
 compiled pass (:func:`~contactqp.kernels.compiled.small_certificate`): ``u = W r + q``, the
 natural-map error and the contact status from ``r`` and the problem's own data. Without the
 compiled kernels each problem is solved by :func:`~contactqp.methods.coulomb.solve_coulomb`.
@@ -22,6 +26,8 @@ from ..core.local_problem import CONTACT_FLOOR, check_positive_semidefinite, sma
 from ..core.model import iteration_cap, positive_tolerance, real_array
 from ..errors import InvalidInputError
 from .coulomb import MAX_ITER, RUN_ITERATIONS, solve_coulomb
+from .planar import solve_planar
+from .spatial import solve_spatial
 
 __all__ = ["solve_coulomb_batch"]
 
@@ -111,16 +117,20 @@ def solve_coulomb_batch(
         errors,
     )
     messages = {}
-    for p in np.flatnonzero(reasons != 0):  # not converged: every stage, as alone
-        alone = solve_coulomb(
+    sweeps = solve_spatial if batch.dim == 3 else solve_planar
+    for p in np.flatnonzero((reasons != 0) & (counts < max_iter)):
+        # Newton stopped short: the sweeps from the start, with the iterations left
+        alone = sweeps(
             batch.problem(int(p)),
             r0=None if r0 is None else np.asarray(r0, dtype=float)[p],
             tol=tol,
-            max_iter=max_iter,
+            max_iter=max_iter - int(counts[p]),
             check_psd=False,
             per_contact=per_contact,
         )
-        x[p], counts[p], messages[int(p)] = alone.forces, alone.iterations, alone.message
+        x[p] = alone.forces
+        messages[int(p)] = f"newton {counts[p]} iterations (stopped short), then {alone.message}"
+        counts[p] += alone.iterations
     u = np.empty((P, m))
     measures = np.empty((P, 4))
     status = np.empty((P, batch.n_contacts), dtype=np.intp)
