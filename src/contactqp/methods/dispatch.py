@@ -38,7 +38,7 @@ def _is_frictionless(problem, kind: str) -> bool:
     if kind in ("frictional", "frictional-polygonal"):
         return problem.frictionless
     if kind in ("local", "global"):  # read directly: a cached property's lock costs more
-        return not (problem.mu > 0).any()  # on the small problems these kinds often are
+        return not problem.mu.any()  # on the small problems these kinds often are (mu >= 0)
     return False
 
 
