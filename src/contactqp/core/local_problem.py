@@ -79,7 +79,9 @@ def _check_dim(dim):
 def _as_matrix(name, value):
     """Return ``value`` as a csr_matrix (if sparse) or a 2-D float ndarray, checked finite."""
     try:
-        if sp.issparse(value):
+        if type(value) is sp.csr_matrix and value.dtype == np.float64:
+            mat, data = value, value.data  # as stored: a copy costs a small problem's solve
+        elif sp.issparse(value):
             # scipy-stubs: issparse narrows only to SparseABC, and csr_matrix(x, dtype=d) is typed
             # only for a d matching x's own scalar type; scipy converts any of its sparse types
             mat = sp.csr_matrix(value, dtype=float)  # type: ignore[call-overload]
