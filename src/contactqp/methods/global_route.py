@@ -52,6 +52,7 @@ from ..core.local_problem import (
     DENSE_FILL,
     DENSE_SIZE,
     SMALL_UNKNOWNS,
+    STATUS_RTOL,
     AccuracyLimits,
     GlobalCertificate,
     GlobalProblem,
@@ -63,7 +64,7 @@ from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
-from .coulomb import RUN_ITERATIONS
+from .coulomb import MAX_ITER, RUN_ITERATIONS
 from .local_global import compiled_global_result
 
 __all__ = [
@@ -88,8 +89,6 @@ DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries 
 #: Most contact unknowns ``m`` of a problem that :func:`solve_compiled` takes (``W`` is formed
 #: dense there: 2.9 MB)
 COMPILED_UNKNOWNS = 600
-#: The rtol of :func:`~contactqp.core.local_problem.contact_status_unchecked`
-_STATUS_RTOL = 1e-6
 _EPS = float(np.finfo(float).eps)
 
 
@@ -417,7 +416,7 @@ def solve_compiled(
     *,
     r0=None,
     tol: float = 1e-8,
-    max_iter: int = 800,
+    max_iter: int = MAX_ITER,
     check_psd: bool = True,
     per_contact: bool = False,
 ) -> LocalResult | None:
@@ -513,7 +512,7 @@ def _run_kernel(
         bool(check_psd),
         PSD_SHIFT,
         rel,
-        _STATUS_RTOL,
+        STATUS_RTOL,
         solve,
         COMPILED_UNKNOWNS,
         DENSE_FREEDOMS,
