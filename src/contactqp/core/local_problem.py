@@ -78,19 +78,21 @@ def _check_dim(dim):
 
 def _as_matrix(name, value):
     """Return ``value`` as a csr_matrix (if sparse) or a 2-D float ndarray, checked finite."""
+    mat: sp.csr_matrix | np.ndarray
+    data: np.ndarray
     try:
         if type(value) is sp.csr_matrix and value.dtype == np.float64:
-            mat, data = value, value.data  # as stored: a copy costs a small problem's solve
+            mat, data = value, np.asarray(value.data)  # as stored: a copy costs a small solve
         elif sp.issparse(value):
             # scipy-stubs: issparse narrows only to SparseABC, and csr_matrix(x, dtype=d) is typed
             # only for a d matching x's own scalar type; scipy converts any of its sparse types
             mat = sp.csr_matrix(value, dtype=float)  # type: ignore[call-overload]
             data = mat.data
         else:
-            mat = np.asarray(value, dtype=float)
-            if type(mat) is not np.ndarray:  # e.g. numpy.matrix
-                mat = mat.view(np.ndarray)
-            data = mat
+            dense = np.asarray(value, dtype=float)
+            if type(dense) is not np.ndarray:  # e.g. numpy.matrix
+                dense = dense.view(np.ndarray)
+            mat = data = dense
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"{name} must be a real matrix: {exc}") from None
     if mat.ndim != 2:
