@@ -87,7 +87,7 @@ def _as_matrix(name, value):
             # scipy-stubs: issparse narrows only to SparseABC, and csr_matrix(x, dtype=d) is typed
             # only for a d matching x's own scalar type; scipy converts any of its sparse types
             mat = sp.csr_matrix(value, dtype=float)  # type: ignore[call-overload]
-            data = mat.data
+            data = np.asarray(mat.data)
         else:
             dense = np.asarray(value, dtype=float)
             if type(dense) is not np.ndarray:  # e.g. numpy.matrix
