@@ -43,7 +43,6 @@ every local method, by the natural-map error of the final ``r`` computed from ``
 from __future__ import annotations
 
 import functools
-import math
 import time
 
 import numpy as np
@@ -53,13 +52,12 @@ from ..core.local_problem import (
     LocalProblem,
     natural_map_residual,
 )
-from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
-from ..errors import InvalidInputError, NotPositiveDefiniteError
+from ..errors import NotPositiveDefiniteError
 from .coulomb import MAX_ITER
 from .local_global import finish
-from .sweeps import compiled_sweeps, kernel_arrays, newton_after
+from .sweeps import checked_start, compiled_sweeps, kernel_arrays, newton_after
 
 __all__ = [
     "solve_planar",
@@ -199,16 +197,7 @@ def solve_planar(
         If ``W`` is not positive semidefinite.
     """
     start = time.perf_counter()
-    if not isinstance(problem, LocalProblem):
-        raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if problem.dim != 2:
-        raise InvalidInputError(f"the planar method solves 2-D problems, got dim {problem.dim}")
-    if not (type(tol) is float and 0.0 < tol < math.inf):  # the common case, as coulomb's
-        positive_tolerance(tol)
-    if not (type(max_iter) is int and max_iter >= 1):
-        iteration_cap(max_iter)
-    m = problem.q.shape[0]
-    given = np.zeros(m) if r0 is None else warm_start(r0, m)
+    given = checked_start(problem, 2, "planar", r0, tol, max_iter)
     budget = min(SWEEPS, max_iter)
     if kernels.planar_solve is not None:
         result, sweeps = compiled_sweeps(
@@ -256,7 +245,7 @@ def solve_planar(
     if converged or sweeps >= max_iter:
         detail = f"gauss-seidel {sweeps} sweeps" + ("" if converged else " (budget spent)")
         reactions = r - shift
-        product, magnitude = np.empty(m), np.empty(m)  # W r and |W| |r|, read once
+        product, magnitude = np.empty_like(r), np.empty_like(r)  # W r and |W| |r|, read once
         kernels.row_products(*arrays, reactions, product, magnitude)
         return finish(
             problem,

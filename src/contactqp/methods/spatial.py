@@ -28,7 +28,6 @@ that Newton route alone.
 from __future__ import annotations
 
 import functools
-import math
 import time
 
 import numpy as np
@@ -36,12 +35,11 @@ import scipy.sparse as sp
 
 from .. import kernels
 from ..core.local_problem import LocalProblem, check_positive_semidefinite
-from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
-from ..errors import InvalidInputError, NotPositiveDefiniteError
+from ..errors import NotPositiveDefiniteError
 from .coulomb import MAX_ITER, solve_coulomb
-from .sweeps import compiled_sweeps, newton_after
+from .sweeps import checked_start, compiled_sweeps, newton_after
 
 __all__ = ["solve_spatial", "SWEEPS", "FIRST", "ROUTE_MAX_CONTACTS"]
 
@@ -116,20 +114,11 @@ def solve_spatial(
         If a diagonal block of ``W`` (or, after a stall, ``W``) is not positive semidefinite.
     """
     start = time.perf_counter()
-    if not isinstance(problem, LocalProblem):
-        raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
-    if problem.dim != 3:
-        raise InvalidInputError(f"the spatial method solves 3-D problems, got dim {problem.dim}")
-    if not (type(tol) is float and 0.0 < tol < math.inf):  # the common case, as coulomb's
-        positive_tolerance(tol)
-    if not (type(max_iter) is int and max_iter >= 1):
-        iteration_cap(max_iter)
+    given = checked_start(problem, 3, "spatial", r0, tol, max_iter)
     if kernels.spatial_solve is None:
         return solve_coulomb(
             problem, r0=r0, tol=tol, max_iter=max_iter, check_psd=check_psd, per_contact=per_contact
         )
-    m = problem.q.shape[0]
-    given = np.zeros(m) if r0 is None else warm_start(r0, m)
     result, sweeps = compiled_sweeps(
         problem,
         kernels.spatial_solve,

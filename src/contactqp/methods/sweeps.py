@@ -13,6 +13,7 @@ to :func:`~contactqp.methods.coulomb.solve_coulomb` from the caller's start.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Callable
 from typing import Any
@@ -26,12 +27,14 @@ from ..core.local_problem import (
     LocalProblem,
     limits_from_norms,
 )
+from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
+from ..errors import InvalidInputError
 from .coulomb import solve_coulomb
 from .local_global import local_result
 
-__all__ = ["compiled_sweeps", "kernel_arrays", "newton_after"]
+__all__ = ["checked_start", "compiled_sweeps", "kernel_arrays", "newton_after"]
 
 _NO_ROWS = np.empty((0, 0))
 _NO_INDEX = np.empty(0, dtype=np.int64)
@@ -53,6 +56,30 @@ def kernel_arrays(
         np.ascontiguousarray(csr.indices, dtype=index),
         np.ascontiguousarray(csr.data, dtype=float),
     )
+
+
+def checked_start(problem, dim: int, method: str, r0, tol, max_iter) -> np.ndarray:
+    """The start of a sweeps route (``r0``, or zero), once the checks both routes make pass:
+    ``problem`` a :class:`~contactqp.core.local_problem.LocalProblem` of dimension ``dim``,
+    ``tol`` and ``max_iter`` valid (the common case tested first, as coulomb does).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming what is wrong.
+    """
+    if not isinstance(problem, LocalProblem):
+        raise InvalidInputError(f"problem must be a LocalProblem, got {type(problem).__name__}")
+    if problem.dim != dim:
+        raise InvalidInputError(
+            f"the {method} method solves {dim}-D problems, got dim {problem.dim}"
+        )
+    if not (type(tol) is float and 0.0 < tol < math.inf):
+        positive_tolerance(tol)
+    if not (type(max_iter) is int and max_iter >= 1):
+        iteration_cap(max_iter)
+    m = problem.q.shape[0]
+    return np.zeros(m) if r0 is None else warm_start(r0, m)
 
 
 def compiled_sweeps(
