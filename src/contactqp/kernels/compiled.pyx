@@ -1205,6 +1205,53 @@ PLANAR_EVERY = _PLANAR_EVERY
 PLANAR_SPAN = _PLANAR_SPAN
 
 
+cdef struct Checks:
+    # the evaluations of the error during a Gauss-Seidel solve: count of them, the sweep of
+    # each (history) and its error, the sweep of the last, and the ratio of the last error to
+    # the change of that sweep (which says, from a sweep's change, when tol may be met)
+    Py_ssize_t* history
+    double* errors
+    Py_ssize_t count
+    Py_ssize_t last
+    double ratio
+
+
+cdef Py_ssize_t _judge(Checks* C, Py_ssize_t sweep, double error, double relative, double tol,
+                       Py_ssize_t max_sweeps, bint stall_test) noexcept nogil:
+    """Record the ``error`` after ``sweep`` sweeps (whose relative change was ``relative``);
+    the code to stop with (:data:`PLANAR_REASONS`: 0 converged, 1 stalled, where the rate over
+    at least ``_PLANAR_SPAN`` sweeps would not reach ``tol`` within ``max_sweeps``, 2 the
+    budget spent), or -1 to go on."""
+    cdef Py_ssize_t k
+    cdef double rate
+    C.history[C.count] = sweep
+    C.errors[C.count] = error
+    C.count += 1
+    C.last = sweep
+    if error <= tol:
+        return 0
+    if sweep >= max_sweeps:
+        return 2
+    if relative > 0.0:
+        C.ratio = error / relative
+    if stall_test:
+        for k in range(C.count - 2, -1, -1):
+            if C.history[k] <= sweep - _PLANAR_SPAN:
+                rate = (error / C.errors[k]) ** (1.0 / (sweep - C.history[k]))
+                if rate >= 1.0 or sweep + log(tol / error) / log(rate) > max_sweeps:
+                    return 1
+                break
+    return -1
+
+
+cdef inline bint _due(const Checks* C, Py_ssize_t sweep, Py_ssize_t first, double relative,
+                      double tol, Py_ssize_t max_sweeps) noexcept nogil:
+    """Whether the error is evaluated after ``sweep`` sweeps: each of the ``first``, when the
+    sweep's change says ``tol`` may be met, at least every ``_PLANAR_EVERY``, and the last."""
+    return (sweep <= first or C.ratio * relative <= tol or sweep - C.last >= _PLANAR_EVERY
+            or sweep >= max_sweeps)
+
+
 cdef struct Blocks:
     # W by 2x2 contact blocks: diag[4 i:4 i + 4] the diagonal block of contact i (row-major),
     # the off-diagonal blocks of block row i at slots ptr[i] .. ptr[i + 1] - 1, col[s] their
@@ -1508,11 +1555,12 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
     cdef Py_ssize_t* loaded = mark + nc  # the columns where r is not zero
     cdef Small S
     cdef double bn, bt, a00, a01, a10, a11, coupling, change, size, relative, residual, error
-    cdef double ratio = 1.0, rate
     cdef double out[2]
     cdef double* a
     cdef bint shifted = False, zero = True, check
-    cdef Py_ssize_t sweep = 0, checks = 0, last = 0, code = 2, bad = -1
+    cdef Py_ssize_t sweep = 0, code = 2, bad = -1
+    cdef Checks C
+    C.history, C.errors, C.count, C.last, C.ratio = history, errors, 0, 0, 1.0
     with nogil:
         # W by contact blocks
         for i in range(nc):
@@ -1606,27 +1654,9 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
                     for k in range(m):
                         react[k] = x[k] - sh[k]
                     _natural_error(&S, react, ud, &residual, &error)
-                history[checks] = sweep
-                errors[checks] = error
-                checks += 1
-                last = sweep
-                if error <= tol:
-                    code = 0
+                code = _judge(&C, sweep, error, relative, tol, max_sweeps, stall_test)
+                if code >= 0:
                     break
-                if sweep >= max_sweeps:
-                    code = 2
-                    break
-                if relative > 0.0:
-                    ratio = error / relative
-                if stall_test:
-                    for k in range(checks - 2, -1, -1):
-                        if history[k] <= sweep - _PLANAR_SPAN:
-                            rate = (error / errors[k]) ** (1.0 / (sweep - history[k]))
-                            if rate >= 1.0 or sweep + log(tol / error) / log(rate) > max_sweeps:
-                                code = 1
-                            break
-                    if code == 1:
-                        break
             elif sweep >= max_sweeps:
                 code = 2
                 break
@@ -1646,8 +1676,7 @@ def planar_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures,
             sweep += 1
             size = sqrt(max(size, S.qq))
             relative = sqrt(change) / (size if size > 0.0 else 1.0)
-            check = (sweep <= first or ratio * relative <= tol
-                     or sweep - last >= _PLANAR_EVERY or sweep >= max_sweeps)
+            check = _due(&C, sweep, first, relative, tol, max_sweeps)
         _block_certificate(&S, 2, dense, Wd, ip, ix, dv, B.diag, x, loaded, rtol, rd, ud, md,
                            std)
     free(work)
@@ -1926,11 +1955,13 @@ def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures
     cdef Py_ssize_t* loaded = mark + nc
     cdef Py_ssize_t keep[3]
     cdef Small S
-    cdef double change, size, relative, residual, error, ratio = 1.0, rate, value
+    cdef double change, size, relative, residual, error, value
     cdef double* a
     cdef double old[3]
     cdef bint shifted = False, zero = True, check
-    cdef Py_ssize_t sweep = 0, checks = 0, last = 0, code = 2, bad = -1
+    cdef Py_ssize_t sweep = 0, code = 2, bad = -1
+    cdef Checks C
+    C.history, C.errors, C.count, C.last, C.ratio = history, errors, 0, 0, 1.0
     cdef double local_tol = max(_LOCAL_SHARE * tol, 1e-15)
     with nogil:
         for i in range(nc):
@@ -2023,27 +2054,9 @@ def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures
                 for k in range(m):
                     react[k] = x[k] - sh[k]
                 _natural_error(&S, react, ud, &residual, &error)
-                history[checks] = sweep
-                errors[checks] = error
-                checks += 1
-                last = sweep
-                if error <= tol:
-                    code = 0
+                code = _judge(&C, sweep, error, relative, tol, max_sweeps, stall_test)
+                if code >= 0:
                     break
-                if sweep >= max_sweeps:
-                    code = 2
-                    break
-                if relative > 0.0:
-                    ratio = error / relative
-                if stall_test:
-                    for k in range(checks - 2, -1, -1):
-                        if history[k] <= sweep - _PLANAR_SPAN:
-                            rate = (error / errors[k]) ** (1.0 / (sweep - history[k]))
-                            if rate >= 1.0 or sweep + log(tol / error) / log(rate) > max_sweeps:
-                                code = 1
-                            break
-                    if code == 1:
-                        break
             elif sweep >= max_sweeps:
                 code = 2
                 break
@@ -2064,8 +2077,7 @@ def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures
             sweep += 1
             size = sqrt(max(size, S.qq))
             relative = sqrt(change) / (size if size > 0.0 else 1.0)
-            check = (sweep <= first or ratio * relative <= tol
-                     or sweep - last >= _PLANAR_EVERY or sweep >= max_sweeps)
+            check = _due(&C, sweep, first, relative, tol, max_sweeps)
         _block_certificate(&S, 3, dense, Wd, ip, ix, dv, B.diag, x, loaded, rtol, rd, ud, md,
                            std)
     free(work)
