@@ -5,7 +5,8 @@ Part 1: every shared FCLIB file of at most ``--contacts`` contacts (default 10) 
 the ordinary entry point ``contactqp.solve(problem)`` from ``r = 0`` to ``--tol`` (1e-8), the
 certificate included. ``first`` is the first solve of a freshly read problem (it pays what is
 computed once per problem: the positive-semidefiniteness check, the dense copy of a sparse
-``W``); ``median`` is the median of ``--repeats`` further solves of the same problem. Both are
+``W``; the package's methods are imported before, as start-up); ``median`` is the median of
+``--repeats`` further solves of the same problem. Both are
 wall time (``time.perf_counter``) and CPU time of the process (``time.process_time``, steadier
 on a shared machine). Beside them: Siconos 4.5's times on the same files (its Alart-Curnier
 Newton ``NSN_AC`` and Gauss-Seidel ``NSGS``, from ``shared/data/fclib/PEER-TIMES.md``, best of
@@ -15,7 +16,7 @@ Part 2: ``--batch`` (default 10,000) one-contact problems in one
 :class:`~contactqp.LocalBatch`, solved by ``contactqp.solve(batch)``, in two draws: ``near 1c``
 perturbs the shared ``FrictionContact3D_1c`` problem (W and q by 20 % entrywise, ``mu`` in
 [0.1, 1]); ``wide`` draws ``W = A A^T + 0.5 I`` (A standard normal), q standard normal, ``mu`` in
-[0, 1]: some of those stall in the first Newton run and take the later stages in Python.
+[0, 1]: some of those stall in the first Newton run and take the compiled sweeps.
 Printed: the best of 3 batch times and the time per problem, the count that needed the later
 stages, and whether every problem was certified.
 
@@ -34,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 import contactqp
+import contactqp.methods  # what contactqp.solve imports on its first use
 from contactqp.io.fclib import read_any
 
 __all__ = ["peer_times", "time_file", "time_batch", "main"]
