@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from .. import kernels
 from .frictional import solve_frictional
 from .global_route import condense, solve_compiled
@@ -38,7 +40,7 @@ def _is_frictionless(problem, kind: str) -> bool:
     if kind in ("frictional", "frictional-polygonal"):
         return problem.frictionless
     if kind in ("local", "global"):  # read directly: a cached property's lock costs more
-        return not problem.mu.any()  # on the small problems these kinds often are (mu >= 0)
+        return not np.count_nonzero(problem.mu)  # on the small problems of these kinds (mu >= 0)
     return False
 
 
