@@ -57,6 +57,8 @@ def test_the_identity_shares_r_read_only():
     with pytest.raises(ValueError):
         dual.W[0, 0] = 0.0
     np.testing.assert_array_equal(model.flexibility, R)
+    forces = np.array([0.0, 2.0, 0.0, 1.0, 3.0, 0.0])  # U = R (P - lambda), one triangle read
+    np.testing.assert_allclose(dual.displacements(forces), -R @ forces, rtol=1e-14)
 
 
 def test_scaled_directions_on_two_freedom_nodes_give_the_dense_product():

@@ -7,7 +7,14 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, aslinearoperator
 
-from contactqp.core.operators import PSD_SHIFT, DenseOperator, Operator, SparseOperator, as_operator
+from contactqp.core.operators import (
+    PSD_SHIFT,
+    DenseOperator,
+    Operator,
+    SparseOperator,
+    as_operator,
+    symmetric_product,
+)
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError, UnsupportedProblemError
 from contactqp.methods.active_set import cold_start
 from contactqp.methods.box_qp import solve_box_qp
@@ -188,3 +195,21 @@ def test_cold_start_shares_each_interpenetration_over_its_row(form):
     guess = cold_start(given, b)
     assert np.all(np.isfinite(guess)) and np.count_nonzero(guess) == np.count_nonzero(b > 0)
     np.testing.assert_allclose(guess, expected, rtol=1e-13, atol=0)
+
+
+@pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
+def test_a_symmetric_product_is_the_product(layout):
+    _, W = gram(n=25, k=25)
+    W = {
+        "C": W,
+        "F": np.asfortranarray(W),
+        "strided": np.repeat(np.repeat(W, 2, axis=0), 2, axis=1)[::2, ::2],
+        "float32": W.astype(np.float32),
+    }[layout]
+    x = np.random.default_rng(6).standard_normal(25)
+    expected = W.astype(float) @ x
+    np.testing.assert_allclose(
+        symmetric_product(W, x), expected, rtol=1e-6 if layout == "float32" else 1e-13
+    )
+    X = np.stack([x, 2 * x], axis=1)  # several columns: the general product
+    np.testing.assert_allclose(symmetric_product(W, X), W @ X, rtol=1e-13)

@@ -43,6 +43,7 @@ from .contact import Constraints, LocalFrames, assemble_constraints, local_frame
 from .friction import FrictionLaw, apex_distance
 from .local_problem import LocalProblem
 from .model import MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance, real_array
+from .operators import symmetric_product
 from .result import ContactResult, FrictionalResult, verdict
 from .status import ContactStatus
 
@@ -172,6 +173,8 @@ class DualForm:
 
     def displacements(self, forces: np.ndarray) -> np.ndarray:
         """``U = R (P - A^T lambda)`` for contact forces ``lambda``."""
+        if self.influence is self.W:  # A = I: R A^T is R, exactly symmetric
+            return self.free_displacements - symmetric_product(self.W, forces)
         return self.free_displacements - self.influence @ forces
 
 
