@@ -49,6 +49,7 @@ import sys
 import time
 import traceback
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -60,7 +61,7 @@ from contactqp.methods import solve_box_qp
 from contactqp.methods.active_set import cold_start
 from contactqp.methods.qp import available_backends, backend_options
 
-__all__ = ["best_time", "build_problem", "half_space", "main"]
+__all__ = ["Timing", "best_time", "build_problem", "half_space", "main", "timing"]
 
 YOUNG, POISSON = 210e9, 0.3  # steel half-space (Pa, -)
 CELL = 10e-6  # cell size (m)
@@ -129,22 +130,62 @@ def half_space(n_contacts: int, *, surface: str = "paraboloid") -> tuple[np.ndar
     return R, gaps
 
 
-def best_time(run, budget: float = 2.0, max_repeat: int = 7):
-    """Run ``run()`` once, repeat while short; return ``(best seconds, first value, first s)``."""
+@dataclass(frozen=True)
+class Timing:
+    """One call timed first, then repeated while short (see :func:`timing`).
+
+    Attributes
+    ----------
+    first : float
+        Seconds of the first call.
+    repeats : tuple of float
+        Seconds of each repetition after it (none when the first call took
+        :data:`SHORT_RUN` or more).
+    value
+        What the first call returned.
+    """
+
+    first: float
+    repeats: tuple
+    value: object = None
+
+    @property
+    def best(self) -> float:
+        """The fastest of all the calls, the first included."""
+        return min((self.first, *self.repeats))
+
+    @property
+    def median(self) -> float:
+        """The median of the repetitions (the first call's time when there are none)."""
+        return float(np.median(self.repeats)) if self.repeats else self.first
+
+
+def timing(run, budget: float = 2.0, max_repeat: int = 7) -> Timing:
+    """Run ``run()`` once, then again while the best is under :data:`SHORT_RUN` (up to
+    ``max_repeat`` calls in all and ``budget`` seconds)."""
     start = time.perf_counter()
     value = run()
     first = time.perf_counter() - start
-    best, spent, count = first, first, 1
-    while best < SHORT_RUN and spent < budget and count < max_repeat:
+    repeats: list[float] = []
+    best, spent = first, first
+    while best < SHORT_RUN and spent < budget and len(repeats) + 1 < max_repeat:
         start = time.perf_counter()
         run()
         elapsed = time.perf_counter() - start
-        best, spent, count = min(best, elapsed), spent + elapsed, count + 1
-    return best, value, first
+        repeats.append(elapsed)
+        best, spent = min(best, elapsed), spent + elapsed
+    return Timing(first, tuple(repeats), value)
+
+
+def best_time(run, budget: float = 2.0, max_repeat: int = 7):
+    """``(best seconds, first value, first s)`` of :func:`timing`."""
+    measured = timing(run, budget, max_repeat)
+    return measured.best, measured.value, measured.first
 
 
 def _backend_child(connection, backend, W, c, unscale):
-    """Solve the dual box QP with one backend; send back ``(seconds, forces * unscale, note)``."""
+    """Solve the dual box QP with one backend; send back ``(Timing, forces * unscale, note)``
+    (``Timing`` None on an error)."""
     try:
         import qpsolvers
         import scipy.sparse
@@ -160,20 +201,21 @@ def _backend_child(connection, backend, W, c, unscale):
                 warnings.simplefilter("ignore")
                 return qpsolvers.solve_problem(problem, solver=backend, **settings)
 
-        seconds, solution, first = best_time(run)
+        measured = timing(run)
+        solution = measured.value
         forces = None if solution.x is None else unscale * np.asarray(solution.x, dtype=float)
         note = "" if solution.found is not False else "not found"
-        connection.send((seconds, first, forces, note))
+        connection.send((Timing(measured.first, measured.repeats), forces, note))
     except Exception as exc:  # a backend error is a table entry, not a crash
         note = f"error: {type(exc).__name__}: {exc}".splitlines()[0]
-        connection.send((math.nan, math.nan, None, note))
+        connection.send((None, None, note))
         traceback.print_exc(file=sys.stderr)
     finally:
         connection.close()
 
 
 def run_backend(backend, W, c, unscale, timeout):
-    """Fork a child to time ``backend``; ``(best s, first s, forces, note)``, note "timeout" if
+    """Fork a child to time ``backend``; ``(Timing or None, forces, note)``, note "timeout" if
     killed."""
     context = multiprocessing.get_context("fork")
     parent, child = context.Pipe(duplex=False)
@@ -182,12 +224,12 @@ def run_backend(backend, W, c, unscale, timeout):
     )
     process.start()
     child.close()
-    outcome = (math.nan, math.nan, None, "timeout")
+    outcome = (None, None, "timeout")
     if parent.poll(timeout):
         try:
             outcome = parent.recv()
         except EOFError:
-            outcome = (math.nan, math.nan, None, f"crashed (exit code {process.exitcode})")
+            outcome = (None, None, f"crashed (exit code {process.exitcode})")
     if process.is_alive():
         process.kill()
     process.join()
@@ -292,13 +334,10 @@ def main(argv=None) -> int:
         start = time.perf_counter()
         R, gaps = half_space(size, surface=args.surface)
         build = time.perf_counter() - start
-        # own 1st: the first solve of a new problem (W assembled in it); then its best
+        # own 1st: the first solve of a new problem (W assembled in it); then its repeats
         problem = contact_problem(R, gaps)
-        start = time.perf_counter()
-        result = contactqp.solve(problem)
-        own_first = time.perf_counter() - start
-        own_best, _, _ = best_time(lambda problem=problem: contactqp.solve(problem))
-        own_best = min(own_best, own_first)
+        own = timing(lambda problem=problem: contactqp.solve(problem))
+        result = own.value
         # from R: the model's validation, the problem and the first solve, end to end
         start = time.perf_counter()
         contactqp.solve(contact_problem(R, gaps))
@@ -317,36 +356,31 @@ def main(argv=None) -> int:
             W_backend, c_backend, unscale = W / w_scale, c / c_scale, c_scale / w_scale
         reference = result.forces
         scale = float(np.max(np.abs(reference)))
-        core_best, core, _ = best_time(
+        core = timing(
             lambda W=W, c=c: solve_box_qp(W, c, lower=0.0, x0=cold_start(W, -c), check_finite=False)
         )
-        chol_best, _, _ = best_time(
-            lambda W=W: scipy.linalg.cho_factor(W, lower=True, check_finite=False)
-        )
+        chol = timing(lambda W=W: scipy.linalg.cho_factor(W, lower=True, check_finite=False))
 
         row = {
             "contacts": size,
             "closed": int(
                 np.count_nonzero(result.contact_status == contactqp.ContactStatus.CLOSED)
             ),
-            "own 1st": _fmt_seconds(own_first),
-            "own": _fmt_seconds(own_best),
-            "1st/own": f"{own_first / own_best:.2f}",
+            "own 1st": _fmt_seconds(own.first),
+            "own med": _fmt_seconds(own.median),
+            "own best": _fmt_seconds(own.best),
+            "1st/med": f"{own.first / own.median:.2f}",
             "from R": _fmt_seconds(from_matrix),
             "build R": _fmt_seconds(build),
             "assembly": _fmt_seconds(assembly),
-            "core": _fmt_seconds(core_best),
-            "it/fact/upd": f"{core.iterations}/{core.factorizations}/{core.updates}",
-            "chol": _fmt_seconds(chol_best),
-            "1st/chol": f"{own_first / chol_best:.2f}",
+            "core": _fmt_seconds(core.median),
+            "it/fact/upd": f"{core.value.iterations}/{core.value.factorizations}/"
+            f"{core.value.updates}",
+            "chol med": _fmt_seconds(chol.median),
+            "chol best": _fmt_seconds(chol.best),
+            "1st/chol": f"{own.first / chol.median:.2f}",
         }
-        summary[size] = {
-            "own": own_best,
-            "first": own_first,
-            "from R": from_matrix,
-            "chol": chol_best,
-            "backends": {},
-        }
+        summary[size] = {"own": own, "from R": from_matrix, "chol": chol, "backends": {}}
         for backend in backends:
             if backend in previous:
                 last_size, last_seconds = previous[backend]
@@ -359,9 +393,7 @@ def main(argv=None) -> int:
                         f"at {last_size} x ({size}/{last_size})^3)"
                     )
                     continue
-            seconds, first, forces, note = run_backend(
-                backend, W_backend, c_backend, unscale, timeout
-            )
+            measured, forces, note = run_backend(backend, W_backend, c_backend, unscale, timeout)
             if note == "timeout":
                 row[backend] = "timeout"
                 notes.append(f"{size}: {backend} killed after {timeout:g} s")
@@ -369,22 +401,23 @@ def main(argv=None) -> int:
                 continue
             if forces is None or forces.shape != reference.shape or not np.all(np.isfinite(forces)):
                 row[backend] = f"failed ({note or 'no solution'})"
-                if math.isfinite(seconds):
-                    previous[backend] = (size, seconds)
+                if measured is not None:
+                    previous[backend] = (size, measured.median)
                 continue
-            previous[backend] = (size, seconds)
+            previous[backend] = (size, measured.median)
             error = float(np.max(np.abs(forces - reference))) / scale
             if error > ACCURACY:
-                row[backend] = f"{_fmt_seconds(seconds)} inaccurate (err={error:.1e})"
+                row[backend] = f"{_fmt_seconds(measured.median)} inaccurate (err={error:.1e})"
             else:
                 row[backend] = (
-                    f"{_fmt_seconds(first)}/{_fmt_seconds(seconds)} x{seconds / own_first:.1f}"
+                    f"{_fmt_seconds(measured.first)}/{_fmt_seconds(measured.median)} "
+                    f"x{measured.median / own.first:.1f}"
                 )
-                summary[size]["backends"][backend] = seconds
+                summary[size]["backends"][backend] = measured
         rows.append(row)
         print(
-            f"[{size} contacts done: own 1st {_fmt_seconds(own_first)}, own "
-            f"{_fmt_seconds(own_best)}, chol {_fmt_seconds(chol_best)}]",
+            f"[{size} contacts done: own 1st {_fmt_seconds(own.first)}, own median "
+            f"{_fmt_seconds(own.median)}, chol median {_fmt_seconds(chol.median)}]",
             file=sys.stderr,
             flush=True,
         )
@@ -393,25 +426,29 @@ def main(argv=None) -> int:
         "contacts",
         "closed",
         "own 1st",
-        "own",
-        "1st/own",
+        "own med",
+        "own best",
+        "1st/med",
         "from R",
         "build R",
         "assembly",
         "core",
         "it/fact/upd",
-        "chol",
+        "chol med",
+        "chol best",
         "1st/chol",
     ] + backends
     _print_table(headers, [[row.get(h, "-") for h in headers] for row in rows])
     print(
         "\nown 1st: the first contactqp.solve(problem) of a new problem (W assembled in it), "
-        "the headline;\nown: its best of repeats; from R: ReducedModel(R) + ContactProblem + "
-        "the first solve; build R: the\nhalf-space matrix; assembly: problem.dual() alone; "
-        "core: solve_box_qp(W, -b) alone; it/fact/upd: core\niterations / Cholesky "
-        "factorisations / updated factorisations of free blocks; chol: one cho_factor\nof the "
-        "full W (best of repeats); backend cells: first call / best of repeats, and best / own "
-        "1st\n(x > 1: slower than own's first call)."
+        "the headline;\nown med / best: the median / best of its repeats (W kept by the "
+        "problem); from R: ReducedModel(R) +\nContactProblem + the first solve; build R: the "
+        "half-space matrix; assembly: problem.dual() alone;\ncore: solve_box_qp(W, -b) alone "
+        "(median); it/fact/upd: core iterations / Cholesky factorisations /\nupdated "
+        "factorisations of free blocks; chol: one cho_factor of the full W (median and best of "
+        "its\nrepeats); 1st/chol: own 1st over chol med; backend cells: first call / median of "
+        "repeats (the first\ncall alone when it took 0.5 s or more), and that median / own 1st "
+        "(x > 1: slower than own's first call)."
     )
     for note in notes:
         print(f"note: {note}")
@@ -419,31 +456,35 @@ def main(argv=None) -> int:
     target = 1600 if 1600 in summary else (sizes[len(sizes) // 2] if sizes else None)
     if target is not None:
         entry = summary[target]
-        first_ratio = entry["first"] / entry["own"]
-        chol_ratio = entry["first"] / entry["chol"]
-        first = _fmt_seconds(entry["first"])
-        print(f"\nsummary at {target} contacts (first call = own 1st, {first}):")
+        own, chol = entry["own"], entry["chol"]
+        first = own.first
+        print(f"\nsummary at {target} contacts (first call = own 1st, {_fmt_seconds(first)}):")
+        ratio = first / own.median
         print(
-            f"  first call / best of repeats = {first_ratio:.2f} (target <= 1.3: "
-            f"{'met' if first_ratio <= 1.3 else 'missed'})"
+            f"  first call / median of repeats = {ratio:.2f} (target <= 1.3: "
+            f"{'met' if ratio <= 1.3 else 'missed'}); / best of repeats = {first / own.best:.2f}"
         )
         if entry["backends"]:
-            fastest = min(entry["backends"], key=entry["backends"].get)
-            speedup = entry["backends"][fastest] / entry["first"]
+            fastest = min(entry["backends"], key=lambda name: entry["backends"][name].median)
+            measured = entry["backends"][fastest]
+            speedup = measured.median / first
             print(
-                f"  fastest accurate backend / first call = {speedup:.1f}x ({fastest}, best of "
-                f"repeats {_fmt_seconds(entry['backends'][fastest])}; target >= 30: "
+                f"  fastest accurate backend / first call = {speedup:.1f}x ({fastest}, median "
+                f"{_fmt_seconds(measured.median)}, best {_fmt_seconds(measured.best)}: "
+                f"{measured.best / first:.1f}x; target >= 30: "
                 f"{'met' if speedup >= 30 else 'missed'})"
             )
         else:
             print("  fastest accurate backend / first call: no accurate backend to compare with")
+        ratio = first / chol.median
         print(
-            f"  first call / one Cholesky of W = {chol_ratio:.2f} (target <= 0.5: "
-            f"{'met' if chol_ratio <= 0.5 else 'missed'})"
+            f"  first call / one Cholesky of W = {ratio:.2f} (median {_fmt_seconds(chol.median)}; "
+            f"target <= 0.5: {'met' if ratio <= 0.5 else 'missed'}); / the fastest Cholesky "
+            f"({_fmt_seconds(chol.best)}) = {first / chol.best:.2f}"
         )
         print(
             f"  from R (model validation + problem + first call) / one Cholesky of W = "
-            f"{entry['from R'] / entry['chol']:.2f}"
+            f"{entry['from R'] / chol.median:.2f}"
         )
     return 0
 

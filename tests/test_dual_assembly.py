@@ -57,6 +57,8 @@ def test_the_identity_shares_r_read_only():
     with pytest.raises(ValueError):
         dual.W[0, 0] = 0.0
     np.testing.assert_array_equal(model.flexibility, R)
+    forces = np.array([0.0, 2.0, 0.0, 1.0, 3.0, 0.0])  # U = R (P - lambda), one triangle read
+    np.testing.assert_allclose(dual.displacements(forces), -R @ forces, rtol=1e-14)
 
 
 def test_scaled_directions_on_two_freedom_nodes_give_the_dense_product():
@@ -142,3 +144,32 @@ def test_the_tiles_of_the_checks_cover_a_large_matrix(monkeypatch):
     bad[18, 19] = bad[19, 18] = 1.01 * np.sqrt(R[18, 18] * R[19, 19])
     with pytest.raises(NotPositiveDefiniteError, match="freedoms 18 and 19"):
         cq.ReducedModel(flexibility=bad)
+
+
+def test_axis_aligned_frames_are_a_selection_with_the_dense_product():
+    # normals along -z: H stores the zero components of -n, t1, t2; W is read off R by indexing
+    from contactqp.core.problem import _selection
+
+    R = spd(12, seed=7)
+    model = cq.ReducedModel(flexibility=R, dofs_per_node=3)
+    obstacle = cq.GapObstacle(np.arange(4), np.zeros(4), (0.0, 0.0, -1.0))
+    problem = cq.FrictionalProblem(model, np.zeros(12), [obstacle], mu=0.3)
+    H = problem.local().operator
+    assert H.nnz > H.shape[0] and _selection(H) is not None  # stored zeros, one nonzero a row
+    W = problem.local().W
+    dense = H.toarray() @ R @ H.toarray().T
+    np.testing.assert_allclose(W, dense, rtol=0, atol=1e-13 * np.abs(dense).max())
+    np.testing.assert_array_equal(W, W.T)
+
+
+def test_scaled_selections_stay_exactly_symmetric():
+    from contactqp.core.problem import _selected_delassus
+
+    R = spd(9, seed=8)
+    columns, scales = np.array([4, 0, 7, 2]), np.array([0.3, -1.7, 2.9, 1.1])
+    influence, W = _selected_delassus(R, columns, scales)
+    A = np.zeros((4, 9))
+    A[np.arange(4), columns] = scales
+    np.testing.assert_allclose(W, A @ R @ A.T, rtol=1e-14)
+    np.testing.assert_allclose(influence, R @ A.T, rtol=1e-14)
+    np.testing.assert_array_equal(W, W.T)

@@ -185,6 +185,37 @@ def test_a_pair_given_both_ways_is_refused():
         cq.ContactProblem(model, LOADS, [pairs])
 
 
+class RowsOnly:
+    """An obstacle of the protocol alone (its ``rows``), as a user may write one."""
+
+    def __init__(self, obstacle):
+        self.obstacle = obstacle
+
+    def rows(self, model):
+        return self.obstacle.rows(model)
+
+
+def test_an_obstacle_with_rows_only_assembles_as_the_built_in_ones():
+    from contactqp.core.contact import assemble_constraints
+
+    model = cq.ReducedModel(flexibility=np.kron(np.eye(3), R), dofs_per_node=2)
+    built_in = [
+        cq.GapObstacle([2, 0], [1e-3, -2e-3], [[0.0, -1.0], [0.6, 0.8]]),
+        cq.NodePairs([[0, 1]], [5e-4], [1.0, 0.0]),
+        cq.GapObstacle([1], [0.0], [0.0, 1.0]),
+    ]
+    expected = assemble_constraints(model, built_in)
+    given = assemble_constraints(model, [RowsOnly(obstacle) for obstacle in built_in])
+    assert (given.matrix != expected.matrix).nnz == 0 and given.matrix.shape == (4, 6)
+    np.testing.assert_array_equal(given.gaps, expected.gaps)
+    np.testing.assert_array_equal(given.nodes, [2, 0, 0, 1])
+    assert given.labels == expected.labels == ["node 2", "node 0", "pair 0-1", "node 1"]
+    with pytest.raises(
+        InvalidInputError, match="^node 2 is constrained twice.*constraints 0 and 4"
+    ):
+        assemble_constraints(model, [*built_in, RowsOnly(cq.GapObstacle([2], [0.0], [0.0, -3.0]))])
+
+
 def test_a_node_between_two_walls_or_in_a_corner_is_legitimate():
     model = cq.ReducedModel(flexibility=np.kron(np.eye(2), R), dofs_per_node=2)
     slot = [cq.GapObstacle([0], [1e-3], [1.0, 0.0]), cq.GapObstacle([0], [1e-3], [-1.0, 0.0])]

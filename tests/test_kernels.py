@@ -173,6 +173,19 @@ def test_sparse_newton_matrices_agree(seed, nc, d, density, kept_share):
 
 
 @pytest.mark.parametrize("kernel", IMPLEMENTATIONS)
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 70), m=st.integers(0, 70))
+def test_abs_row_sums_are_the_sums_of_the_rows_asked_for(kernel, seed, n, m):
+    rng = np.random.default_rng(seed)
+    W = rng.standard_normal((max(n, 1), m))
+    W[rng.random(W.shape) < 0.2] = 0.0
+    rows = rng.integers(0, W.shape[0], size=rng.integers(0, 3 * n + 1)).astype(np.int64)
+    sums = np.full(rows.size, np.nan)
+    kernel.abs_row_sums(W, rows, sums)
+    close(sums, np.abs(W).sum(axis=1)[rows])  # repeated rows, any order, empty rows
+
+
+@pytest.mark.parametrize("kernel", IMPLEMENTATIONS)
 def test_rows_the_buffers_cannot_hold_are_refused(kernel):
     with pytest.raises(ValueError, match="2 or 3 components"):
         kernel.project_rows(np.zeros((2, 4)), np.zeros(2), np.zeros((2, 4)))

@@ -7,7 +7,14 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, aslinearoperator
 
-from contactqp.core.operators import PSD_SHIFT, DenseOperator, Operator, SparseOperator, as_operator
+from contactqp.core.operators import (
+    PSD_SHIFT,
+    DenseOperator,
+    Operator,
+    SparseOperator,
+    as_operator,
+    symmetric_product,
+)
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError, UnsupportedProblemError
 from contactqp.methods.active_set import cold_start
 from contactqp.methods.box_qp import solve_box_qp
@@ -167,3 +174,42 @@ def test_dense_block_on_runs_of_consecutive_indices_is_the_matrix_block():
         operator.block(runs, np.array([3, 60]))
     with pytest.raises(IndexError):
         operator.block(np.r_[50:61], runs)
+
+
+@pytest.mark.parametrize("form", ["dense", "fortran", "sparse", "operator"])
+def test_cold_start_shares_each_interpenetration_over_its_row(form):
+    A, W = gram(n=30, k=12)
+    W[3] = W[:, 3] = 0.0  # a zero row where b <= 0: its guess is 0, not 0 / 0
+    b = np.random.default_rng(4).standard_normal(30)
+    b[3] = -1.0
+    given = {
+        "dense": W,
+        "fortran": np.asfortranarray(W),
+        "sparse": sp.csr_matrix(W),
+        "operator": GramOperator(np.delete(A, 3, axis=0), 0.1),
+    }[form]
+    if form == "operator":
+        b = np.delete(b, 3)
+        W = np.delete(np.delete(W, 3, axis=0), 3, axis=1)
+    expected = np.where(b > 0, np.maximum(b, 0.0) / np.abs(W).sum(axis=1).clip(1e-300), 0.0)
+    guess = cold_start(given, b)
+    assert np.all(np.isfinite(guess)) and np.count_nonzero(guess) == np.count_nonzero(b > 0)
+    np.testing.assert_allclose(guess, expected, rtol=1e-13, atol=0)
+
+
+@pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
+def test_a_symmetric_product_is_the_product(layout):
+    _, W = gram(n=25, k=25)
+    W = {
+        "C": W,
+        "F": np.asfortranarray(W),
+        "strided": np.repeat(np.repeat(W, 2, axis=0), 2, axis=1)[::2, ::2],
+        "float32": W.astype(np.float32),
+    }[layout]
+    x = np.random.default_rng(6).standard_normal(25)
+    expected = W.astype(float) @ x
+    np.testing.assert_allclose(
+        symmetric_product(W, x), expected, rtol=1e-6 if layout == "float32" else 1e-13
+    )
+    X = np.stack([x, 2 * x], axis=1)  # several columns: the general product
+    np.testing.assert_allclose(symmetric_product(W, X), W @ X, rtol=1e-13)

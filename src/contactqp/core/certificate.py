@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .local_problem import CONTACT_FLOOR, AccuracyLimits, cone_residual
+from .operators import symmetric_product
 
 __all__ = [
     "CERTIFICATE_TOL",
@@ -216,12 +217,13 @@ def _floored(scale):
 def _product_on_support(model, forces: np.ndarray) -> np.ndarray:
     """``R f`` with ``R`` the flexibility as given, read only where ``f`` is nonzero when that is
     a small part of it: rows of ``R`` (contiguous) when it is the symmetric matrix stored,
-    else its columns."""
+    else its columns; otherwise all of ``R``, one triangle of the symmetric one."""
     given = model.as_given
+    symmetric = given is model.flexibility  # the validated, exactly symmetric matrix
     support = np.flatnonzero(forces)
     if 4 * support.size >= forces.size:
-        return given @ forces
-    if given is model.flexibility:  # the validated, exactly symmetric matrix: R[:, s] = R[s].T
+        return symmetric_product(given, forces) if symmetric else given @ forces
+    if symmetric:  # R[:, s] = R[s].T
         return forces[support] @ given[support]
     return given[:, support] @ forces[support]
 

@@ -13,6 +13,7 @@ the node, or of the first node relative to the second, along ``t``).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Protocol, TypeAlias, runtime_checkable
@@ -118,23 +119,56 @@ def _node_freedoms(model: ReducedModel, node: int, direction: np.ndarray, name: 
     return dofs
 
 
-def _node_rows(
+@dataclass(frozen=True)
+class _RowBlock:
+    """Constraint rows of one width ``w``, as arrays: row ``i`` reads
+    ``coefficients[i] . U[freedoms[i]] <= gaps[i]`` (what :class:`ConstraintRow` holds, for
+    many rows without a Python object per row)."""
+
+    nodes: np.ndarray  # (k,) int
+    freedoms: np.ndarray  # (k, w) int
+    coefficients: np.ndarray  # (k, w)
+    gaps: np.ndarray  # (k,)
+    labels: list[str]
+
+    def rows(self) -> list[ConstraintRow]:
+        """The rows as :data:`ConstraintRow` tuples."""
+        return [
+            (int(k), f, c, float(g), label)
+            for k, f, c, g, label in zip(
+                self.nodes, self.freedoms, self.coefficients, self.gaps, self.labels, strict=True
+            )
+        ]
+
+
+def _node_block(
     model: ReducedModel,
     nodes: np.ndarray,
     gaps: np.ndarray,
     directions: np.ndarray,
     name: str,
     label: str,
-) -> list[ConstraintRow]:
-    """One constraint row per node: ``(node, freedoms, direction, gap, label)``.
+) -> _RowBlock:
+    """One constraint row per node: its freedoms, the direction, the gap.
 
     ``directions`` is one unit vector for all nodes, shape (d,), or one per node, shape (k, d).
     """
-    directions = np.broadcast_to(directions, (len(nodes), np.shape(directions)[-1]))
-    return [
-        (int(k), _node_freedoms(model, k, d, name), d, float(g), f"node {k}{label}")
-        for k, g, d in zip(nodes, gaps, directions, strict=True)
-    ]
+    d = int(np.shape(directions)[-1])
+    directions = np.broadcast_to(np.asarray(directions, dtype=float), (len(nodes), d))
+    counts = model.dofs_per_node[nodes]
+    wrong = np.flatnonzero(counts != d)
+    if wrong.size:
+        raise InvalidInputError(
+            f"{name}: node {nodes[wrong[0]]} has {counts[wrong[0]]} freedoms but the direction "
+            f"has {d} components"
+        )
+    return _RowBlock(
+        nodes=nodes.astype(int, copy=False),
+        freedoms=model.offsets[nodes][:, None] + np.arange(d),
+        coefficients=directions,
+        gaps=np.asarray(gaps, dtype=float).reshape(-1),
+        labels=[f"node {k}{label}" for k in nodes.tolist()],
+    )
 
 
 def _coordinates(model: ReducedModel, name: str) -> np.ndarray:
@@ -163,6 +197,9 @@ class GapObstacle:
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
+        return self._row_block(model).rows()
+
+    def _row_block(self, model: ReducedModel) -> _RowBlock:
         nodes = _node_indices(model, self.nodes, "GapObstacle.nodes")
         gaps = real_array(self.gaps, "GapObstacle.gaps").reshape(-1)
         if gaps.shape != nodes.shape:
@@ -172,7 +209,7 @@ class GapObstacle:
         if not np.all(np.isfinite(gaps)):
             raise InvalidInputError("GapObstacle.gaps contains NaN or inf")
         dirs = _unit_directions(self.directions, len(nodes), "GapObstacle.directions")
-        return _node_rows(model, nodes, gaps, dirs, "GapObstacle", "")
+        return _node_block(model, nodes, gaps, dirs, "GapObstacle", "")
 
 
 @dataclass
@@ -195,6 +232,9 @@ class PlaneObstacle:
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
+        return self._row_block(model).rows()
+
+    def _row_block(self, model: ReducedModel) -> _RowBlock:
         coords = _coordinates(model, "PlaneObstacle")
         nodes = _node_indices(model, self.nodes, "PlaneObstacle.nodes")
         normal = _unit_directions(self.normal, 1, "PlaneObstacle.normal")[0]
@@ -205,7 +245,7 @@ class PlaneObstacle:
                 f"(d={coords.shape[1]}) must share one dimension"
             )
         gaps = (point - coords[nodes]) @ normal
-        return _node_rows(model, nodes, gaps, normal, "PlaneObstacle", " / plane")
+        return _node_block(model, nodes, gaps, normal, "PlaneObstacle", " / plane")
 
 
 @dataclass
@@ -230,6 +270,9 @@ class ProfileObstacle:
 
     def rows(self, model: ReducedModel) -> list[ConstraintRow]:
         """Constraint rows as ``(node, freedoms, coefficients, gap, label)`` tuples."""
+        return self._row_block(model).rows()
+
+    def _row_block(self, model: ReducedModel) -> _RowBlock:
         coords = _coordinates(model, "ProfileObstacle")
         nodes = _node_indices(model, self.nodes, "ProfileObstacle.nodes")
         direction = _unit_directions(self.direction, 1, "ProfileObstacle.direction")[0]
@@ -245,7 +288,7 @@ class ProfileObstacle:
                 f"values, got shape {surface.shape}"
             )
         gaps = surface - coords[nodes] @ direction
-        return _node_rows(model, nodes, gaps, direction, "ProfileObstacle", " / profile")
+        return _node_block(model, nodes, gaps, direction, "ProfileObstacle", " / profile")
 
 
 @dataclass
@@ -315,27 +358,52 @@ def assemble_constraints(
         meet several obstacles along different directions (a corner, or a slot between two
         walls with opposite normals).
     """
-    rows = [row for obstacle in _obstacle_list(obstacles) for row in obstacle.rows(model)]
-    if not rows:
+    blocks = [
+        block for obstacle in _obstacle_list(obstacles) for block in _row_blocks(obstacle, model)
+    ]
+    gaps = np.concatenate([block.gaps for block in blocks]) if blocks else np.zeros(0)
+    if not gaps.size:
         raise InvalidInputError("obstacles define no constraint: give at least one node")
-    gaps = np.array([r[3] for r in rows])
+    labels = [label for block in blocks for label in block.labels]
     if np.max(np.abs(gaps)) > MAX_MAGNITUDE:
         worst = int(np.argmax(np.abs(gaps)))
         raise InvalidInputError(
-            f"the gap of {rows[worst][4]} is {gaps[worst]:.3g} m, beyond "
+            f"the gap of {labels[worst]} is {gaps[worst]:.3g} m, beyond "
             f"{MAX_MAGNITUDE:g}: rescale the units"
         )
-    _refuse_duplicates(rows)
-    indptr = np.cumsum([0] + [len(r[1]) for r in rows])
-    indices = np.concatenate([r[1] for r in rows])
-    data = np.concatenate([r[2] for r in rows])
-    matrix = scipy.sparse.csr_matrix((data, indices, indptr), shape=(len(rows), model.n_freedoms))
+    _refuse_duplicates(blocks, labels)
+    widths = np.concatenate([np.full(b.gaps.size, b.freedoms.shape[1]) for b in blocks])
+    indptr = np.concatenate(([0], np.cumsum(widths)))
+    indices = np.concatenate([block.freedoms.ravel() for block in blocks])
+    data = np.concatenate([block.coefficients.ravel() for block in blocks])
+    matrix = scipy.sparse.csr_matrix((data, indices, indptr), shape=(gaps.size, model.n_freedoms))
     return Constraints(
         matrix=matrix,
         gaps=gaps,
-        nodes=np.array([r[0] for r in rows], dtype=int),
-        labels=[r[4] for r in rows],
+        nodes=np.concatenate([block.nodes for block in blocks]).astype(int, copy=False),
+        labels=labels,
     )
+
+
+def _row_blocks(obstacle: Obstacle, model: ReducedModel) -> list[_RowBlock]:
+    """The rows of ``obstacle`` as blocks: the built-in obstacles' own, else its
+    :meth:`~Obstacle.rows`, consecutive rows of one width in one block."""
+    own = getattr(obstacle, "_row_block", None)
+    if own is not None:
+        return [own(model)]
+    blocks = []
+    for _, group in itertools.groupby(obstacle.rows(model), key=lambda row: len(row[1])):
+        rows = list(group)
+        blocks.append(
+            _RowBlock(
+                nodes=np.array([row[0] for row in rows], dtype=int),
+                freedoms=np.array([row[1] for row in rows], dtype=np.intp),
+                coefficients=np.array([row[2] for row in rows], dtype=float),
+                gaps=np.array([row[3] for row in rows], dtype=float),
+                labels=[row[4] for row in rows],
+            )
+        )
+    return blocks
 
 
 def _obstacle_list(obstacles: Obstacle | Iterable[Obstacle]) -> list[Obstacle]:
@@ -363,18 +431,24 @@ def _obstacle_list(obstacles: Obstacle | Iterable[Obstacle]) -> list[Obstacle]:
 _DUPLICATE_DECIMALS = 9
 
 
-def _refuse_duplicates(rows: list[ConstraintRow]) -> None:
+def _refuse_duplicates(blocks: list[_RowBlock], labels: list[str]) -> None:
     """Raise if two rows constrain the same freedoms along the same direction.
 
-    Rows are compared by size, vectorised: each row's freedoms sorted, with its unit
+    Rows are compared by width, vectorised: each row's freedoms sorted, with its unit
     coefficients rounded to :data:`_DUPLICATE_DECIMALS`.
     """
-    by_size: dict[int, list[int]] = {}
-    for position, row in enumerate(rows):
-        by_size.setdefault(len(row[1]), []).append(position)
-    for size, positions in by_size.items():
-        dofs = np.array([rows[p][1] for p in positions], dtype=float).reshape(-1, size)
-        coefficients = np.array([rows[p][2] for p in positions], dtype=float).reshape(-1, size)
+    by_width: dict[int, list[tuple[np.ndarray, _RowBlock]]] = {}
+    offset = 0
+    for block in blocks:
+        count = block.gaps.size
+        by_width.setdefault(block.freedoms.shape[1], []).append(
+            (np.arange(offset, offset + count), block)
+        )
+        offset += count
+    for parts in by_width.values():
+        positions = np.concatenate([where for where, _ in parts])
+        dofs = np.concatenate([block.freedoms for _, block in parts]).astype(float)
+        coefficients = np.concatenate([block.coefficients for _, block in parts])
         order = np.argsort(dofs, axis=1, kind="stable")
         dofs = np.take_along_axis(dofs, order, axis=1)
         unit = np.take_along_axis(coefficients, order, axis=1)
@@ -386,10 +460,10 @@ def _refuse_duplicates(rows: list[ConstraintRow]) -> None:
         twice = np.flatnonzero(counts[inverse.ravel()] > 1)
         group = inverse.ravel()[twice[0]]
         first, second = (positions[i] for i in twice[inverse.ravel()[twice] == group][:2])
-        label = rows[second][4]
+        label = labels[second]
         raise InvalidInputError(
             f"{label} is constrained twice along the same direction (constraints {first} "
-            f"and {second}, '{rows[first][4]}' and '{label}'): the contact operator would "
+            f"and {second}, '{labels[first]}' and '{label}'): the contact operator would "
             f"be singular; give each node and direction once (keep the smaller gap)"
         )
 

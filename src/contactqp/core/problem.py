@@ -43,6 +43,7 @@ from .contact import Constraints, LocalFrames, assemble_constraints, local_frame
 from .friction import FrictionLaw, apex_distance
 from .local_problem import LocalProblem
 from .model import MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance, real_array
+from .operators import symmetric_product
 from .result import ContactResult, FrictionalResult, verdict
 from .status import ContactStatus
 
@@ -74,11 +75,23 @@ def _delassus(model: ReducedModel, matrix: scipy.sparse.csr_matrix):
 
 
 def _selection(matrix: scipy.sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(columns, scales)`` when every row of ``M`` holds one stored entry (each constraint acts
-    on one freedom: ``M = diag(scales) I[columns]``), else None."""
-    if matrix.shape[0] == 0 or not np.all(np.diff(matrix.indptr) == 1):
+    """``(columns, scales)`` when every row of ``M`` holds one nonzero entry (each constraint acts
+    on one freedom: ``M = diag(scales) I[columns]``), else None. Stored zeros do not count: the
+    frame of an axis-aligned normal stores its zero components."""
+    stored = np.diff(matrix.indptr)
+    if matrix.shape[0] == 0 or np.any(stored == 0):
         return None
-    return matrix.indices, matrix.data
+    if np.all(stored == 1):
+        return matrix.indices, matrix.data
+    nonzero = matrix.data != 0.0
+    rows = np.repeat(np.arange(matrix.shape[0]), stored)[nonzero]
+    if rows.size != matrix.shape[0] or np.any(np.diff(rows) != 1):
+        return None
+    return matrix.indices[nonzero], matrix.data[nonzero]
+
+
+#: Entries of ``W`` scaled at a time by :func:`_selected_delassus` (a temporary of 512 kB).
+_SCALED_ENTRIES = 1 << 16
 
 
 def _selected_delassus(R: np.ndarray, columns: np.ndarray, scales: np.ndarray):
@@ -92,11 +105,18 @@ def _selected_delassus(R: np.ndarray, columns: np.ndarray, scales: np.ndarray):
         view = R.view()
         view.flags.writeable = False
         return view, view
-    rows = R[columns]  # M R up to the scales: contiguous rows of R (R = R^T)
-    W = rows[:, columns]
+    rows = R.take(columns, axis=0)  # M R up to the scales: contiguous rows of R (R = R^T)
+    W = rows.take(columns, axis=1)
     if not unit:
         rows *= scales[:, None]
-        W *= np.multiply.outer(scales, scales)
+        if np.all(np.abs(scales) == 1.0):  # signs (unit directions): exact in either order
+            W *= scales[:, None]
+            W *= scales[None, :]
+        else:
+            step = max(1, _SCALED_ENTRIES // scales.size)
+            for start in range(0, scales.size, step):  # s_i s_j by row blocks, no m x m temporary
+                block = slice(start, start + step)
+                W[block] *= np.multiply.outer(scales[block], scales)
     return rows.T, W
 
 
@@ -172,6 +192,8 @@ class DualForm:
 
     def displacements(self, forces: np.ndarray) -> np.ndarray:
         """``U = R (P - A^T lambda)`` for contact forces ``lambda``."""
+        if self.influence is self.W:  # A = I: R A^T is R, exactly symmetric
+            return self.free_displacements - symmetric_product(self.W, forces)
         return self.free_displacements - self.influence @ forces
 
 

@@ -7,8 +7,9 @@ This module offers the first that loads: the compiled one unless it is absent, i
 one :class:`~contactqp.errors.PureNumpyKernelsWarning` says so when the package is imported, or
 unless the environment variable ``CONTACTQP_PURE_NUMPY`` is set to anything but ``""`` or
 ``"0"`` (then silently: the choice was the user's). :data:`IMPLEMENTATION` names the one in
-use. Callers: :mod:`contactqp.core.local_problem`, :mod:`contactqp.methods.coulomb` and
-:mod:`contactqp.methods.planar`.
+use. Callers: :mod:`contactqp.core.local_problem`, :mod:`contactqp.methods.coulomb`,
+:mod:`contactqp.methods.planar` and (the cold start's row sums)
+:mod:`contactqp.methods.active_set`.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ __all__ = [
     "planar_gauss_seidel",
     "planar_blocks",
     "row_products",
+    "abs_row_sums",
     "small_newton",
     "small_certificate",
     "small_semidefinite",
@@ -85,6 +87,7 @@ SPATIAL_REASONS: tuple[str, ...] = ()
 
 if pure_numpy_forced():
     from .pure_numpy import (
+        abs_row_sums,
         alart_curnier_rows,
         natural_map_rows,
         planar_blocks,
@@ -99,6 +102,7 @@ else:
     try:
         from . import compiled as _compiled
         from .compiled import (
+            abs_row_sums,
             alart_curnier_rows,
             natural_map_rows,
             planar_blocks,
@@ -122,6 +126,7 @@ else:
         IMPLEMENTATION = "compiled"
     except ImportError as _missing:
         from .pure_numpy import (
+            abs_row_sums,
             alart_curnier_rows,
             natural_map_rows,
             planar_blocks,

@@ -15,6 +15,7 @@ __all__ = [
     "planar_gauss_seidel",
     "planar_blocks",
     "row_products",
+    "abs_row_sums",
 ]
 
 SMALL_REASONS: tuple[str, ...]
@@ -167,6 +168,7 @@ def row_products(
     product: np.ndarray,
     magnitude: np.ndarray,
 ) -> None: ...
+def abs_row_sums(W: np.ndarray, rows: np.ndarray, sums: np.ndarray) -> None: ...
 
 GLOBAL_CODES: tuple[str, ...]
 GLOBAL_MEASURES: tuple[str, ...]

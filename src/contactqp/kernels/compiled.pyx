@@ -22,6 +22,7 @@ from cpython.buffer cimport (
     PyBUF_C_CONTIGUOUS, PyBUF_FORMAT, PyBUF_WRITABLE, PyBuffer_Release, PyObject_GetBuffer
 )
 from libc.stdint cimport int64_t
+from cpython.pycapsule cimport PyCapsule_GetName, PyCapsule_GetPointer
 
 __all__ = [
     "project_rows",
@@ -31,6 +32,7 @@ __all__ = [
     "planar_gauss_seidel",
     "planar_blocks",
     "row_products",
+    "abs_row_sums",
     "small_newton",
     "small_certificate",
     "small_semidefinite",
@@ -415,6 +417,29 @@ def row_products(const double[:, :] W, const int64_t[:] indptr, const int64_t[:]
                 a += v if v >= 0.0 else -v
         product[i] = s
         magnitude[i] = a
+
+
+ctypedef double (*_asum_t)(int* n, double* x, int* incx) noexcept nogil
+cdef _asum_t _dasum = NULL
+
+
+def abs_row_sums(const double[:, ::1] W, const int64_t[:] rows, double[:] sums):
+    """``sums[k] = sum_j |W[rows[k], j]|`` by BLAS ``dasum`` (scipy's) on each row asked for:
+    one read of each, no temporary."""
+    global _dasum
+    cdef Py_ssize_t k, i
+    cdef int n = <int> W.shape[1], one = 1
+    if sums.shape[0] != rows.shape[0]:
+        raise ValueError("sums must hold one value per row")
+    if _dasum == NULL:
+        from scipy.linalg import cython_blas
+        capsule = cython_blas.__pyx_capi__["dasum"]
+        _dasum = <_asum_t> PyCapsule_GetPointer(capsule, PyCapsule_GetName(capsule))
+    for k in range(rows.shape[0]):
+        i = rows[k]
+        if i < 0 or i >= W.shape[0]:
+            raise IndexError(f"row {i} out of range 0..{W.shape[0] - 1}")
+        sums[k] = _dasum(&n, <double*> &W[i, 0], &one) if n else 0.0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -2093,8 +2118,6 @@ def spatial_solve(W, indptr, indices, data, q, mu, shift, r, u, status, measures
 # Small global problems M v = H r + f, u = H^T v + w: the factorisation of M, the condensation
 # W = H^T M^-1 H, the Newton runs on the condensed problem and the certificate on the global
 # equations as written, in one call (contactqp.methods.global_route.solve_compiled).
-
-from cpython.pycapsule cimport PyCapsule_GetName, PyCapsule_GetPointer
 
 __all__ += ["global_small", "GLOBAL_CODES", "GLOBAL_MEASURES"]
 

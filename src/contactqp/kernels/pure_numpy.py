@@ -22,6 +22,7 @@ __all__ = [
     "planar_gauss_seidel",
     "planar_blocks",
     "row_products",
+    "abs_row_sums",
 ]
 
 
@@ -286,3 +287,17 @@ def row_products(
     matrix = _matrix(W, indptr, indices, data, x.shape[0])
     product[...] = np.asarray(matrix @ x).ravel()
     magnitude[...] = np.asarray(abs(matrix) @ np.abs(x)).ravel()
+
+
+#: Rows of ``|W|`` :func:`abs_row_sums` forms at a time (a buffer of a few hundred kB).
+_ABS_ROWS = 32
+
+
+def abs_row_sums(W: np.ndarray, rows: np.ndarray, sums: np.ndarray) -> None:
+    """``sums[k] = sum_j |W[rows[k], j]|``, a few rows at a time in one reused buffer."""
+    buffer = np.empty((min(_ABS_ROWS, rows.size), W.shape[1]))
+    for start in range(0, rows.size, _ABS_ROWS):
+        chunk = rows[start : start + _ABS_ROWS]
+        block = W.take(chunk, axis=0, out=buffer[: chunk.size])
+        np.abs(block, out=block)
+        sums[start : start + chunk.size] = block.sum(axis=1)

@@ -6,9 +6,10 @@ import time
 
 import numpy as np
 
+from .. import kernels
 from ..core.fastened import FastenedProblem
 from ..core.model import iteration_cap, positive_tolerance, warm_start
-from ..core.operators import SymmetricDenseOperator, as_operator
+from ..core.operators import DenseOperator, SymmetricDenseOperator, as_operator
 from .box_qp import solve_box_qp
 from .fastened import solve_fastened_box_qp
 
@@ -22,14 +23,24 @@ def cold_start(W, b):
 
     Each interpenetration ``b_i > 0`` is shared over the row of ``W`` (a matrix or an
     :class:`~contactqp.core.operators.Operator`), so that the first free block is smaller than
-    the whole overlap; only the first active set depends on it.
+    the whole overlap; only the first active set depends on it. Only the rows with ``b_i > 0``
+    are read (the guess is zero elsewhere); a dense ``W``'s in one pass
+    (:func:`~contactqp.kernels.abs_row_sums`), with no temporary of its size.
     """
     W = as_operator(W)
-    row_sums = np.empty(len(b))
-    for start in range(0, len(b), _ROW_CHUNK):  # |W| by row blocks: no full-size temporary
-        rows = slice(start, start + _ROW_CHUNK)
-        row_sums[rows] = np.abs(W.block(rows, None)).sum(axis=1)
-    return np.maximum(b, 0.0) / row_sums
+    b = np.asarray(b, dtype=float)
+    overlap = np.flatnonzero(b > 0.0)
+    sums = np.empty(overlap.size)
+    matrix = W.matrix if isinstance(W, DenseOperator) else None
+    if matrix is not None and matrix.dtype == np.float64 and matrix.flags.c_contiguous:
+        kernels.abs_row_sums(matrix, overlap.astype(np.int64, copy=False), sums)
+    else:
+        for start in range(0, overlap.size, _ROW_CHUNK):  # |W| by row blocks
+            rows = overlap[start : start + _ROW_CHUNK]
+            sums[start : start + rows.size] = np.abs(W.block(rows, None)).sum(axis=1)
+    guess = np.zeros(b.size)
+    guess[overlap] = b[overlap] / sums
+    return guess
 
 
 def _operator(W):
