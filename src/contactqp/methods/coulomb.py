@@ -71,8 +71,16 @@ from ..core.operators import Operator
 from ..errors import InvalidInputError
 from .local_global import finish
 from .pgs import GaussSeidel
+from .proximal import proximal_point
 
-__all__ = ["solve_coulomb", "solve_on_candidates", "CandidateSolution", "alart_curnier"]
+__all__ = [
+    "solve_coulomb",
+    "solve_proximal",
+    "PROXIMAL_MAX_ITER",
+    "solve_on_candidates",
+    "CandidateSolution",
+    "alart_curnier",
+]
 
 REGULARISATION = 1e-2  # largest eta of the Newton matrix A + B (W + eta D); LM start
 LM_MIN, LM_MAX, LM_TRIES = 1e-12, 1e6, 3  # Levenberg-Marquardt range of eta, tries per step
@@ -83,8 +91,11 @@ STALL = 20  # a Newton run stops when its best error has not halved in this many
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
 RUN_ITERATIONS = 100  # largest number of iterations of one Newton (or LM) run
-#: Default total budget: what all the stages can spend (3 rounds of two runs, 2 x 100 sweeps).
-MAX_ITER = 2 * ROUNDS * RUN_ITERATIONS + (ROUNDS - 1) * PGS_SWEEPS
+PROXIMAL_ITERATIONS = 600  # largest number of inner Newton iterations of the proximal stage
+PROXIMAL_MAX_ITER = 2000  # default budget of :func:`solve_proximal` (inner Newton iterations)
+#: Default total budget: what all the stages can spend (3 rounds of two runs, 2 x 100 sweeps,
+#: the proximal stage's 600 inner iterations).
+MAX_ITER = 2 * ROUNDS * RUN_ITERATIONS + (ROUNDS - 1) * PGS_SWEEPS + PROXIMAL_ITERATIONS
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this share of its column's max
 _NO_JACOBIAN = np.empty((0, 3, 3))  # tells kernels.alart_curnier_rows to skip the Jacobian
 ACTIVE_SET_MIN = 64  # contacts from which a dense problem is solved on its candidate set
@@ -365,6 +376,11 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
         if iterations >= max_iter:
             stages.append(f"max_iter = {max_iter} reached")
             break
+    if error > tol and iterations < max_iter:  # the last stage: proximal-point iterations
+        budget = min(PROXIMAL_ITERATIONS, max_iter - iterations)
+        r, error, k, reason = proximal_point(W, q, mu, d, r, tol, budget, measure, _Newton)
+        iterations += k
+        stages.append(f"proximal {k} it. ({reason}, error {error:.1e})")
     return r, iterations, stages
 
 
@@ -499,6 +515,51 @@ def _check_options(problem, r0, tol, max_iter):
     if r0 is None:
         return np.zeros(m)
     return warm_start(r0, m)
+
+
+def solve_proximal(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = PROXIMAL_MAX_ITER,
+    check_psd: bool = True,
+    per_contact: bool = False,
+):
+    """Solve a local Coulomb problem by proximal-point iterations alone
+    (:func:`~contactqp.methods.proximal.proximal_point` around this module's Newton runs).
+
+    The last stage of :func:`solve_coulomb`, for problems whose ``W`` is very singular (rigid
+    multibody problems: far more contact unknowns than body freedoms, large friction). The
+    parameters, result and exceptions are those of :func:`solve_coulomb`; ``max_iter`` is the
+    budget of inner Newton iterations.
+    """
+    start = time.perf_counter()
+    r = _check_options(problem, r0, tol, max_iter)
+    W = problem.W
+    if sp.issparse(W) and better_dense(W):
+        W = W.toarray()
+    if check_psd:
+        problem.check_semidefinite()
+    shift = problem.apex_shift
+    q = problem.q - W @ shift if np.any(shift) else problem.q
+
+    def measure(r_apex, u):
+        return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
+
+    r, _, iterations, reason = proximal_point(
+        W, q, problem.mu, problem.dim, r + shift, tol, max_iter, measure, _Newton
+    )
+    return finish(
+        problem,
+        r - shift,
+        tol,
+        iterations,
+        start,
+        f"proximal {iterations} it. ({reason})",
+        method="proximal",
+        per_contact=per_contact,
+    )
 
 
 def solve_coulomb(

@@ -29,6 +29,7 @@ friction: formulations and numerical comparisons", INRIA RR-9118 (2018).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -43,6 +44,7 @@ RHO_MIN, RHO_MAX = 1e-10, 1e6  # range of rho
 INNER_ITERATIONS = 50  # largest number of Newton iterations of one inner problem
 INNER_SHARE = 0.1  # inner tolerance: this share of the current outer error (and >= tol / 10)
 FAST = 10  # an inner run of at most this many iterations lowers rho
+LM_INNER = True  # an inner Newton run that fails is followed by a Levenberg-Marquardt run
 STALL = 30  # the loop stops when its best error has not halved in this many outer iterations
 
 
@@ -121,10 +123,17 @@ def proximal_point(
             return natural_map_residual(sub, x, u)
 
         runner = newton(sub.W, sub.q, mu, dim, sub_measure)
-        budget = min(INNER_ITERATIONS, max_iter - iterations)
         inner_tol = max(INNER_SHARE * error, 0.1 * tol)
-        x, inner_error, k, _ = runner.run(r, inner_tol, budget, False)
-        iterations += max(k, 1)
+        x, inner_error, k = r, math.inf, 0
+        for adaptive in (False, True) if LM_INNER else (False,):  # Newton, then LM from its best
+            budget = min(INNER_ITERATIONS, max_iter - iterations - k)
+            if budget < 1:
+                break
+            x, inner_error, more, _ = runner.run(x, inner_tol, budget, adaptive)
+            k += max(more, 1)
+            if inner_error <= inner_tol:
+                break
+        iterations += k
         outer += 1
         new = measure(x, W @ x + q)[1]
         if inner_error > inner_tol:  # inner problem too hard: a stronger proximal term
