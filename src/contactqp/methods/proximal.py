@@ -13,9 +13,19 @@ sequence of problems with the positive definite operator
 from ``r_k``, the last outer iterate; its solution is ``r_{k+1}``. At a fixed point
 ``r_{k+1} = r_k`` the velocity is exactly ``W r + q``: the problem as given. Each inner problem
 is solved by a Newton run (the caller's, given as ``newton(W, q) -> runner``) to a tolerance a
-tenth of the current outer error. The weight ``rho`` adapts: divided by 10 when an outer step
-at least halves the error (the inner problems are then nearly the given one and converge as
-fast), multiplied by 10 when an inner run does not reach its tolerance.
+tenth of the current outer error, and when that run fails, by a Levenberg-Marquardt run from
+its best point. The weight ``rho`` adapts to the inner runs (as in Siconos's FC3D_PROX):
+divided by 10 when an inner problem is solved in at most 10 iterations (the inner problems
+are then nearly the given one and converge as fast), multiplied by 10 when it is not solved.
+
+Measured on the walls of rigid boxes of ``tests/multibody_problems.py`` (13 problems: the
+stage's inputs where the default route's rounds had failed, 16 to 360 contacts, 600 inner
+iterations): the Levenberg-Marquardt inner runs rescued a problem the Newton runs alone left
+at 1.6e-6; a weight tied to the outer error (``rho = 5 e``, Siconos's current rule) did no
+better than the rule above (4 of 13 converged each, from the stalled points); a cold start
+``r = 0`` converged on 8 of 13 (9 with 1500 iterations) where the stalled point converged on
+4 (:func:`~contactqp.methods.coulomb.solve_coulomb` therefore starts its proximal stage from
+zero).
 
 Convergence is decided by the caller's ``measure`` of the problem as given, never by the inner
 problems' errors.
