@@ -343,7 +343,7 @@ class _Newton:
         return best[0], best[1], max_iter, "iteration limit"
 
 
-def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
+def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None, proximal=True):
     """Newton, Levenberg-Marquardt, then (Gauss-Seidel, both Newton runs) up to 3 rounds on
     the FCLIB problem ``(W, q, mu)`` from ``r``, then, only if they all failed, proximal-point
     iterations from ``r = 0`` (:func:`~contactqp.methods.proximal.proximal_point`);
@@ -351,7 +351,9 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
 
     ``measure(r, u)`` is ``(residual, error)``, the convergence test (error <= ``tol``).
     ``first``: what the first Newton run returned when it was run already (by the compiled
-    small-problem route), ``(r, error, iterations, reason)``.
+    small-problem route), ``(r, error, iterations, reason)``. ``proximal=False``: without
+    the proximal stage (a candidate set's subproblem: when it fails, the whole problem is
+    solved next, and only its failure is the route's).
     """
     newton = _Newton(W, q, mu, d, measure)
     gauss_seidel = None
@@ -383,7 +385,7 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
         if iterations >= max_iter:
             stages.append(f"max_iter = {max_iter} reached")
             break
-    if error > tol and iterations < max_iter:
+    if proximal and error > tol and iterations < max_iter:
         # the last stage: proximal-point iterations from a cold start (the point where the
         # Newton runs stalled attracts them too, measured on the walls of rigid boxes of
         # tests/multibody_problems.py); the better of the two points is kept
@@ -439,7 +441,15 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
                 return natural_map_residual(sub, r_sub, u_sub, per_contact=per_contact)
 
             r_sub, k, more = _rounds(
-                sub_W, sub_q, sub_mu, d, r[rows], tol, max_iter - iterations, measure
+                sub_W,
+                sub_q,
+                sub_mu,
+                d,
+                r[rows],
+                tol,
+                max_iter - iterations,
+                measure,
+                proximal=False,
             )
             iterations += k
             stages.append(f"{candidate.size} contacts: " + ", ".join(more))
