@@ -32,7 +32,12 @@ freedoms):
 * a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
   (``eta`` adapted to the success of full steps) then continues from the best point;
 * if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.methods.pgs`) and both
-  Newton runs again, in at most 3 rounds.
+  Newton runs again, in at most 3 rounds;
+* if every round failed, proximal-point iterations (:mod:`contactqp.methods.proximal`: Newton
+  runs on ``W + rho D``, up to 1000 inner iterations) from a cold start ``r = 0``: on the
+  very singular ``W`` of rigid multibody problems with large friction the point where the
+  Newton runs stalled attracts the proximal iterations too (measured on walls of rigid boxes),
+  a cold start much less. The better of the two points is kept.
 
 Convergence is decided only by :func:`~contactqp.core.local_problem.natural_map_error` (<= ``tol``),
 never by the solver's own residual. Cohesion is handled by translating each cone to its apex
@@ -72,8 +77,16 @@ from ..core.operators import Operator
 from ..errors import InvalidInputError
 from .local_global import certified_result, finish
 from .pgs import GaussSeidel
+from .proximal import proximal_point
 
-__all__ = ["solve_coulomb", "solve_on_candidates", "CandidateSolution", "alart_curnier"]
+__all__ = [
+    "solve_coulomb",
+    "solve_proximal",
+    "PROXIMAL_MAX_ITER",
+    "solve_on_candidates",
+    "CandidateSolution",
+    "alart_curnier",
+]
 
 REGULARISATION = 1e-2  # largest eta of the Newton matrix A + B (W + eta D); LM start
 LM_MIN, LM_MAX, LM_TRIES = 1e-12, 1e6, 3  # Levenberg-Marquardt range of eta, tries per step
@@ -84,8 +97,11 @@ STALL = 20  # a Newton run stops when its best error has not halved in this many
 PGS_SWEEPS = 100  # Gauss-Seidel sweeps before each later round
 ROUNDS = 3  # rounds of (Gauss-Seidel,) Newton, Levenberg-Marquardt Newton
 RUN_ITERATIONS = 100  # largest number of iterations of one Newton (or LM) run
-#: Default total budget: what all the stages can spend (3 rounds of two runs, 2 x 100 sweeps).
-MAX_ITER = 2 * ROUNDS * RUN_ITERATIONS + (ROUNDS - 1) * PGS_SWEEPS
+PROXIMAL_ITERATIONS = 1000  # largest number of inner Newton iterations of the proximal stage
+PROXIMAL_MAX_ITER = 2000  # default budget of :func:`solve_proximal` (inner Newton iterations)
+#: Default total budget: what all the stages can spend (3 rounds of two runs, 2 x 100 sweeps,
+#: the proximal stage's 1000 inner iterations).
+MAX_ITER = 2 * ROUNDS * RUN_ITERATIONS + (ROUNDS - 1) * PGS_SWEEPS + PROXIMAL_ITERATIONS
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot down to this share of its column's max
 _NO_JACOBIAN = np.empty((0, 3, 3))  # tells kernels.alart_curnier_rows to skip the Jacobian
 ACTIVE_SET_MIN = 64  # contacts from which a dense problem is solved on its candidate set
@@ -328,13 +344,17 @@ class _Newton:
         return best[0], best[1], max_iter, "iteration limit"
 
 
-def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
+def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None, proximal=True):
     """Newton, Levenberg-Marquardt, then (Gauss-Seidel, both Newton runs) up to 3 rounds on
-    the FCLIB problem ``(W, q, mu)`` from ``r``; ``(r, iterations, stages)``.
+    the FCLIB problem ``(W, q, mu)`` from ``r``, then, only if they all failed, proximal-point
+    iterations from ``r = 0`` (:func:`~contactqp.methods.proximal.proximal_point`);
+    ``(r, iterations, stages)``.
 
     ``measure(r, u)`` is ``(residual, error)``, the convergence test (error <= ``tol``).
     ``first``: what the first Newton run returned when it was run already (by the compiled
-    small-problem route), ``(r, error, iterations, reason)``.
+    small-problem route), ``(r, error, iterations, reason)``. ``proximal=False``: without
+    the proximal stage (a candidate set's subproblem: when it fails, the whole problem is
+    solved next, and only its failure is the route's).
     """
     newton = _Newton(W, q, mu, d, measure)
     gauss_seidel = None
@@ -366,6 +386,17 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None):
         if iterations >= max_iter:
             stages.append(f"max_iter = {max_iter} reached")
             break
+    if proximal and error > tol and iterations < max_iter:
+        # the last stage: proximal-point iterations from a cold start (the point where the
+        # Newton runs stalled attracts them too, measured on the walls of rigid boxes of
+        # tests/multibody_problems.py); the better of the two points is kept
+        budget = min(PROXIMAL_ITERATIONS, max_iter - iterations)
+        cold = np.zeros_like(r)
+        x, new, k, reason = proximal_point(W, q, mu, d, cold, tol, budget, measure, _Newton)
+        iterations += k
+        stages.append(f"proximal from r = 0 {k} it. ({reason}; error {new:.1e})")
+        if new < measure(r, W @ r + q)[1]:
+            r = x
     return r, iterations, stages
 
 
@@ -411,7 +442,15 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
                 return natural_map_residual(sub, r_sub, u_sub, per_contact=per_contact)
 
             r_sub, k, more = _rounds(
-                sub_W, sub_q, sub_mu, d, r[rows], tol, max_iter - iterations, measure
+                sub_W,
+                sub_q,
+                sub_mu,
+                d,
+                r[rows],
+                tol,
+                max_iter - iterations,
+                measure,
+                proximal=False,
             )
             iterations += k
             stages.append(f"{candidate.size} contacts: " + ", ".join(more))
@@ -502,6 +541,51 @@ def _check_options(problem, r0, tol, max_iter):
     return np.array(warm_start(r0, m))  # a copy: the solvers write in it
 
 
+def solve_proximal(
+    problem: LocalProblem,
+    *,
+    r0=None,
+    tol: float = 1e-8,
+    max_iter: int = PROXIMAL_MAX_ITER,
+    check_psd: bool = True,
+    per_contact: bool = False,
+):
+    """Solve a local Coulomb problem by proximal-point iterations alone
+    (:func:`~contactqp.methods.proximal.proximal_point` around this module's Newton runs).
+
+    The last stage of :func:`solve_coulomb`, for problems whose ``W`` is very singular (rigid
+    multibody problems: far more contact unknowns than body freedoms, large friction). The
+    parameters, result and exceptions are those of :func:`solve_coulomb`; ``max_iter`` is the
+    budget of inner Newton iterations.
+    """
+    start = time.perf_counter()
+    r = _check_options(problem, r0, tol, max_iter)
+    W = problem.W
+    if sp.issparse(W) and better_dense(W):
+        W = W.toarray()
+    if check_psd:
+        problem.check_semidefinite()
+    shift = problem.apex_shift
+    q = problem.q - W @ shift if np.any(shift) else problem.q
+
+    def measure(r_apex, u):
+        return natural_map_residual(problem, r_apex - shift, u, per_contact=per_contact)
+
+    r, _, iterations, reason = proximal_point(
+        W, q, problem.mu, problem.dim, r + shift, tol, max_iter, measure, _Newton
+    )
+    return finish(
+        problem,
+        r - shift,
+        tol,
+        iterations,
+        start,
+        f"proximal {iterations} it. ({reason})",
+        method="proximal",
+        per_contact=per_contact,
+    )
+
+
 def solve_coulomb(
     problem: LocalProblem,
     *,
@@ -530,8 +614,9 @@ def solve_coulomb(
         Total budget of Newton iterations and Gauss-Seidel sweeps over all stages (the
         reported ``iterations`` never exceed it). A round is a Newton run then a
         Levenberg-Marquardt run, each of at most 100 iterations; at most 3 rounds, the later
-        two each after up to 100 Gauss-Seidel sweeps. The default, 800, is what every stage
-        can spend.
+        two each after up to 100 Gauss-Seidel sweeps; then, if all failed, up to 1000 inner
+        Newton iterations of proximal-point iterations. The default, 1800, is what every
+        stage can spend.
     check_psd : bool
         Check that ``W`` is positive semidefinite (one factorisation). Callers whose ``W`` is
         ``H R H^T`` of a validated model may skip it.

@@ -36,7 +36,7 @@ from .active_set import solve_active_set
 from .batch import solve_coulomb_batch
 from .constrained_cg import MAX_ITER as CG_MAX_ITER
 from .constrained_cg import solve_constrained_cg
-from .coulomb import MAX_ITER, solve_coulomb
+from .coulomb import MAX_ITER, PROXIMAL_MAX_ITER, solve_coulomb, solve_proximal
 from .fastened import solve_lawson_hanson, solve_nnls
 from .local_global import solve_frictionless
 from .planar import SWEEPS, solve_planar
@@ -229,6 +229,27 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 None,
                 "exact",
                 "semismooth Newton on Alart-Curnier, Gauss-Seidel fallback",
+            ),
+            Method(
+                "proximal",
+                ("local", "global"),
+                solve_proximal,
+                (
+                    _R0_LOCAL,
+                    _local_tol(1e-8),
+                    Option(
+                        "max_iter",
+                        int,
+                        PROXIMAL_MAX_ITER,
+                        "budget of the inner Newton iterations",
+                    ),
+                    Option("check_psd", bool, True, "check that W is positive semidefinite"),
+                    _PER_CONTACT,
+                ),
+                None,
+                "cross-check",
+                "proximal-point iterations around Newton, for a very singular W (the last stage "
+                "of coulomb)",
             ),
             Method(
                 "coulomb-batch",
