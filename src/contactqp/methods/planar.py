@@ -200,7 +200,7 @@ def solve_planar(
     given = checked_start(problem, 2, "planar", r0, tol, max_iter)
     budget = min(SWEEPS, max_iter)
     if kernels.planar_solve is not None:
-        result, sweeps = compiled_sweeps(
+        result, sweeps, error = compiled_sweeps(
             problem,
             kernels.planar_solve,
             kernels.PLANAR_REASONS,
@@ -218,7 +218,7 @@ def solve_planar(
         if result is not None:
             return result
         return newton_after(
-            problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps
+            problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps, error
         )
     arrays = kernel_arrays(problem.W)
     blocks = np.empty((problem.n_contacts, 4))
@@ -258,7 +258,10 @@ def solve_planar(
             per_contact=per_contact,
             products=(product, magnitude),
         )
-    return newton_after(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps)
+    error = measure(r, np.asarray(W @ r).ravel() + q)[1]  # where the sweeps stopped
+    return newton_after(
+        problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps, error
+    )
 
 
 def _bad_block(contact: int, problem: LocalProblem) -> None:

@@ -119,7 +119,7 @@ def solve_spatial(
         return solve_coulomb(
             problem, r0=r0, tol=tol, max_iter=max_iter, check_psd=check_psd, per_contact=per_contact
         )
-    result, sweeps = compiled_sweeps(
+    result, sweeps, error = compiled_sweeps(
         problem,
         kernels.spatial_solve,
         kernels.SPATIAL_REASONS,
@@ -136,4 +136,6 @@ def solve_spatial(
     )
     if result is not None:
         return result
-    return newton_after(problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps)
+    return newton_after(
+        problem, r0, given, tol, max_iter, check_psd, per_contact, start, sweeps, error
+    )

@@ -96,15 +96,15 @@ def compiled_sweeps(
     check_psd: bool,
     per_contact: bool,
     start: float,
-) -> tuple[LocalResult | None, int]:
+) -> tuple[LocalResult | None, int, float]:
     """The sweeps and the certificate in one call of ``kernel`` from ``r`` (overwritten), at
     most ``budget`` sweeps, the error evaluated after each of the ``first``.
 
     ``reasons`` names the kernel's codes; ``bad_block(contact)`` raises
     :class:`~contactqp.errors.NotPositiveDefiniteError` for the contact whose diagonal block
-    failed the kernel's test (``check_psd``). Returns ``(result, sweeps)``: the result is None
-    when the sweeps stopped short of ``tol`` (stalled, or ``budget`` spent) with iterations
-    left for Newton.
+    failed the kernel's test (``check_psd``). Returns ``(result, sweeps, error)``: the result
+    is None when the sweeps stopped short of ``tol`` (stalled, or ``budget`` spent) with
+    iterations left for Newton; ``error`` is the natural-map error where they stopped.
     """
     nc = problem.n_contacts
     u = np.empty(r.shape[0])
@@ -132,9 +132,9 @@ def compiled_sweeps(
     reason = reasons[code]
     if reason == "diagonal block not semidefinite":  # sweeps is then the contact's index
         bad_block(sweeps)
-    if reason != "converged" and sweeps < max_iter:
-        return None, sweeps
     error, product, size_q, scale = measures.tolist()
+    if reason != "converged" and sweeps < max_iter:
+        return None, sweeps, error
     limits = limits_from_norms(product, size_q, scale, problem.digits)
     converged = error <= tol
     verdict = "converged" if converged else f"not converged to {tol:g}"
@@ -145,7 +145,7 @@ def compiled_sweeps(
         + (" (largest of the problem's and each contact's)" if per_contact else "")
     )
     notes = limits.describe(tol) if max(limits.rounding, limits.data) > tol else ""
-    return local_result(
+    result = local_result(
         problem,
         r,
         u,
@@ -158,7 +158,8 @@ def compiled_sweeps(
         method=method,
         limits=limits,
         contact_status=status,
-    ), sweeps
+    )
+    return result, sweeps, error
 
 
 def newton_after(
@@ -171,10 +172,11 @@ def newton_after(
     per_contact: bool,
     start: float,
     sweeps: int,
+    error: float,
 ) -> LocalResult:
     """The stalled sweeps' hand-over: :func:`~contactqp.methods.coulomb.solve_coulomb` from
-    the caller's start (``given``; none when ``r0`` is None), ``sweeps`` counted in its
-    iterations and message."""
+    the caller's start (``given``; none when ``r0`` is None), ``sweeps`` and the natural-map
+    ``error`` where they stopped in its message, ``sweeps`` in its iterations."""
     newton = solve_coulomb(
         problem,
         r0=None if r0 is None else given,
@@ -187,5 +189,5 @@ def newton_after(
         newton,
         iterations=newton.iterations + sweeps,
         seconds=time.perf_counter() - start,
-        message=f"gauss-seidel {sweeps} sweeps (stalled), then {newton.message}",
+        message=f"gauss-seidel {sweeps} sweeps (stalled; error {error:.1e}), then {newton.message}",
     )
