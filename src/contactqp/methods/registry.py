@@ -182,6 +182,26 @@ def _local_tol(default: float) -> Option:
     return Option("tol", float, default, "target natural-map error")
 
 
+def _sweeps_options(most: int) -> tuple[Option, ...]:
+    """The options of a Gauss-Seidel route of at most ``most`` sweeps (planar, spatial): those
+    of coulomb, to which it hands a stall."""
+    return (
+        _R0_LOCAL,
+        _local_tol(1e-8),
+        Option(
+            "max_iter",
+            int,
+            MAX_ITER,
+            f"budget of Gauss-Seidel sweeps (at most {most}) and, after a stall, of the coulomb "
+            "method",
+        ),
+        Option(
+            "check_psd", bool, True, "check W's contact blocks (all of W when coulomb takes over)"
+        ),
+        _PER_CONTACT,
+    )
+
+
 #: Every method, by name (explicit registration: add a method here and nowhere else).
 METHODS: Mapping[str, Method] = MappingProxyType(
     {
@@ -275,24 +295,7 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 "planar",
                 ("local", "global"),
                 solve_planar,
-                (
-                    _R0_LOCAL,
-                    _local_tol(1e-8),
-                    Option(
-                        "max_iter",
-                        int,
-                        MAX_ITER,
-                        f"budget of Gauss-Seidel sweeps (at most {SWEEPS}) and, after a "
-                        f"stall, of the coulomb method",
-                    ),
-                    Option(
-                        "check_psd",
-                        bool,
-                        True,
-                        "check W's contact blocks (all of W when coulomb takes over)",
-                    ),
-                    _PER_CONTACT,
-                ),
+                _sweeps_options(SWEEPS),
                 None,
                 "exact",
                 "2-D contacts: Gauss-Seidel with the exact planar local solver, then coulomb "
@@ -302,24 +305,7 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                 "spatial",
                 ("local", "global"),
                 solve_spatial,
-                (
-                    _R0_LOCAL,
-                    _local_tol(1e-8),
-                    Option(
-                        "max_iter",
-                        int,
-                        MAX_ITER,
-                        f"budget of Gauss-Seidel sweeps (at most {SPATIAL_SWEEPS}) and, after a "
-                        f"stall, of the coulomb method",
-                    ),
-                    Option(
-                        "check_psd",
-                        bool,
-                        True,
-                        "check W's contact blocks (all of W when coulomb takes over)",
-                    ),
-                    _PER_CONTACT,
-                ),
+                _sweeps_options(SPATIAL_SWEEPS),
                 None,
                 "exact",
                 "3-D contacts: Gauss-Seidel with a local solver by cases, then coulomb "
