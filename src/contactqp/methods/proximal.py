@@ -13,7 +13,7 @@ sequence of problems with the positive definite operator
 from ``r_k``, the last outer iterate; its solution ``x`` gives ``r_{k+1} = r_k + 1.5 (x - r_k)``
 (over-relaxed; Eckstein and Bertsekas 1992). At a fixed point the velocity is exactly
 ``W r + q``: the problem as given. Each inner problem is solved by a Newton run (the caller's
-runner, :class:`~contactqp.methods.coulomb._Newton`) from ``r_k`` to a tenth of the current
+runner, coulomb's ``_Newton``) from ``r_k`` to a tenth of the current
 outer error, and when that run fails, by a Levenberg-Marquardt run from its best point. The
 weight ``rho`` (relative to ``D``, from 1) adapts to the inner runs: times 0.3 when an inner
 problem is solved in at most 3 iterations, down to 1e-4 (so that ``W + rho D`` stays well
@@ -109,7 +109,7 @@ def proximal_point(
         only test of convergence and of the best point.
     newton : callable
         ``newton(W, q, mu, dim, measure)``: a runner of Newton iterations on the problem
-        ``(W, q, mu)`` (:class:`contactqp.methods.coulomb._Newton`), whose
+        ``(W, q, mu)`` (coulomb's ``_Newton``), whose
         ``run(r, tol, max_iter, adaptive) -> (r, error, iterations, reason)`` brings
         ``measure``'s error to ``tol`` and whose ``with_q(q, measure)`` is the same runner on
         another ``q`` (the factorisation's ordering kept).
