@@ -114,8 +114,9 @@ def solve(problem, method: str | None = None, **options):
     to ``coulomb``. A global problem is condensed by the structure of its ``M``
     (:func:`~contactqp.methods.global_route.condense`: block-diagonal ``M`` inverted exactly,
     small ones factored dense), and the answer certified on the global equations with the same
-    factorisation; a small one solved by ``coulomb`` goes through all of this in one compiled
-    call (:func:`~contactqp.methods.global_route.solve_compiled`). The methods, their kinds and
+    factorisation; a small one, with ``coulomb`` or no method named, goes through all of this
+    in one compiled call first (:func:`~contactqp.methods.global_route.solve_compiled`), before
+    the routes by size. The methods, their kinds and
     options: :mod:`the registry <contactqp.methods.registry>`, or ``contactqp methods``.
 
     Parameters
