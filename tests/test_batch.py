@@ -149,7 +149,7 @@ def test_dask_cluster_gives_the_serial_results(riveted, source, serial, tmp_path
         threads_per_worker=1,
         protocol="tcp",
         host="127.0.0.1",
-        dashboard_address=None,
+        dashboard_address=":0",  # a free port: no clash with another run on this machine
     ) as cluster:
         summary = run_batch(
             FasteningCase(riveted),

@@ -187,7 +187,7 @@ def test_a_dask_cluster_stores_the_numbers_of_one_process(blocks_file, blocks_st
         threads_per_worker=1,
         protocol="tcp",
         host="127.0.0.1",
-        dashboard_address=None,
+        dashboard_address=":0",  # a free port: no clash with another run on this machine
     ) as cluster:
         study = run_assembly_study(
             blocks_file, tmp_path, samples=SAMPLES, scheduler=cluster.scheduler_address
