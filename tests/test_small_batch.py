@@ -87,14 +87,15 @@ def test_closed_forms_of_one_contact():
     assert_matches_one_by_one(batch, result, tol=1e-12)
 
 
-def test_problems_newton_stops_short_on_take_the_sweeps():
+@pytest.mark.parametrize(("dim", "P"), [(3, 3000), (2, 20000)])
+def test_problems_newton_stops_short_on_take_the_sweeps(dim, P):
     # a wide draw of one-contact problems (ill-conditioned W, mu up to 1): some stall in the
-    # first Newton run; the compiled sweeps then solve them from their start, as alone
+    # first Newton run; the compiled sweeps of their dimension (spatial, planar) then solve them
+    # from their start, as alone
     rng = np.random.default_rng(0)
-    P = 3000
-    A = rng.standard_normal((P, 3, 3))
-    W = A @ A.transpose(0, 2, 1) + 0.5 * np.eye(3)
-    batch = LocalBatch(W, rng.standard_normal((P, 3)), rng.uniform(0, 1, (P, 1)), 3)
+    A = rng.standard_normal((P, dim, dim))
+    W = A @ A.transpose(0, 2, 1) + 0.5 * np.eye(dim)
+    batch = LocalBatch(W, rng.standard_normal((P, dim)), rng.uniform(0, 1, (P, 1)), dim)
     result = contactqp.solve(batch)
     if kernels.small_newton is not None:
         assert result.messages, "expected some problems beyond the first Newton run"
@@ -102,7 +103,7 @@ def test_problems_newton_stops_short_on_take_the_sweeps():
             assert message.startswith("newton ") and "(stopped short), then converged" in message
             assert result.iterations[p] > int(message.split()[1])  # Newton's, then the sweeps'
     chosen = sorted(result.messages)[:5] + [0, 1, 2]
-    sub = LocalBatch(W[chosen], batch.q[chosen], batch.mu[chosen], 3)
+    sub = LocalBatch(W[chosen], batch.q[chosen], batch.mu[chosen], dim)
     assert_matches_one_by_one(sub, contactqp.solve(sub), tol=1e-8)
     assert result.all_solved
 
