@@ -16,14 +16,16 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Protocol, TypeAlias, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, TypeAlias, runtime_checkable
 
 import numpy as np
-import scipy.sparse
 from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .model import MAX_MAGNITUDE, ReducedModel, real_array
+
+if TYPE_CHECKING:
+    import scipy.sparse
 
 __all__ = [
     "Constraints",
@@ -358,6 +360,8 @@ def assemble_constraints(
         meet several obstacles along different directions (a corner, or a slot between two
         walls with opposite normals).
     """
+    import scipy.sparse
+
     blocks = [
         block for obstacle in _obstacle_list(obstacles) for block in _row_blocks(obstacle, model)
     ]
@@ -541,6 +545,8 @@ def local_frames(model: ReducedModel, constraints: Constraints) -> LocalFrames:
         The contact nodes have different numbers of freedoms, or a row is not made of ``+-n``
         blocks.
     """
+    import scipy.sparse
+
     A = constraints.matrix
     counts = model.dofs_per_node[constraints.nodes]
     if np.any(counts != counts[0]):

@@ -25,7 +25,6 @@ loads, the closure of each fastener checked separately.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import InvalidInputError
 from .model import real_array, warm_start
@@ -39,6 +38,8 @@ class _Reduction:
     """The elimination of the fastener rows of ``W``: factor, coupling and Schur complement."""
 
     def __init__(self, W: np.ndarray, rows: np.ndarray, contacts: np.ndarray):
+        import scipy.linalg
+
         self.factor = scipy.linalg.cho_factor(W[np.ix_(rows, rows)])
         self.coupling = W[np.ix_(rows, contacts)]
         self.eliminated = scipy.linalg.cho_solve(self.factor, self.coupling)
@@ -131,6 +132,8 @@ class FastenedProblem:
     ) -> FastenedResult:
         """The certified :class:`~contactqp.core.result.FastenedResult` of contact-row forces
         ``forces`` (N, >= 0)."""
+        import scipy.linalg
+
         problem, rows, contacts = self.problem, self.fasteners, self.contacts
         dual = problem.dual()
         multipliers = np.empty(problem.n_constraints)

@@ -37,13 +37,11 @@ import copy
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse
 from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .model import ReducedModel, finite_array
-from .operators import Operator
+from .operators import Operator, is_sparse
 
 __all__ = ["Links", "LinkedModel", "ReducedOperator"]
 
@@ -71,7 +69,7 @@ class Links:
     reference: np.ndarray
 
     def __init__(self, directions: ArrayLike, compliance: ArrayLike, reference: ArrayLike):
-        if scipy.sparse.issparse(directions):
+        if is_sparse(directions):
             directions = directions.toarray()
         E = finite_array(directions, "link directions", 2)
         m = E.shape[1]
@@ -172,6 +170,8 @@ class LinkedModel:
 
     def solve_schur(self, rhs: ArrayLike) -> np.ndarray:
         """``S^{-1} rhs`` for ``rhs`` of shape (m,) or (m, p)."""
+        import scipy.linalg
+
         values = np.asarray(rhs, dtype=float)
         if self._factor is None:
             return np.zeros_like(values)
@@ -195,6 +195,8 @@ class LinkedModel:
     def reduced_operator(self, W: ArrayLike, coupling: ArrayLike) -> np.ndarray:
         """``W' = W - B S^{-1} B^T``: the contact operator ``W = G R G^T`` (symmetric) with
         the links."""
+        import scipy.linalg
+
         B = np.asarray(coupling, dtype=float)
         if self._factor is None:
             return np.array(W, dtype=float)
@@ -210,6 +212,8 @@ class LinkedModel:
         """``W'`` of :meth:`reduced_operator` scaled by its largest diagonal, as an operator
         that reads ``W`` (the contact operator of a larger set, ``rows`` the contacts' rows
         in it) only where asked: ``B = G R E`` on those rows."""
+        import scipy.linalg
+
         B = np.asarray(coupling, dtype=float)
         if self._factor is None:
             return ReducedOperator(W, rows, None)
@@ -304,6 +308,8 @@ class ReducedOperator(Operator):
 
 def _cholesky(S: np.ndarray) -> tuple[np.ndarray, bool]:
     """Cholesky factor of ``S``; refused when the links are not independent."""
+    import scipy.linalg
+
     scale = float(np.max(np.abs(np.diag(S)), initial=0.0))
     try:
         factor = scipy.linalg.cho_factor(S, lower=True, check_finite=False)

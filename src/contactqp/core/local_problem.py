@@ -24,16 +24,21 @@ import functools
 import math
 import operator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from .. import kernels
 from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .friction import FrictionLaw, apex_distance
 from .model import finite_array
-from .operators import PSD_SHIFT  # the shift accepted by check_positive_semidefinite
+from .operators import (
+    PSD_SHIFT,  # the shift accepted by check_positive_semidefinite
+    is_sparse,
+)
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 __all__ = [
     "AccuracyLimits",
@@ -81,12 +86,15 @@ def _as_matrix(name, value):
     mat: sp.csr_matrix | np.ndarray
     data: np.ndarray
     try:
-        if type(value) is sp.csr_matrix and value.dtype == np.float64:
-            mat, data = value, np.asarray(value.data)  # as stored: a copy costs a small solve
-        elif sp.issparse(value):
-            # scipy-stubs: issparse narrows only to SparseABC, and csr_matrix(x, dtype=d) is typed
-            # only for a d matching x's own scalar type; scipy converts any of its sparse types
-            mat = sp.csr_matrix(value, dtype=float)  # type: ignore[call-overload]
+        if is_sparse(value):
+            import scipy.sparse as sp
+
+            if type(value) is sp.csr_matrix and value.dtype == np.float64:
+                mat = value  # as stored: a copy costs a small solve
+            else:
+                # scipy-stubs: csr_matrix(x, dtype=d) is typed only for a d matching x's own
+                # scalar type; scipy converts any of its sparse types
+                mat = sp.csr_matrix(value, dtype=float)  # type: ignore[call-overload]
             data = np.asarray(mat.data)
         else:
             dense = np.asarray(value, dtype=float)
@@ -100,6 +108,13 @@ def _as_matrix(name, value):
     if not np.isfinite(data).all():
         raise InvalidInputError(f"{name} contains NaN or inf")
     return mat
+
+
+def _plain_csr(value) -> bool:
+    """True when the sparse ``value`` is a ``csr_matrix`` of float64 C-contiguous values."""
+    import scipy.sparse as sp
+
+    return type(value) is sp.csr_matrix and _plain_array(value.data, 1)
 
 
 def _plain_array(value, ndim: int) -> bool:
@@ -200,7 +215,7 @@ class LocalProblem:
             return False
         if isinstance(W, np.ndarray) and _plain_array(W, 2):
             values = W.reshape(-1)
-        elif type(W) is sp.csr_matrix and _plain_array(W.data, 1):
+        elif is_sparse(W) and _plain_csr(W):
             values = W.data
         else:
             return False
@@ -519,11 +534,13 @@ def _abs_product(A, x) -> np.ndarray:
     """``|A| |x|`` for a dense or sparse ``A``; a dense ``A`` by blocks of rows, so that no copy
     of a large ``W`` is made."""
     ax = np.abs(np.asarray(x, dtype=float)).ravel()
-    if sp.issparse(A):
+    if is_sparse(A):
         sparse: Any = A
         if sparse.nnz <= _SPARSE_BLOCK:  # scipy's |A|: a small copy, no new CSR matrix
             return np.asarray(abs(sparse) @ ax).ravel()
     if not isinstance(A, np.ndarray):
+        import scipy.sparse as sp
+
         return _abs_sparse_product(sp.csr_matrix(A), ax)  # no copy of a CSR matrix
     A = np.asarray(A)  # e.g. a numpy.matrix
     rows = max(1, (1 << 22) // max(1, A.shape[1]))  # blocks of at most 32 MB
@@ -539,6 +556,8 @@ def _abs_sparse_product(A: sp.csr_matrix, ax: np.ndarray) -> np.ndarray:
     The absolute values of a block go into one reused buffer (2 MB, which stays in cache) rather
     than into a copy of all of ``A``'s values.
     """
+    import scipy.sparse as sp
+
     indptr, entries = A.indptr, _SPARSE_BLOCK
     out = np.empty(A.shape[0])
     scratch = np.empty(min(entries, A.nnz))
@@ -668,7 +687,7 @@ def column_products(A, x, columns=None) -> tuple[np.ndarray, np.ndarray]:
     columns in compressed rows.
     """
     xv = np.asarray(x, dtype=float).ravel()
-    if sp.issparse(A):
+    if is_sparse(A):
         sparse: Any = A
         B = sparse if columns is None else sparse.tocsr()[:, columns]
         return np.asarray(B @ xv).ravel(), _abs_product(B, xv)
@@ -729,6 +748,7 @@ class _ScaledFactor:
     """
 
     def __init__(self, M):
+        import scipy.sparse as sp
         from scipy.sparse.linalg import splu
 
         ndof = M.shape[0]
@@ -833,14 +853,16 @@ class GlobalProblem:
         microsecond, scipy.sparse some tens: the certificate of a small problem cost 20 times
         its solve)."""
         M, H = self.M, self.H
-        if sp.issparse(M) and M.shape[0] * M.shape[1] <= DENSE_READ:
+        if is_sparse(M) and M.shape[0] * M.shape[1] <= DENSE_READ:
             M = M.toarray()
-        if sp.issparse(H) and H.shape[0] * H.shape[1] <= DENSE_READ:
+        if is_sparse(H) and H.shape[0] * H.shape[1] <= DENSE_READ:
             H = H.toarray()
         return M, H
 
     @functools.cached_property
     def _condensed(self) -> LocalProblem:
+        import scipy.sparse as sp  # the factorisation of M is SuperLU's
+
         Mm, Hm, fv, wv, muv, dim = self.M, self.H, self.f, self.w, self.mu, self.dim
         ndof, m = Mm.shape[0], Hm.shape[1]
         if ndof == 0:  # no freedoms: H is empty, nothing to condense
@@ -914,10 +936,13 @@ class GlobalProblem:
         error = natural_map_residual(local, rv, u)[1]
         scale = math.sqrt(max(local.q @ local.q, rv @ rv, u @ u)) or 1.0
         # rounding: the scaled unknown y = v / s is solved to ~cond * eps relative, u = H^T S y + w
-        scaled_h = sp.diags(s) @ H if sp.issparse(H) else s[:, None] * H
-        size_h = float(
-            np.sqrt((abs(scaled_h).power(2) if sp.issparse(H) else scaled_h**2).sum())
-        )  # Frobenius: >= the 2-norm
+        if is_sparse(H):
+            import scipy.sparse as sp
+
+            scaled_h = sp.diags(s) @ H
+            size_h = float(np.sqrt(abs(scaled_h).power(2).sum()))  # Frobenius: >= the 2-norm
+        else:
+            size_h = float(np.sqrt(((s[:, None] * H) ** 2).sum()))
         size_y = float(np.linalg.norm(v / s)) if v.size else 0.0
         transported = float(np.linalg.norm(_abs_product(H.T, v))) + float(np.linalg.norm(w))
         rounding = (condition * _EPS * size_h * size_y + _EPS * transported) / scale
@@ -1267,8 +1292,6 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
     NotPositiveDefiniteError
         With the failed test in the message.
     """
-    import scipy.linalg
-
     S = 0.5 * (W + W.T)
     if not isinstance(S, np.ndarray) and better_dense(S):
         S = S.toarray()
@@ -1278,6 +1301,7 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
         return
     s = 1.0 / np.sqrt(diag[keep])
     if not isinstance(S, np.ndarray):
+        import scipy.sparse as sp
         from scipy.sparse.linalg import splu
 
         Sk = sp.csc_matrix(S)[keep][:, keep]
@@ -1294,6 +1318,8 @@ def check_positive_semidefinite(W, name: str = "W") -> None:
         except RuntimeError:  # exactly singular
             ok = False
     else:
+        import scipy.linalg
+
         scaled = s[:, None] * S[np.ix_(keep, keep)] * s[None, :] + PSD_SHIFT * np.eye(keep.size)
         try:
             scipy.linalg.cholesky(scaled, check_finite=False)

@@ -14,7 +14,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError, SymmetrizedWarning
@@ -291,6 +290,8 @@ def _tile_checks(
 
 def _smallest_eigenvalue(array: np.ndarray) -> float:
     """The smallest eigenvalue (for an error message: the matrix is refused already)."""
+    import scipy.linalg
+
     return float(scipy.linalg.eigvalsh(array, subset_by_index=[0, 0], check_finite=False)[0])
 
 
@@ -305,6 +306,8 @@ def cholesky_factor(array: np.ndarray, name: str) -> np.ndarray:
     InvalidInputError
         A pivot at or below ``1e-14`` times the largest (singular to working precision).
     """
+    import scipy.linalg
+
     try:
         factor = scipy.linalg.cholesky(array, lower=True, check_finite=False)
     except np.linalg.LinAlgError as exc:
@@ -498,6 +501,8 @@ class ReducedModel:
 
     def _inverse(self) -> np.ndarray:
         """The inverse of the given matrix, from its Cholesky factor."""
+        import scipy.linalg
+
         return scipy.linalg.cho_solve(self._cholesky(), np.eye(self.n_freedoms), check_finite=False)
 
     @property
@@ -527,6 +532,8 @@ class ReducedModel:
         values = np.asarray(loads, dtype=float)
         if self._flexibility is not None:
             return self._flexibility @ values
+        import scipy.linalg
+
         return scipy.linalg.cho_solve(self._cholesky(), values, check_finite=False)
 
     def forces(self, displacements: ArrayLike) -> np.ndarray:
@@ -534,6 +541,8 @@ class ReducedModel:
         values = np.asarray(displacements, dtype=float)
         if self._stiffness is not None:
             return self._stiffness @ values
+        import scipy.linalg
+
         return scipy.linalg.cho_solve(self._cholesky(), values, check_finite=False)
 
     def __repr__(self) -> str:

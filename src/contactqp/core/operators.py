@@ -25,17 +25,21 @@ which such an operator refuses with :class:`~contactqp.errors.UnsupportedProblem
 
 from __future__ import annotations
 
+import functools
+import sys
 from abc import ABC, abstractmethod
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse as sp
-from scipy.linalg.blas import dsymv as _symv
 
 from ..errors import InvalidInputError, NotPositiveDefiniteError, UnsupportedProblemError
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+    from typing_extensions import TypeIs
 
 __all__ = [
     "BlockFactor",
@@ -46,6 +50,7 @@ __all__ = [
     "SparseOperator",
     "SymmetricDenseOperator",
     "as_operator",
+    "is_sparse",
     "symmetric_product",
 ]
 
@@ -58,6 +63,17 @@ PSD_SHIFT = 1e-5
 #: block be factored.
 SINGULAR_SHIFT = 1e-11
 _FACTORS_KEPT = 2
+
+
+def is_sparse(value: object) -> TypeIs[sp.sparray | sp.spmatrix]:
+    """``scipy.sparse.issparse(value)``, without importing scipy.sparse.
+
+    No value is a sparse matrix or array before :mod:`scipy.sparse` is imported, so the dense
+    path never pays for that import (a third of a second); scipy.sparse and scipy.linalg are
+    imported by the functions that use them.
+    """
+    sparse = sys.modules.get("scipy.sparse")
+    return sparse is not None and sparse.issparse(value)
 
 
 @dataclass(frozen=True)
@@ -89,6 +105,8 @@ class BlockFactor:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve the (shifted) block's system for ``rhs`` (shape (k,) or (k, j))."""
+        import scipy.linalg
+
         return scipy.linalg.cho_solve((self.lower.T, False), rhs, check_finite=False)
 
 
@@ -113,6 +131,8 @@ def _cholesky(block: np.ndarray) -> np.ndarray:
     """Lower Cholesky factor of the lower triangle of ``block``, in place when ``block`` is
     C-contiguous: ``block.T`` is then the same memory in LAPACK's column order, whose upper
     triangle holds ``block``'s lower one, and its upper factor ``U`` is ``L^T`` (no copy)."""
+    import scipy.linalg
+
     return scipy.linalg.cholesky(block.T, lower=False, overwrite_a=True, check_finite=False).T
 
 
@@ -386,10 +406,18 @@ def symmetric_product(matrix: np.ndarray, x) -> np.ndarray:
     x = np.asarray(x)
     if x.ndim == 1 and x.dtype == np.float64 and matrix.dtype == np.float64 and matrix.ndim == 2:
         if matrix.flags.c_contiguous:  # its transpose is the same matrix in column order
-            return _symv(1.0, matrix.T, x)
+            return _symv()(1.0, matrix.T, x)
         if matrix.flags.f_contiguous:
-            return _symv(1.0, matrix, x)
+            return _symv()(1.0, matrix, x)
     return matrix @ x
+
+
+@functools.cache
+def _symv() -> Callable[..., np.ndarray]:
+    """BLAS ``dsymv`` (importing scipy.linalg on first use)."""
+    from scipy.linalg.blas import dsymv
+
+    return dsymv
 
 
 class SparseOperator(Operator):
@@ -428,7 +456,7 @@ def as_operator(W) -> Operator:
     if isinstance(W, Operator):
         return W
     operator: Operator
-    if sp.issparse(W):
+    if is_sparse(W):
         operator = SparseOperator(W)
     else:
         try:

@@ -33,9 +33,9 @@ import copy
 import dataclasses
 import functools
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse
 
 from ..errors import ContactWarning, InvalidInputError
 from .certificate import CERTIFICATE_TOL, certify, certify_friction, contact_scales
@@ -46,6 +46,9 @@ from .model import MAX_MAGNITUDE, ReducedModel, finite_array, positive_tolerance
 from .operators import symmetric_product
 from .result import ContactResult, FrictionalResult, verdict
 from .status import ContactStatus
+
+if TYPE_CHECKING:
+    import scipy.sparse
 
 __all__ = ["ContactProblem", "DualForm", "FrictionalProblem", "FrictionStep", "LocalForm"]
 

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from ..core.local_problem import DENSE_SIZE, GlobalProblem, LocalProblem
@@ -37,6 +37,9 @@ from ..errors import (
 )
 from ..optional import require
 from .siconos import read_dat
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 __all__ = [
     "read_problem",
@@ -125,6 +128,8 @@ def _text(group, name):
 
 def _read_matrix(group):
     """Read a CSparse-style matrix group into a csr_matrix."""
+    import scipy.sparse as sp
+
     m, n, nz = _int(group, "m"), _int(group, "n"), _int(group, "nz")
     where = group.name
     if m < 0 or n < 0:
@@ -332,6 +337,8 @@ def write_problem(path: str | os.PathLike[str], problem: LocalProblem) -> None:
             f"{path}: FCLIB has no field for cohesion; the problem's Mohr-Coulomb cohesion "
             f"would be lost"
         )
+    import scipy.sparse as sp
+
     h5py = _h5py()
     W = sp.csr_matrix(problem.W, copy=True)
     W.sort_indices()

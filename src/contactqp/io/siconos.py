@@ -41,7 +41,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.local_problem import GlobalProblem, LocalProblem
 from ..errors import ContactError, FileFormatError, FileLayoutError
@@ -189,6 +188,8 @@ def _read_dense(tk, rows, cols, what):
 
 
 def _read_sbm(tk, rows, cols, what):
+    import scipy.sparse as sp
+
     nbblocks = tk.int(f"{what} SBM number of blocks")
     if nbblocks == 0:
         return sp.csr_matrix((rows, cols))
@@ -247,6 +248,8 @@ def _read_sbm(tk, rows, cols, what):
 
 
 def _read_cs_dump(tk, rows, cols, what):
+    import scipy.sparse as sp
+
     origin = tk.int(f"{what} sparse origin code")
     if origin not in (1, 2, 3):
         raise FileLayoutError(f"{what}: unknown sparse origin code {origin} (expected 1, 2 or 3)")

@@ -61,8 +61,6 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from .. import kernels
 from ..core.local_problem import (
@@ -75,7 +73,7 @@ from ..core.local_problem import (
     natural_map_residual,
 )
 from ..core.model import iteration_cap, positive_tolerance, warm_start
-from ..core.operators import Operator
+from ..core.operators import Operator, is_sparse
 from ..errors import InvalidInputError
 from .local_global import certified_result, finish
 from .pgs import GaussSeidel
@@ -147,7 +145,7 @@ class _Newton:
     def __init__(self, W, q, mu, dim, measure):
         self.W, self.q, self.mu, self.d = W, q, mu, dim
         self.nc = mu.shape[0]
-        self.sparse = sp.issparse(W)
+        self.sparse = is_sparse(W)
         diag = np.asarray(W.diagonal(), dtype=float).reshape(self.nc, dim).mean(axis=1)
         self.scale = np.where(diag > 0, diag, 1.0)  # D: per-contact diagonal scale of W
         self.rho = 1.0 / self.scale
@@ -164,6 +162,9 @@ class _Newton:
         The unknowns are renumbered once by SuperLU's minimum-degree ordering of that pattern,
         so that each step's factorisation keeps the natural order (no new ordering per step).
         """
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
         nc, d, m = self.nc, self.d, self.W.shape[0]
         coo = sp.coo_matrix(self.W)
         block = np.arange(nc).repeat(d * d)
@@ -254,6 +255,9 @@ class _Newton:
 
     def _sparse_solve(self, A, B, kept, rhs, step) -> bool:
         """The kept contacts' rows of the step by SuperLU on their block; False if singular."""
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
         kept_unknowns = np.repeat(kept, self.d)[self.order]  # in the factorisation's order
         renumber = np.cumsum(kept_unknowns, dtype=np.int64) - 1
         renumber[~kept_unknowns] = -1
@@ -565,7 +569,7 @@ def _working_W(problem: LocalProblem, check_psd: bool):
     :func:`~contactqp.core.local_problem.better_dense` prefers), checked semidefinite once
     per problem and its ``with_q`` twins when ``check_psd``."""
     W = problem.W  # a float ndarray or CSR, as validated
-    if sp.issparse(W) and better_dense(W):
+    if is_sparse(W) and better_dense(W):
         W = W.toarray()  # once, for the PSD check, the Newton steps and Gauss-Seidel
     if check_psd:
         problem.check_semidefinite()

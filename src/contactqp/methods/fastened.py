@@ -11,7 +11,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import scipy.linalg
 
 from ..core.fastened import FastenedProblem
 from ..core.model import positive_tolerance
@@ -103,6 +102,7 @@ def solve_fastened_box_qp(
 
 def solve_nnls(problem: FastenedProblem) -> FastenedResult:
     """:func:`scipy.optimize.nnls` on ``min ||L^T x - L^-1 q||`` with ``S = L L^T`` (cold)."""
+    import scipy.linalg
     from scipy.optimize import nnls
 
     start = time.perf_counter()

@@ -25,7 +25,6 @@ from __future__ import annotations
 from collections import OrderedDict
 
 import numpy as np
-import scipy.linalg
 
 from ..core.operators import BlockFactor, Operator, as_operator
 
@@ -35,14 +34,20 @@ _PLANS_KEPT = 6
 
 
 def _cholesky(block: np.ndarray) -> np.ndarray:
+    import scipy.linalg
+
     return scipy.linalg.cholesky(block, lower=True, overwrite_a=True, check_finite=False)
 
 
 def _forward(L, rhs):
+    import scipy.linalg
+
     return scipy.linalg.solve_triangular(L, rhs, lower=True, check_finite=False)
 
 
 def _backward(L, rhs):
+    import scipy.linalg
+
     return scipy.linalg.solve_triangular(L, rhs, lower=True, trans="T", check_finite=False)
 
 
@@ -81,6 +86,8 @@ class _Plan:
         self.size = L.shape[0] + (0 if C is None else C.shape[1])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
+        import scipy.linalg
+
         n_base = self.L.shape[0]
         extended = np.zeros(self.size)
         extended[self.positions] = rhs

@@ -40,11 +40,9 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse as sp
 
 from .. import kernels
 from ..core.local_problem import (
@@ -66,6 +64,9 @@ from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
 from .coulomb import MAX_ITER, RUN_ITERATIONS
 from .local_global import compiled_global_result
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 __all__ = [
     "BLOCK_MAX",
@@ -178,6 +179,8 @@ class BlockDiagonalMass(MassFactor):
 
     def matrix(self) -> sp.csr_matrix:
         """``M^{-1}``, sparse (block diagonal)."""
+        import scipy.sparse as sp
+
         n_blocks, size = self.inverse.shape[0], self.size
         if size == 1:
             return sp.csr_matrix(sp.diags(self.inverse.reshape(-1)))
@@ -216,6 +219,8 @@ def _diagonal_blocks(M, size: int) -> np.ndarray:
         shaped = M.reshape(n_blocks, size, n_blocks, size)
         index = np.arange(n_blocks)
         return np.array(shaped[index, :, index, :])
+    import scipy.sparse as sp
+
     bsr = sp.bsr_matrix(M, blocksize=(size, size))
     bsr.sort_indices()
     blocks = np.zeros((n_blocks, size, size))
@@ -240,6 +245,8 @@ class DenseMass(MassFactor):
     """
 
     def __init__(self, M: Any):
+        import scipy.linalg
+
         ndof = M.shape[0]
         dense = np.array(M if isinstance(M, np.ndarray) else M.toarray(), dtype=np.float64)
         self.s = _scaling(np.diagonal(dense).copy())
@@ -267,6 +274,8 @@ class DenseMass(MassFactor):
     @functools.cached_property
     def condition(self) -> float:  # type: ignore[override]
         """1-norm condition number of ``S M S``, estimated by LAPACK from the factor."""
+        import scipy.linalg
+
         if self.cholesky is not None:
             rcond, _ = scipy.linalg.lapack.dpocon(self.cholesky[0], self._norm)
         else:
@@ -275,6 +284,8 @@ class DenseMass(MassFactor):
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """``M^{-1} rhs = S (S M S)^{-1} S rhs``."""
+        import scipy.linalg
+
         sc = self.s[:, None] if rhs.ndim == 2 else self.s
         if self.cholesky is not None:
             return sc * scipy.linalg.cho_solve(self.cholesky, sc * rhs, check_finite=False)
@@ -304,6 +315,8 @@ def block_size(M) -> int | None:
     if isinstance(M, np.ndarray):
         rows, cols = np.nonzero(M)
     else:
+        import scipy.sparse as sp
+
         csr: Any = sp.csr_matrix(M)
         keep = csr.data != 0
         rows = np.repeat(np.arange(ndof), np.diff(csr.indptr))[keep]
@@ -385,8 +398,12 @@ def condense(problem: GlobalProblem) -> Condensed:
         if not isinstance(H, np.ndarray) and not (
             m <= DENSE_SIZE or np.count_nonzero(W) >= DENSE_FILL * m * m
         ):  # CSR where the problem's condensation gives CSR that the local methods keep
+            import scipy.sparse as sp
+
             W = sp.csr_matrix(W)
     else:  # a block-diagonal M (a general one was condensed by the problem)
+        import scipy.sparse as sp
+
         assert isinstance(factor, BlockDiagonalMass)
         Hc: Any = sp.csr_matrix(H)
         W = sp.csr_matrix(Hc.T @ (factor.matrix() @ Hc))
@@ -406,6 +423,8 @@ def condense(problem: GlobalProblem) -> Condensed:
 def _csr_arrays(A) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(indptr, indices, data)`` of ``A`` in compressed rows (scipy's int32 or int64
     indices, as stored)."""
+    import scipy.sparse as sp
+
     csr: Any = A if sp.issparse(A) else sp.csr_matrix(A)
     return csr.indptr, csr.indices, csr.data
 

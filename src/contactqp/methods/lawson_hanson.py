@@ -5,8 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.linalg.lapack
 
 __all__ = ["NonnegativeQPSolution", "solve_nonnegative_qp"]
 
@@ -50,6 +48,8 @@ def solve_nonnegative_qp(S, q, x0=None, tol: float = 1e-10, max_iter: int | None
 
     References: C. L. Lawson, R. J. Hanson, Solving Least Squares Problems, ch. 23 (1974).
     """
+    import scipy.linalg
+
     if max_iter is None:
         max_iter = 3 * len(q)
     x = np.zeros(len(q))

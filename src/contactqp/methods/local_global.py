@@ -21,7 +21,6 @@ import time
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.certificate import LocalCertificate
 from ..core.local_problem import (
@@ -38,7 +37,7 @@ from ..core.local_problem import (
     natural_map_residual,
 )
 from ..core.model import warm_start
-from ..core.operators import SymmetricDenseOperator, as_operator
+from ..core.operators import SymmetricDenseOperator, as_operator, is_sparse
 from ..core.result import NOT_CONVERGED, SUCCESS, LocalResult
 from ..errors import InvalidInputError, NotPositiveDefiniteError
 from .active_set import cold_start
@@ -281,7 +280,7 @@ def solve_frictionless(
         raise InvalidInputError("the frictionless route needs mu = 0 on every contact")
     start = time.perf_counter()
     normal = np.arange(problem.n_contacts) * problem.dim
-    dense = not sp.issparse(problem.W)
+    dense = not is_sparse(problem.W)
     if dense:
         W_dense = np.asarray(problem.W)
         W_nn, symmetric, row_sums = _dense_normal_block(W_dense, problem.dim)

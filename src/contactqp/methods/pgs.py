@@ -17,7 +17,6 @@ and works on the FCLIB form (no cohesion: the caller translates a cohesive probl
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.local_problem import project_rows
 from ..core.operators import as_operator
@@ -27,6 +26,8 @@ __all__ = ["GaussSeidel"]
 
 def _block_graph(W, nc, d):
     """CSR adjacency (nc x nc) of the contacts whose blocks ``W_ij`` are nonzero."""
+    import scipy.sparse as sp  # the graph is CSR, W dense or not
+
     if isinstance(W, np.ndarray):
         pattern = sp.csr_matrix(np.any(W.reshape(nc, d, nc, d) != 0, axis=(1, 3)))
     else:
@@ -68,6 +69,8 @@ class GaussSeidel:
     """
 
     def __init__(self, W, q, mu, dim, local_iterations: int = 50):
+        import scipy.sparse as sp
+
         operator = as_operator(W)
         W = operator.matrix  # the colouring and the row blocks are built on the stored entries
         nc = mu.shape[0]

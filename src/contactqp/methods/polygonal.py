@@ -34,8 +34,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from ..core.friction import polygon_normals
 from ..core.local_problem import LocalProblem
@@ -57,6 +55,8 @@ class _PolygonalTresca:
     """Tresca problem with polygonal discs as a qpsolvers problem (scaled like the SOCP)."""
 
     def __init__(self, data: FixedPointData, facets: int, backend: str, options: dict):
+        import scipy.sparse as sp
+
         self.qpsolvers = installed_backend(backend, "the polygonal cone")
         self.backend = backend
         self.options = {**backend_options(backend), **options}
@@ -74,6 +74,8 @@ class _PolygonalTresca:
         self.inradius = np.cos(np.pi / facets)
 
     def __call__(self, q, s, f):
+        import scipy.sparse as sp
+
         d, nc = self.d, self.nc
         keep, sliding, normal, tangent = free_unknowns(s, d)
         bound = s[sliding] / f
@@ -147,6 +149,9 @@ def _polish_active_set(P, c, G, h, normal, x):
     The refined point is kept only if it is feasible and its multipliers are >= 0 (the active
     set was right); otherwise ``x`` is returned.
     """
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import splu
+
     G = sp.csr_matrix(G)
     scale = max(
         float(np.max(np.abs(x), initial=0.0)),

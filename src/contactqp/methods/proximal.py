@@ -53,9 +53,9 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.local_problem import cone_residual
+from ..core.operators import is_sparse
 
 __all__ = ["proximal_point", "RHO_START", "RHO_MIN", "RHO_MAX", "INNER_ITERATIONS"]
 
@@ -71,7 +71,9 @@ RELAX = 1.5  # over-relaxation of the outer step (Eckstein and Bertsekas 1992)
 
 def _regularised(W, weights: np.ndarray):  # -> the type of W
     """``W + diag(weights)``, dense or sparse as ``W``."""
-    if sp.issparse(W):
+    if is_sparse(W):
+        import scipy.sparse as sp
+
         return sp.csr_matrix(W + sp.diags(weights))  # type: ignore[operator]
     out = np.array(W, dtype=float, copy=True)
     out[np.diag_indices_from(out)] += weights

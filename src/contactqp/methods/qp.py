@@ -10,7 +10,6 @@ import warnings
 from contextlib import contextmanager
 
 import numpy as np
-import scipy.sparse
 
 from ..errors import InvalidInputError, SolverError
 from ..optional import require, require_backend
@@ -129,6 +128,8 @@ def solve_qp(problem, *, backend: str = DEFAULT_BACKEND, **options):
     SolverError
         The backend raised, or returned no point or a non-finite one.
     """
+    import scipy.sparse
+
     qpsolvers = installed_backend(backend)
     start = time.perf_counter()
     # scaled unknowns U = s_u V and multipliers lambda = s_f z keep the backend's tolerances
@@ -186,6 +187,8 @@ def refused_setting(backend: str, key: str, value) -> str | None:
     backend raises or prints (from C code), or a warning naming ``key`` (piqp warns of unknown
     names only when verbose).
     """
+    import scipy.sparse
+
     qpsolvers = _qpsolvers()
     sparse = backend in qpsolvers.sparse_solvers
     one = scipy.sparse.csc_matrix(np.ones((1, 1))) if sparse else np.ones((1, 1))

@@ -31,11 +31,10 @@ import functools
 import time
 
 import numpy as np
-import scipy.sparse as sp
 
 from .. import kernels
 from ..core.local_problem import LocalProblem, check_positive_semidefinite
-from ..core.operators import PSD_SHIFT
+from ..core.operators import PSD_SHIFT, is_sparse
 from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
 from .coulomb import MAX_ITER, solve_coulomb
@@ -58,7 +57,7 @@ def _bad_block(contact: int, problem: LocalProblem) -> None:
     message of :func:`~contactqp.core.local_problem.check_positive_semidefinite` on it."""
     rows = slice(3 * contact, 3 * contact + 3)
     block = problem.W[rows, rows]
-    block = np.asarray(block.toarray() if sp.issparse(block) else block)  # duplicates summed
+    block = np.asarray(block.toarray() if is_sparse(block) else block)  # duplicates summed
     name = f"W's diagonal block of contact {contact}"
     check_positive_semidefinite(block, name)  # raises, saying what fails
     raise NotPositiveDefiniteError(  # a block at the edge of the test, which the kernel failed

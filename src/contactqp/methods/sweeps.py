@@ -19,7 +19,6 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.local_problem import (
     CONTACT_FLOOR,
@@ -49,6 +48,8 @@ def kernel_arrays(
     (:func:`~contactqp.kernels.planar_gauss_seidel`: int64; the solve kernels: intp)."""
     if isinstance(W, np.ndarray):
         return np.ascontiguousarray(W, dtype=float), _NO_INDEX, _NO_INDEX, _NO_DATA
+    import scipy.sparse as sp
+
     csr = sp.csr_matrix(W)
     return (
         _NO_ROWS,

@@ -65,7 +65,6 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse.linalg import LinearOperator, eigsh
 
 from ..core.model import iteration_cap, positive_tolerance, true_or_false, warm_start
 from ..core.sliding_surface import SlidingSurfaceProblem, SlidingSurfaceResult
@@ -167,6 +166,8 @@ def _projected_slip(t: np.ndarray, w: np.ndarray, bound: np.ndarray, on: np.ndar
 def _lipschitz(apply, cells: np.ndarray) -> tuple[float, int]:
     """Largest eigenvalue of ``W_TT`` on the ``cells`` in contact (times 1.02), and the
     products it took."""
+    from scipy.sparse.linalg import LinearOperator, eigsh
+
     k = 2 * cells.size
     count = [0]
 

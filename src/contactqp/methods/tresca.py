@@ -38,10 +38,9 @@ from __future__ import annotations
 
 import time
 import warnings
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
 from ..core.local_problem import LocalProblem, natural_map_error
 from ..core.model import iteration_cap, positive_tolerance, warm_start
@@ -50,6 +49,9 @@ from ..core.result import LocalResult
 from ..errors import InvalidInputError, SolverError
 from ..optional import require
 from .local_global import local_result
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 __all__ = ["solve_tresca_fixed_point"]
 
@@ -72,7 +74,7 @@ def check_fixed_point_arguments(problem, tol, max_iter, r0):
     return warm_start(r0, problem.dim * problem.n_contacts)
 
 
-_Matrix = np.ndarray | sp.csr_matrix | sp.csr_array
+_Matrix: TypeAlias = "np.ndarray | sp.csr_matrix | sp.csr_array"
 
 
 def _split_skew(W: _Matrix) -> tuple[_Matrix, _Matrix | None]:
@@ -264,6 +266,8 @@ def free_unknowns(s, d):
 
 def _project(z, s, d):
     """Projection on ``{x_N >= 0, ||x_T|| <= s}`` per contact and its (generalised) Jacobian."""
+    import scipy.sparse as sp
+
     Z = z.reshape(-1, d)
     nc = Z.shape[0]
     norm = np.linalg.norm(Z[:, 1:], axis=1)
@@ -298,6 +302,9 @@ def polish(W, c, s, x, d, steps: int = 6):
     d : int
         2 or 3.
     """
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import MatrixRankWarning, spsolve
+
     m = x.size
     dense = not sp.issparse(W)
 
@@ -338,6 +345,8 @@ class _ClarabelTresca:
     """
 
     def __init__(self, data: FixedPointData):
+        import scipy.sparse as sp
+
         self._clarabel = require("clarabel", "the Tresca fixed point", "qp")
         self.w = data.w
         self.W = data.W_sym / self.w  # scaled, full (for the polish)
@@ -351,6 +360,8 @@ class _ClarabelTresca:
         self.settings = settings
 
     def __call__(self, q, s, f):
+        import scipy.sparse as sp
+
         clarabel = self._clarabel
         d, nc = self.d, self.nc
         m = d * nc
