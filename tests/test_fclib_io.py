@@ -446,6 +446,41 @@ def test_local_problem_validation(args, match):
     assert "\n" not in str(info.value)
 
 
+def _global_fields(**changes):
+    """A valid global problem's fields as stored (float64, C-contiguous, H in CSR), with
+    ``changes``: the compiled one-pass checks see them first."""
+    fields = {
+        "M": np.eye(3),
+        "H": sp.csr_matrix(np.eye(3, 2)),
+        "f": np.zeros(3),
+        "w": np.zeros(2),
+        "mu": np.array([0.1]),
+        "dim": 2,
+    }
+    return {**fields, **changes}
+
+
+@pytest.mark.parametrize(
+    "changes, match",
+    [
+        ({"M": np.diag([1.0, np.nan, 1.0])}, "M contains NaN"),
+        ({"H": sp.csr_matrix(np.array([[1.0, 0.0], [0.0, np.inf], [0.0, 0.0]]))}, "H contains"),
+        ({"f": np.array([0.0, np.nan, 0.0])}, "f contains NaN"),
+        ({"w": np.array([np.inf, 0.0])}, "w contains"),
+        ({"mu": np.array([-0.1])}, "mu must be >= 0"),
+        ({"w": np.zeros(3)}, "w must have length"),
+        ({"M": np.eye(2)}, "H must have shape"),
+    ],
+)
+def test_global_problem_validation(changes, match):
+    with pytest.raises(InvalidInputError, match=match) as info:
+        GlobalProblem(**_global_fields(**changes))
+    assert "\n" not in str(info.value)
+    fields = _global_fields()  # valid: kept as stored, not copied
+    problem = GlobalProblem(**fields)
+    assert all(getattr(problem, name) is fields[name] for name in ("M", "H", "f", "w", "mu"))
+
+
 def test_condense_singular_m():
     M = sp.csr_matrix(np.array([[1.0, 1.0], [1.0, 1.0]]))
     with pytest.raises(NotPositiveDefiniteError, match="singular"):

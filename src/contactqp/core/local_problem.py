@@ -117,6 +117,14 @@ def _plain_csr(value) -> bool:
     return type(value) is sp.csr_matrix and _plain_array(value.data, 1)
 
 
+def _stored_values(matrix) -> np.ndarray | None:
+    """The values of ``matrix`` as stored, one C-contiguous float64 vector (a dense matrix
+    raveled, a ``csr_matrix``'s ``data``) to be checked in place; None for any other kind."""
+    if isinstance(matrix, np.ndarray):
+        return matrix.reshape(-1) if _plain_array(matrix, 2) else None
+    return matrix.data if is_sparse(matrix) and _plain_csr(matrix) else None
+
+
 def _plain_array(value, ndim: int) -> bool:
     """True when ``value`` is a C-contiguous float64 ndarray of ``ndim`` dimensions."""
     return (
@@ -213,13 +221,8 @@ class LocalProblem:
             and W.shape == (q.shape[0], q.shape[0])
         ):
             return False
-        if isinstance(W, np.ndarray) and _plain_array(W, 2):
-            values = W.reshape(-1)
-        elif is_sparse(W) and _plain_csr(W):
-            values = W.data
-        else:
-            return False
-        if not kernels.local_arrays_valid(values, q, mu, cohesion):
+        values = _stored_values(W)
+        if values is None or not kernels.local_arrays_valid(values, q, mu, cohesion):
             return False
         if self.digits:
             object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
@@ -830,12 +833,47 @@ class GlobalProblem:
     digits: dict[str, int] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
+        if self._validated_in_one_pass():
+            return
         Mm, Hm, fv, wv, muv, dim = _check_global(self.M, self.H, self.f, self.w, self.mu, self.dim)
         for name, value in zip(
             ("M", "H", "f", "w", "mu", "dim"), (Mm, Hm, fv, wv, muv, dim), strict=True
         ):
             object.__setattr__(self, name, value)
         object.__setattr__(self, "digits", _check_digits(self.digits, ("M", "H", "f", "w")))
+
+    def _validated_in_one_pass(self) -> bool:
+        """True when the fields are already as stored (C-contiguous float64 arrays, ``M`` and
+        ``H`` dense or float64 ``csr_matrix``, an int ``dim``, a str ``title``) and pass the
+        checks of :func:`_check_global` by two compiled passes
+        (:func:`~contactqp.kernels.compiled.local_arrays_valid`); False otherwise or when a
+        check fails, and :func:`_check_global` then names what is wrong."""
+        M, H, f, w, mu, dim = self.M, self.H, self.f, self.w, self.mu, self.dim
+        if not (
+            kernels.local_arrays_valid is not None
+            and type(dim) is int
+            and (dim == 2 or dim == 3)
+            and type(self.title) is str
+            and type(self.digits) is dict
+            and _plain_array(f, 1)
+            and _plain_array(w, 1)
+            and _plain_array(mu, 1)
+            and w.shape[0] == dim * mu.shape[0]
+            and M.shape == (f.shape[0], f.shape[0])
+            and H.shape == (f.shape[0], w.shape[0])
+        ):
+            return False
+        M_values, H_values = _stored_values(M), _stored_values(H)
+        if not (
+            M_values is not None
+            and H_values is not None
+            and kernels.local_arrays_valid(M_values, f, mu, None)
+            and kernels.local_arrays_valid(H_values, w, mu, None)
+        ):
+            return False
+        if self.digits:
+            object.__setattr__(self, "digits", _check_digits(self.digits, ("M", "H", "f", "w")))
+        return True
 
     @property
     def n_contacts(self) -> int:
