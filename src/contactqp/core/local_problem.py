@@ -122,7 +122,10 @@ def _stored_values(matrix) -> np.ndarray | None:
     raveled, a ``csr_matrix``'s ``data``) to be checked in place; None for any other kind."""
     if isinstance(matrix, np.ndarray):
         return matrix.reshape(-1) if _plain_array(matrix, 2) else None
-    return matrix.data if is_sparse(matrix) and _plain_csr(matrix) else None
+    if not is_sparse(matrix):
+        return None
+    csr: Any = matrix  # scipy-stubs: issparse narrows only to the sparse base classes
+    return csr.data if _plain_csr(csr) else None
 
 
 def _plain_array(value, ndim: int) -> bool:
