@@ -23,6 +23,7 @@ import copy
 import functools
 import math
 import operator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -115,6 +116,15 @@ def _plain_csr(value) -> bool:
     import scipy.sparse as sp
 
     return type(value) is sp.csr_matrix and _plain_array(value.data, 1)
+
+
+def _one_pass_check(dim, title, digits) -> Callable[..., bool] | None:
+    """:func:`~contactqp.kernels.compiled.local_arrays_valid` when a problem's ``dim``,
+    ``title`` and ``digits`` are as stored (an int 2 or 3, a str, a dict), so that its arrays
+    may be checked in one compiled pass; None otherwise or without the compiled kernels."""
+    if type(dim) is int and (dim == 2 or dim == 3) and type(title) is str and type(digits) is dict:
+        return kernels.local_arrays_valid
+    return None
 
 
 def _stored_values(matrix) -> np.ndarray | None:
@@ -211,12 +221,9 @@ class LocalProblem:
         ``dim``, a str ``title``. False, with nothing stored, otherwise or when a check
         fails: :meth:`_validate` then names what is wrong."""
         W, q, mu, cohesion, dim = self.W, self.q, self.mu, self.cohesion, self.dim
+        check = _one_pass_check(dim, self.title, self.digits)
         if not (
-            kernels.local_arrays_valid is not None
-            and type(dim) is int
-            and (dim == 2 or dim == 3)
-            and type(self.title) is str
-            and type(self.digits) is dict
+            check is not None
             and _plain_array(q, 1)
             and _plain_array(mu, 1)
             and (cohesion is None or _plain_array(cohesion, 1))
@@ -225,7 +232,7 @@ class LocalProblem:
         ):
             return False
         values = _stored_values(W)
-        if values is None or not kernels.local_arrays_valid(values, q, mu, cohesion):
+        if values is None or not check(values, q, mu, cohesion):
             return False
         if self.digits:
             object.__setattr__(self, "digits", _check_digits(self.digits, ("W", "q")))
@@ -852,12 +859,9 @@ class GlobalProblem:
         (:func:`~contactqp.kernels.compiled.local_arrays_valid`); False otherwise or when a
         check fails, and :func:`_check_global` then names what is wrong."""
         M, H, f, w, mu, dim = self.M, self.H, self.f, self.w, self.mu, self.dim
+        check = _one_pass_check(dim, self.title, self.digits)
         if not (
-            kernels.local_arrays_valid is not None
-            and type(dim) is int
-            and (dim == 2 or dim == 3)
-            and type(self.title) is str
-            and type(self.digits) is dict
+            check is not None
             and _plain_array(f, 1)
             and _plain_array(w, 1)
             and _plain_array(mu, 1)
@@ -870,8 +874,8 @@ class GlobalProblem:
         if not (
             M_values is not None
             and H_values is not None
-            and kernels.local_arrays_valid(M_values, f, mu, None)
-            and kernels.local_arrays_valid(H_values, w, mu, None)
+            and check(M_values, f, mu, None)
+            and check(H_values, w, mu, None)
         ):
             return False
         if self.digits:
