@@ -206,3 +206,19 @@ def test_the_version_has_one_source():
     proc = run("--version")
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split()[-1] == contactqp.__version__ == version("contactqp")
+
+
+def test_fclib_table_written_to_a_pipe_keeps_every_figure():
+    # rich cuts a table to 80 columns off a terminal; the figures must survive in full
+    path = FCLIB / "FC3D_Example1.dat"
+    table = run("fclib", str(path))
+    data = run("fclib", str(path), "--json")
+    assert table.returncode == 0 and data.returncode == 0, table.stderr + data.stderr
+    row = json.loads(data.stdout)
+    assert "…" not in table.stdout
+    line = next(line for line in table.stdout.splitlines() if path.name in line)
+    cells = [cell.strip() for cell in line.strip("│ ").split("│")]
+    assert cells[0] == path.name and int(cells[2]) == row["contacts"] == 3
+    assert cells[3] == str(row["converged"])
+    assert abs(float(cells[4]) - row["error"]) <= 0.01 * row["error"]
+    assert sum(map(int, cells[7:10])) == 3

@@ -102,11 +102,18 @@ def _show_warning(
     warn(str(message) if own else f"{message} ({category.__name__})")
 
 
+#: Width of the tables written to a file or a pipe, where rich would otherwise cut them to 80
+#: columns and shorten numbers to an ellipsis (a table is only as wide as its contents).
+PIPED_WIDTH = 200
+
+
 def console() -> Console:
-    """A rich console on stdout (rich is imported only when a command prints a table)."""
+    """A rich console on stdout (rich is imported only when a command prints a table): the
+    terminal's width, or :data:`PIPED_WIDTH` when stdout is not a terminal."""
     from rich.console import Console
 
-    return Console()
+    terminal = Console()
+    return terminal if terminal.is_terminal else Console(width=PIPED_WIDTH)
 
 
 @contextmanager

@@ -158,7 +158,8 @@ def _fclib_table(rows: list[dict[str, Any]]) -> None:
 
     table = Table(title="FCLIB problems")
     for column in COLUMNS:
-        table.add_column(column, justify="left" if column == "file" else "right")
+        # a narrow terminal folds a value onto two lines rather than cut it to an ellipsis
+        table.add_column(column, justify="left" if column == "file" else "right", overflow="fold")
     for r in rows:
         table.add_row(
             Path(r["file"]).name,
