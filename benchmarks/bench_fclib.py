@@ -44,6 +44,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+import scipy.linalg  # the methods import these on first use: start-up, not a solve
+import scipy.sparse  # noqa: F401
 
 import contactqp as cq
 import contactqp.methods  # what cq.solve imports on its first use (start-up, not a solve)

@@ -33,6 +33,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+import scipy.linalg  # the methods import these on first use: start-up, not a solve
+import scipy.sparse  # noqa: F401
 
 import contactqp
 import contactqp.methods  # what contactqp.solve imports on its first use
