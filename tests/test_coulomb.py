@@ -34,7 +34,7 @@ from contactqp.core.status import ContactStatus
 from contactqp.errors import InvalidInputError, NotPositiveDefiniteError
 from contactqp.io import read_problem
 from contactqp.methods import coulomb
-from contactqp.methods.coulomb import alart_curnier, solve_coulomb
+from contactqp.methods.coulomb import ACTIVE_SET_MIN, alart_curnier, solve_coulomb
 from contactqp.methods.pgs import GaussSeidel
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "fclib"
@@ -401,6 +401,33 @@ def test_indefinite_w_is_refused(W, match):
     q[normal] = [-1.0, -1.0, -1.5]  # its solution (1, 2/3, 1/6) frees the indefinite block
     with pytest.raises(NotPositiveDefiniteError, match=f"W's normal block.*{match}"):
         solve(LocalProblem(frictionless, q, np.zeros(3), 3))
+
+
+def _one_indefinite_block(contact: int, nc: int = 100):
+    """A dense problem of ``nc`` uncoupled contacts (enough for the candidate sets), ``W`` the
+    identity but for an indefinite tangential block at ``contact``; contact 0 is pressed, the
+    others open."""
+    assert nc >= ACTIVE_SET_MIN
+    W = np.eye(3 * nc)
+    W[3 * contact + 1, 3 * contact + 2] = W[3 * contact + 2, 3 * contact + 1] = 2.0
+    q = np.zeros(3 * nc)
+    q[::3] = 1.0
+    q[0], q[1] = -1.0, 0.2
+    return LocalProblem(W, q, np.full(nc, 0.3), 3)
+
+
+def test_candidate_sets_check_the_blocks_they_solve_on():
+    # the indefinite block is the pressed contact's: the first candidate set holds it
+    with pytest.raises(NotPositiveDefiniteError, match="block of the candidate contacts"):
+        solve_coulomb(_one_indefinite_block(0))
+    # it is an open contact's, which no candidate set takes: the answer is certified on the
+    # whole problem, where only contact 0 carries force; all of W is indeed indefinite
+    problem = _one_indefinite_block(50)
+    result = solve_coulomb(problem)
+    assert result.success and natural_map_error(problem, result.forces) <= 1e-8
+    assert np.count_nonzero(result.forces.reshape(-1, 3).any(axis=1)) == 1
+    with pytest.raises(NotPositiveDefiniteError):
+        check_positive_semidefinite(problem.W)
 
 
 def test_frictionless_route_needs_only_a_semidefinite_normal_block():

@@ -68,6 +68,7 @@ from ..core.local_problem import (
     STATUS_RTOL,
     LocalProblem,
     better_dense,
+    check_positive_semidefinite,
     column_products,
     limits_from_norms,
     natural_map_residual,
@@ -430,7 +431,7 @@ def _entries(W, rows, cols) -> np.ndarray:
     return W[np.ix_(rows, cols)]
 
 
-def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
+def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False, check_psd=False):
     """Solve on the contacts that can close; ``(r, iterations, stages, index)``.
 
     The FCLIB problem ``(W, q, mu)`` (dense ``W``, or an :class:`Operator` read only on the
@@ -446,7 +447,8 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
     subproblem did not converge or ``C`` grew past half of the contacts: the caller then
     solves the whole problem from ``r``. ``look_ahead``: the open contacts that the warm
     start itself closes join ``C`` before its first solve (a warm start from a nearby
-    problem's answer then usually needs one solve, not two).
+    problem's answer then usually needs one solve, not two). ``check_psd``: each candidate
+    set's block of ``W`` is checked positive semidefinite before it is solved on.
     """
     nc = mu.shape[0]
     normal = np.arange(nc) * d
@@ -459,6 +461,8 @@ def _active_set(W, q, mu, d, r, tol, max_iter, per_contact, look_ahead=False):
         rows = (candidate[:, None] * d + np.arange(d)).reshape(-1)
         if candidate.size:
             sub_W, sub_q, sub_mu = _entries(W, rows, rows), q[rows], mu[candidate]
+            if check_psd:
+                check_positive_semidefinite(sub_W, "W (its block of the candidate contacts)")
             sub = LocalProblem(sub_W, sub_q, sub_mu, d)
 
             def measure(r_sub, u_sub, sub=sub):
@@ -657,7 +661,10 @@ def solve_coulomb(
         Newton iterations of proximal-point iterations. The default, 1800, is what every
         stage can spend.
     check_psd : bool
-        Check that ``W`` is positive semidefinite (one factorisation). Callers whose ``W`` is
+        Check that ``W`` is positive semidefinite (one factorisation). A dense problem of at
+        least :data:`ACTIVE_SET_MIN` contacts solved on candidate sets has the blocks of ``W``
+        it is solved on checked, all of ``W`` only when it is solved on the whole (the check
+        of all of ``W`` cost three times the solve at 2,304 contacts). Callers whose ``W`` is
         ``H R H^T`` of a validated model may skip it.
     per_contact : bool
         Converge to ``tol`` on every contact's own scale too
@@ -688,16 +695,23 @@ def solve_coulomb(
         if check_psd:
             problem.check_semidefinite()  # once per problem and its with_q twins
         return _solve_small(problem, small_W, r, tol, max_iter, per_contact, start)
-    W, d, mu = _working_W(problem, check_psd), problem.dim, problem.mu
+    W, d, mu = _working_W(problem, False), problem.dim, problem.mu
+    on_candidates = isinstance(W, np.ndarray) and problem.n_contacts >= ACTIVE_SET_MIN
+    if check_psd and not on_candidates:
+        problem.check_semidefinite()
     shift, q, measure = _apex_form(problem, W, per_contact)
     r = r + shift
     loaded = None  # the components outside which the answer is zero, when known
-    if isinstance(W, np.ndarray) and problem.n_contacts >= ACTIVE_SET_MIN:
-        r, iterations, stages, index = _active_set(W, q, mu, d, r, tol, max_iter, per_contact)
+    if on_candidates:  # each candidate set's block of W checked, all of W only if solved on
+        r, iterations, stages, index = _active_set(
+            W, q, mu, d, r, tol, max_iter, per_contact, check_psd=check_psd
+        )
         if index is not None:  # r is zero outside index, the apex shifts' normals aside
             shifted = np.flatnonzero(shift)
             loaded = np.union1d(index, shifted) if shifted.size else index
         else:  # the reduction gave up: the whole problem from where it stopped
+            if check_psd:
+                problem.check_semidefinite()
             r, k, more = _rounds(W, q, mu, d, r, tol, max_iter - iterations, measure)
             iterations += k
             stages += ["whole problem:"] + more

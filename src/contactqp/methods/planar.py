@@ -176,7 +176,8 @@ def solve_planar(
     check_psd : bool
         Check that each contact's diagonal block of ``W`` is positive semidefinite
         (:func:`check_contact_blocks`, what the sweeps rely on: a read of three diagonals);
-        when Newton takes over, it checks all of ``W`` (one factorisation). A full
+        when Newton takes over, it checks what it solves on (all of ``W``, or the blocks of
+        its candidate sets: see :func:`~contactqp.methods.coulomb.solve_coulomb`). A full
         factorisation would cost several times the sweeps on the files of small 2-D problems;
         the answer is judged by its natural-map error on ``W`` as given either way.
     per_contact : bool

@@ -196,7 +196,10 @@ def _sweeps_options(most: int) -> tuple[Option, ...]:
             "method",
         ),
         Option(
-            "check_psd", bool, True, "check W's contact blocks (all of W when coulomb takes over)"
+            "check_psd",
+            bool,
+            True,
+            "check W's contact blocks (and what coulomb solves on, when it takes over)",
         ),
         _PER_CONTACT,
     )
@@ -243,7 +246,12 @@ METHODS: Mapping[str, Method] = MappingProxyType(
                         MAX_ITER,
                         "budget of Newton iterations and Gauss-Seidel sweeps",
                     ),
-                    Option("check_psd", bool, True, "check that W is positive semidefinite"),
+                    Option(
+                        "check_psd",
+                        bool,
+                        True,
+                        "check that W (on candidate sets: their blocks) is positive semidefinite",
+                    ),
                     _PER_CONTACT,
                 ),
                 None,

@@ -93,7 +93,8 @@ def solve_spatial(
         Newton iterations and sweeps of :func:`~contactqp.methods.coulomb.solve_coulomb`.
     check_psd : bool
         Check that each contact's diagonal block of ``W`` is positive semidefinite (what the
-        sweeps rely on); when Newton takes over, it checks all of ``W`` (one factorisation).
+        sweeps rely on); when Newton takes over, it checks what it solves on (all of ``W``,
+        or the blocks of its candidate sets: see :func:`~contactqp.methods.coulomb.solve_coulomb`).
         The answer is judged by its natural-map error on ``W`` as given either way.
     per_contact : bool
         Converge to ``tol`` on every contact's own scale too.

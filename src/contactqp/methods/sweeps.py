@@ -183,7 +183,7 @@ def newton_after(
         r0=None if r0 is None else given,
         tol=tol,
         max_iter=max_iter - sweeps,
-        check_psd=check_psd,  # all of W: Newton factors it
+        check_psd=check_psd,  # what Newton factors: all of W or its candidate sets' blocks
         per_contact=per_contact,
     )
     return dataclasses.replace(
