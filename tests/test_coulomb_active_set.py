@@ -59,18 +59,30 @@ def test_candidate_set_from_a_warm_start_and_with_cohesion(monkeypatch):
 
 
 def test_with_q_keeps_w_and_the_semidefinite_check(monkeypatch):
-    problem = _plate_problem()
-    calls = []
+    sizes = []  # the rows of each matrix checked
     real = local_problem.check_positive_semidefinite
-    monkeypatch.setattr(
-        local_problem, "check_positive_semidefinite", lambda W: calls.append(1) or real(W)
-    )
+
+    def counting(W, *name):
+        sizes.append(W.shape[0])
+        return real(W, *name)
+
+    monkeypatch.setattr(local_problem, "check_positive_semidefinite", counting)
+    monkeypatch.setattr(coulomb, "check_positive_semidefinite", counting)
+    problem = _plate_problem()
+    m = problem.q.shape[0]
     twin = problem.with_q(-problem.q)
     assert twin.W is problem.W and twin.mu is problem.mu
     np.testing.assert_array_equal(twin.q, -problem.q)
-    for candidate in (problem, twin, problem.with_q(problem.q)):
+    twins = (problem, twin, problem.with_q(problem.q))
+    for candidate in twins:  # on candidate sets: their blocks only, never all of W
         assert solve(candidate, "coulomb").success
-    assert len(calls) == 1  # factored once for the problem and its twins
+    assert sizes and max(sizes) < m
+    sizes.clear()
+    with monkeypatch.context() as patch:  # on the whole problem: all of W, factored once
+        patch.setattr(coulomb, "ACTIVE_SET_MIN", 10**9)
+        for candidate in twins:
+            assert solve(candidate, "coulomb").success
+    assert sizes == [m]
     with pytest.raises(InvalidInputError, match="q must have length"):
         problem.with_q(np.zeros(5))
 
