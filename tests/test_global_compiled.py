@@ -51,6 +51,8 @@ GLOBAL_FILES = [
     "LMGC_GlobalFrictionContactProblem00046.hdf5",
 ]
 #: the files the compiled route takes (every M block diagonal or at most 400 freedoms, m <= 600)
+#: in one group of contacts, or in groups the general route also gives in one Newton run
+#: (Spheres-i099, a block-diagonal M and 137 groups of 1,068 unknowns in all, is below)
 EPS = np.finfo(float).eps
 
 #: the compiled route's tests need its kernel (the pure-numpy run's test does not)
@@ -389,18 +391,114 @@ def test_warm_start_and_per_contact(monkeypatch):
     assert "each contact's" in strict.message
 
 
+def counting_kernel(monkeypatch) -> list[int]:
+    """The codes the compiled kernel returns from now on (the kernel itself still runs)."""
+    codes: list[int] = []
+    real = kernels.global_small
+    assert real is not None
+
+    def counted(*args):
+        codes.append(real(*args))
+        return codes[-1]
+
+    monkeypatch.setattr(kernels, "global_small", counted)
+    return codes
+
+
 @needs_kernels
 def test_problems_it_does_not_take_go_to_the_general_route(monkeypatch):
-    """More contact unknowns than COMPILED_UNKNOWNS: the general route answers (the kernel is
-    not called)."""
-    problem = structured("diagonal", nc=6)
-    monkeypatch.setattr(global_route, "COMPILED_UNKNOWNS", 12)
-    called = []
-    real = kernels.global_small
-    monkeypatch.setattr(kernels, "global_small", lambda *a: called.append(1) or real(*a))
+    """A dense ``M`` with more contact unknowns than COMPILED_UNKNOWNS, and a block-diagonal
+    one whose group of coupled contacts has more than SMALL_UNKNOWNS: the kernel declines
+    (code 1, "not handled") and the general route answers, as it does without the kernel."""
+    not_handled = kernels.GLOBAL_CODES.index("not handled")
+    for kind, patched in (("symmetric", "COMPILED_UNKNOWNS"), ("diagonal", "SMALL_UNKNOWNS")):
+        problem = structured(kind, nc=6)
+        with monkeypatch.context() as patch:
+            patch.setattr(global_route, patched, 12)
+            codes = counting_kernel(patch)
+            result = cq.solve(fresh(problem), tol=1e-10)
+            assert codes == [not_handled], kind
+            if patched == "COMPILED_UNKNOWNS":
+                assert certify_compiled(fresh(problem), result.forces) is None
+        with monkeypatch.context() as patch:  # the default route without the kernel
+            patch.setattr(kernels, "global_small", None)
+            reference = cq.solve(fresh(problem), tol=1e-10)
+        assert result.success and reference.success
+        assert (result.method, result.iterations) == (reference.method, reference.iterations)
+        size = np.abs(reference.forces).max()
+        np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-12 * size)
+
+
+@needs_kernels
+def test_spheres_i099_is_solved_group_by_group(monkeypatch):
+    """Spheres-i099 (356 contacts, 1,068 unknowns, 2,000 rigid bodies: M diagonal of 12,000
+    freedoms) falls into 137 groups of at most 13 contacts: the compiled route takes it and
+    meets 1e-8 on the global equations, judged again by a fresh problem through its own sparse
+    LU; its reactions and statuses are the general route's (one Newton run on all of W) to
+    that accuracy. Its iteration count is the most any group's Newton run took, each to
+    ``tol / sqrt(3)`` of the group's own scale (10 here, against the general route's 9)."""
+    problem = read_any(FCLIB / "Spheres-i099-356-679.hdf5")
+    assert problem.H.shape[1] > global_route.COMPILED_UNKNOWNS
+    codes = counting_kernel(monkeypatch)
+    result = cq.solve(fresh(problem), tol=1e-8)
+    assert codes == [0]
+    assert "on 137 groups of contacts that W does not couple" in result.message
+    own = fresh(problem).certify(result.forces)
+    assert own.error <= 1e-8 and own.equilibrium <= 1e-8
+    assert abs(own.error - result.certificate.natural_map) <= 100 * own.limits.rounding + 1e-15
+    reference = general(problem, monkeypatch, tol=1e-8)
+    assert reference.success
+    size = np.abs(reference.forces).max()
+    np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-6 * size)
+    np.testing.assert_array_equal(result.contact_status, reference.contact_status)
+
+
+def rigid_bodies(n_pairs: int, seed: int = 0) -> GlobalProblem:
+    """``n_pairs`` pairs of rigid bodies (6x6 SPD mass blocks), three contacts between the
+    bodies of each pair: a block-diagonal ``M`` whose ``W`` couples only the contacts of one
+    pair, far more contact unknowns (9 per pair) than COMPILED_UNKNOWNS."""
+    rng = np.random.default_rng(seed)
+    blocks, H = [], sp.lil_matrix((12 * n_pairs, 9 * n_pairs))
+    for pair in range(n_pairs):
+        for _ in range(2):
+            B = rng.standard_normal((6, 6))
+            blocks.append(B @ B.T + 6 * np.eye(6))
+        H[12 * pair : 12 * pair + 12, 9 * pair : 9 * pair + 9] = rng.standard_normal((12, 9))
+    w = np.zeros(9 * n_pairs)
+    w[::3] = rng.uniform(-0.3, 0.1, 3 * n_pairs)  # most contacts pressed, some open
+    return GlobalProblem(
+        sp.csr_matrix(sp.block_diag(blocks)),
+        sp.csr_matrix(H),
+        rng.standard_normal(12 * n_pairs),
+        w,
+        rng.uniform(0.1, 1.0, 3 * n_pairs),
+        3,
+    )
+
+
+@needs_kernels
+def test_block_diagonal_m_beyond_compiled_unknowns_is_solved_by_groups(monkeypatch):
+    """With a block-diagonal ``M`` the compiled route takes any number of contact unknowns
+    whose groups are small (here 1,800 > COMPILED_UNKNOWNS, groups of 9): each group solved
+    apart, the whole certified, and judged again by a fresh problem through its own sparse LU;
+    the general route (the kernel switched off) finds the same reactions."""
+    problem = rigid_bodies(200)
+    assert problem.H.shape[1] > global_route.COMPILED_UNKNOWNS
+    codes = counting_kernel(monkeypatch)
     result = cq.solve(fresh(problem), tol=1e-10)
-    assert result.success and not called
-    assert certify_compiled(fresh(problem), result.forces) is None
+    assert codes == [0]
+    assert result.success and "on 200 groups of contacts that W does not couple" in result.message
+    own = fresh(problem).certify(result.forces)
+    assert own.error <= 1e-10 and own.equilibrium <= 1e-10
+    reference = general(problem, monkeypatch, tol=1e-10)
+    assert reference.success
+    np.testing.assert_allclose(
+        result.forces, reference.forces, rtol=0, atol=1e-8 * np.abs(reference.forces).max()
+    )
+    np.testing.assert_array_equal(result.contact_status, reference.contact_status)
+    compiled = certify_compiled(fresh(problem), result.forces)
+    assert compiled is not None
+    assert_same_certificate(compiled, python_certificate(problem, result.forces), problem)
 
 
 def test_pure_numpy_route_runs_without_the_kernel():

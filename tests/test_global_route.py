@@ -23,6 +23,7 @@ import pytest
 import scipy.sparse as sp
 
 import contactqp as cq
+from contactqp import kernels
 from contactqp.core.local_problem import GlobalProblem
 from contactqp.errors import NotPositiveDefiniteError
 from contactqp.io.fclib import read_any
@@ -159,7 +160,10 @@ def test_indefinite_mass_leaves_the_check_of_w_to_run():
 
 
 @pytest.mark.parametrize("name", GLOBAL_FILES)
-def test_shared_global_files_keep_their_newton_iterations_and_certificates(name):
+def test_shared_global_files_keep_their_newton_iterations_and_certificates(name, monkeypatch):
+    """The general route (the compiled one, which runs Newton on each group of contacts apart,
+    switched off: tests/test_global_compiled.py compares the two)."""
+    monkeypatch.setattr(kernels, "global_small", None)
     given = read_any(FCLIB / name)
     result = cq.solve(given, method="coulomb")
     fresh = read_any(FCLIB / name)

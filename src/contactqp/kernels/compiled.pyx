@@ -2551,6 +2551,83 @@ cdef Py_ssize_t _root(Py_ssize_t* parent, Py_ssize_t i) noexcept nogil:
     return i
 
 
+cdef void _join(Py_ssize_t* parent, Py_ssize_t i, Py_ssize_t j) noexcept nogil:
+    """Put the groups of contacts ``i`` and ``j`` together (the smaller root stays)."""
+    i = _root(parent, i)
+    j = _root(parent, j)
+    if i != j:
+        parent[max(i, j)] = min(i, j)
+
+
+cdef void _group_by_blocks(Py_ssize_t* parent, const Py_ssize_t* Hp, const Py_ssize_t* Hi,
+                           Py_ssize_t n, Py_ssize_t k, Py_ssize_t d, Py_ssize_t nc) noexcept nogil:
+    """Join the contacts that ``H`` puts on one ``k x k`` block of a block-diagonal ``M``
+    (``W = H^T M^-1 H`` is zero between the others)."""
+    cdef Py_ssize_t i, b, p, first
+    for i in range(nc):
+        parent[i] = i
+    for b in range(n // k):
+        first = -1
+        for i in range(b * k, b * k + k):
+            for p in range(Hp[i], Hp[i + 1]):
+                if first < 0:
+                    first = Hi[p] // d
+                else:
+                    _join(parent, first, Hi[p] // d)
+
+
+cdef void _group_by_entries(Py_ssize_t* parent, const double* W, Py_ssize_t m, Py_ssize_t d,
+                            Py_ssize_t nc) noexcept nogil:
+    """Join the contacts that a nonzero entry of the dense row-major ``W`` couples."""
+    cdef Py_ssize_t i, a, b
+    for i in range(nc):
+        parent[i] = i
+    for a in range(m):
+        for b in range(m):
+            if W[a * m + b] != 0.0 and a // d != b // d:
+                _join(parent, a // d, b // d)
+
+
+cdef Py_ssize_t _group_layout(Py_ssize_t* parent, Py_ssize_t* start, Py_ssize_t* members,
+                              Py_ssize_t* cursor, Py_ssize_t* offset, Py_ssize_t* place,
+                              Py_ssize_t nc, Py_ssize_t d, Py_ssize_t* groups,
+                              Py_ssize_t* widest) noexcept nogil:
+    """Each contact's root in ``parent``, each group's contacts (in increasing order) in
+    ``members[start[root]:start[root + 1]]``, and where the group's block of ``W`` (its
+    unknowns in that order, row-major) starts in the packed array: ``offset[root]``; ``place``
+    gives each unknown's row in its block. Returns the packed array's size; ``groups`` and
+    ``widest`` (the most unknowns of a group) are written."""
+    cdef Py_ssize_t i, c, p, width, packed = 0
+    groups[0] = 0
+    widest[0] = 0
+    for i in range(nc):
+        parent[i] = _root(parent, i)
+        if parent[i] == i:
+            groups[0] += 1
+    for i in range(nc + 1):
+        start[i] = 0
+    for i in range(nc):
+        start[parent[i] + 1] += 1
+    for i in range(nc):
+        start[i + 1] += start[i]
+    for i in range(nc):
+        cursor[i] = start[i]
+    for i in range(nc):
+        members[cursor[parent[i]]] = i
+        cursor[parent[i]] += 1
+    for i in range(nc):
+        if parent[i] != i:
+            continue
+        width = (start[i + 1] - start[i]) * d
+        widest[0] = max(widest[0], width)
+        offset[i] = packed
+        packed += width * width
+        for p in range(start[i], start[i + 1]):
+            for c in range(d):
+                place[members[p] * d + c] = (p - start[i]) * d + c
+    return packed
+
+
 cdef const void* _int_view(object array, str name, Py_ssize_t* size, int* itemsize) except NULL:
     """The data of a C-contiguous 1-D array of 32- or 64-bit ints (scipy's index arrays are
     either), its length written to ``size`` and its item size to ``itemsize``; the buffer is
@@ -2588,14 +2665,20 @@ cdef void _copy_ints(const void* source, int itemsize, Py_ssize_t n,
 
 
 cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, const double* Hx,
-                   const double* f, const double* w, Py_ssize_t m, double* W, double* q,
-                   double* B, double* work) noexcept nogil:
-    """``W = H^T M^-1 H`` (row-major m x m) and ``q = H^T M^-1 f + w``; ``B``: n (m + 1)
-    doubles (dense M) or n. ``_G_SINGULAR`` when they are not finite."""
-    cdef Py_ssize_t n = F.n, k = F.k, i, i1, i2, p1, p2, b, a, row
+                   const double* f, const double* w, Py_ssize_t m, Py_ssize_t d, double* W,
+                   Py_ssize_t n_w, const Py_ssize_t* parent, const Py_ssize_t* start,
+                   const Py_ssize_t* offset, const Py_ssize_t* place, double* q, double* B,
+                   double* work) noexcept nogil:
+    """``W = H^T M^-1 H`` and ``q = H^T M^-1 f + w``; ``B``: n (m + 1) doubles (dense M) or
+    n. A dense ``M`` gives ``W`` dense (row-major m x m, ``n_w = m^2``); a block-diagonal one
+    gives the blocks of the groups of :func:`_group_by_blocks` only, packed as
+    :func:`_group_layout` lays them out (``n_w`` numbers; W is zero elsewhere).
+    ``_G_SINGULAR`` when ``q`` is not finite (``W``'s entries are checked by the caller)."""
+    cdef Py_ssize_t n = F.n, k = F.k, i, i1, i2, p1, p2, b, a, root
     cdef double value
     cdef const double* inverse
-    for i in range(m * m):
+    cdef double* row
+    for i in range(n_w):
         W[i] = 0.0
     for i in range(m):
         q[i] = 0.0
@@ -2619,11 +2702,13 @@ cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, co
             inverse = F.inverse + b * k * k
             for i1 in range(b * k, b * k + k):
                 for p1 in range(Hp[i1], Hp[i1 + 1]):
-                    row = Hi[p1] * m
+                    a = Hi[p1]
+                    root = parent[a // d]
+                    row = W + offset[root] + place[a] * (start[root + 1] - start[root]) * d
                     for i2 in range(b * k, b * k + k):
                         value = Hx[p1] * inverse[(i1 - b * k) * k + i2 - b * k]
                         for p2 in range(Hp[i2], Hp[i2 + 1]):
-                            W[row + Hi[p2]] += value * Hx[p2]
+                            row[place[Hi[p2]]] += value * Hx[p2]
         for i in range(n):
             B[i] = f[i]
         _mass_solve(F, B, 1, work)
@@ -2634,7 +2719,7 @@ cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, co
         q[i] += w[i]
         if not isfinite(q[i]):
             return _G_SINGULAR
-    return _G_SOLVED  # W's entries are checked finite by the caller's pass over them
+    return _G_SOLVED
 
 
 def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w, mu, r,
@@ -2648,9 +2733,13 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     ``data``), ``mu`` (nc,), ``m = d nc``. ``M`` is factored as
     :func:`contactqp.methods.global_route.factor_mass` does: block diagonal (blocks of at most
     ``max_block``, inverted exactly) or, up to ``max_dense`` freedoms, dense (LAPACK: Cholesky
-    of the Jacobi-scaled ``M`` when it is exactly symmetric, else LU). ``W = H^T M^-1 H`` and
-    ``q = H^T M^-1 f + w`` are formed dense; the contacts fall into the groups that ``W``
-    couples (its nonzero blocks), each of at most ``max_group`` unknowns, and with ``solve``
+    of the Jacobi-scaled ``M`` when it is exactly symmetric, else LU). The contacts fall into
+    the groups that ``W = H^T M^-1 H`` couples: with a dense ``M`` (then ``m <= max_unknowns``)
+    those of its nonzero entries, ``W`` formed dense; with a block-diagonal one those that ``H``
+    puts on one block, found before ``M`` is factored, and only the groups' blocks of ``W`` are
+    formed (at most ``max(max_unknowns**2, m max_group)`` numbers in all).
+    ``q = H^T M^-1 f + w``. With ``solve`` every group must have at most ``max_group``
+    unknowns, and
     each group is solved from ``r`` by coulomb's first Newton run (that of
     :func:`small_newton`, to ``tol`` for one group, else ``tol / sqrt(3)``, which bounds the
     whole problem's error by ``tol``), after the semidefiniteness test of
@@ -2748,7 +2837,7 @@ cdef int _global_small(
     for i in range(Hp[n]):
         if Hi[i] < 0 or Hi[i] >= m:
             raise ValueError("H_indices out of range")
-    if n == 0 or nc == 0 or m > max_unknowns:
+    if n == 0 or nc == 0:
         return _G_NOT_HANDLED
     d = m // nc
     if d * nc != m:
@@ -2758,17 +2847,36 @@ cdef int _global_small(
     cdef Mass F
     F.n = n
     F.k = _mass_structure(Mp, Mi, Mx, n, max_block)
-    if F.k == 0 and n > max_dense:
+    if F.k == 0 and (n > max_dense or m > max_unknowns):
         return _G_NOT_HANDLED
     cdef Py_ssize_t k = F.k, g = max_group
+    # the groups of contacts that W couples, and where each group's block of W is kept
+    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((5 * nc + 1 + g + m) * sizeof(Py_ssize_t))
+    if index == NULL:
+        raise MemoryError()
+    cdef Py_ssize_t* parent = index
+    cdef Py_ssize_t* start = index + nc  # nc + 1
+    cdef Py_ssize_t* members = start + nc + 1
+    cdef Py_ssize_t* keep = members + nc  # g
+    cdef Py_ssize_t* cursor = keep + g  # nc
+    cdef Py_ssize_t* offset = cursor + nc  # nc
+    cdef Py_ssize_t* place = offset + nc  # m
+    cdef Py_ssize_t groups = 0, widest = 0, packed = 0
+    if k > 0:  # with a block-diagonal M, from H alone: W is formed on the groups' blocks only
+        _group_by_blocks(parent, Hp, Hi, n, k, d, nc)
+        packed = _group_layout(parent, start, members, cursor, offset, place, nc, d, &groups,
+                               &widest)
+        if (solve and widest > g) or packed > max(max_unknowns * max_unknowns, m * g):
+            free(index)
+            return _G_NOT_HANDLED
+    cdef Py_ssize_t n_w = m * m if k == 0 else packed
     cdef Py_ssize_t n_work = n * n + 6 * n if k == 0 else 4 * n + 2 * k * k
     cdef Py_ssize_t n_b = n * (m + 1) if k == 0 else n
-    cdef Py_ssize_t total = (n + (n * n if k == 0 else n * k) + n_work + m * m + m + n_b
+    cdef Py_ssize_t total = (n + (n * n if k == 0 else n * k) + n_work + n_w + m + n_b
                              + 5 * n + 3 * m + 3 * g * g + 4 * g + nc)
     cdef double* block = <double*> malloc(total * sizeof(double))
-    cdef Py_ssize_t* index = <Py_ssize_t*> malloc((4 * nc + 1 + g) * sizeof(Py_ssize_t))
     cdef int* pivots = <int*> malloc((n + 1) * sizeof(int))
-    if block == NULL or index == NULL or pivots == NULL:
+    if block == NULL or pivots == NULL:
         free(block)
         free(index)
         free(pivots)
@@ -2778,8 +2886,9 @@ cdef int _global_small(
     F.factor = F.inverse
     F.pivots = pivots
     cdef double* work = F.inverse + (n * n if k == 0 else n * k)
-    cdef double* W = work + n_work
-    cdef double* q = W + m * m
+    cdef double* W = work + n_work  # dense (M dense) or the groups' blocks (block diagonal)
+    cdef double* Wg = W if k > 0 else NULL  # the groups' blocks, packed
+    cdef double* q = W + n_w
     cdef double* B = q + m
     cdef double* Hr = B + n_b
     cdef double* Mv = Hr + n
@@ -2795,13 +2904,9 @@ cdef int _global_small(
     cdef double* squares = muc + g  # nc
     cdef double* v_scaled = squares + nc  # n
     cdef double* forcing = v_scaled + n  # n
-    cdef Py_ssize_t* parent = index
-    cdef Py_ssize_t* start = index + nc  # nc + 1
-    cdef Py_ssize_t* members = start + nc + 1
-    cdef Py_ssize_t* keep = members + nc  # g
-    cdef Py_ssize_t* cursor = keep + g  # nc
+    cdef double* row
     cdef int code = _G_SOLVED, reason
-    cdef Py_ssize_t a, b, c, p, j, groups = 0, size, mg, ncg, iterations = 0, count, root, first
+    cdef Py_ssize_t a, b, c, p, j, size, mg, ncg, iterations = 0, count, root, first
     cdef double tol_group, value, error, residual, eq, sizes, product, magnitude, rr, uu, qq
     cdef double size_h, size_y, transported, scale, largest, force, wdiag, carry, slip
     cdef double rel_m = dg[0], rel_h = dg[1], rel_f = dg[2], rel_w = dg[3], data = 0.0
@@ -2815,58 +2920,34 @@ cdef int _global_small(
                 zeros[i] = 0.0
             code = _mass_factor(&F, Mp, Mi, Mx, work)
             if code == _G_SOLVED:
-                code = _condense(&F, Hp, Hi, Hx, fd, wd, m, W, q, B, work)
-            if code == _G_SOLVED:
-                # the groups of contacts that W couples: with a block-diagonal M, those that
-                # H puts on one block (W is zero between the others: no entry is written); with
-                # a dense M, those of W's nonzero entries
-                for i in range(nc):
-                    parent[i] = i
-                if k > 0:
-                    for b in range(n // k):
-                        first = -1
-                        for i in range(b * k, b * k + k):
-                            for p in range(Hp[i], Hp[i + 1]):
-                                if first < 0:
-                                    first = _root(parent, Hi[p] // d)
-                                    continue
-                                j = _root(parent, Hi[p] // d)
-                                if j != first:
-                                    parent[max(first, j)] = min(first, j)
-                                    first = min(first, j)
+                code = _condense(&F, Hp, Hi, Hx, fd, wd, m, d, W, n_w, parent, start, offset,
+                                 place, q, B, work)
+            if code == _G_SOLVED and k == 0:
+                # with a dense M, the groups are those of W's nonzero entries; their blocks
+                # are copied out of the dense W, packed
+                _group_by_entries(parent, W, m, d, nc)
+                packed = _group_layout(parent, start, members, cursor, offset, place, nc, d,
+                                       &groups, &widest)
+                if solve and widest > g:
+                    code = _G_NOT_HANDLED
                 else:
-                    for a in range(m):
-                        for b in range(m):
-                            if W[a * m + b] != 0.0 and a // d != b // d:
-                                i = _root(parent, a // d)
-                                j = _root(parent, b // d)
-                                if i != j:
-                                    parent[max(i, j)] = min(i, j)
-                for i in range(nc):
-                    parent[i] = _root(parent, i)
-                    if parent[i] == i:
-                        groups += 1
-                for i in range(nc + 1):
-                    start[i] = 0
-                for i in range(nc):
-                    start[parent[i] + 1] += 1
-                for i in range(nc):
-                    start[i + 1] += start[i]
-                for i in range(nc):
-                    cursor[i] = start[i]
-                for i in range(nc):  # each group's contacts in increasing order
-                    members[cursor[parent[i]]] = i
-                    cursor[parent[i]] += 1
-                for i in range(nc):
-                    if solve and (start[i + 1] - start[i]) * d > g:
-                        code = _G_NOT_HANDLED
-                for a in range(m):  # W is zero outside its groups' blocks: the rest finite?
-                    root = parent[a // d]
-                    for p in range(start[root], start[root + 1]):
-                        j = members[p] * d
-                        for b in range(j, j + d):
-                            if not isfinite(W[a * m + b]):
-                                code = _G_SINGULAR
+                    Wg = <double*> malloc(packed * sizeof(double))
+                    if Wg == NULL:
+                        code = -1
+                    else:
+                        for a in range(m):
+                            root = parent[a // d]
+                            mg = (start[root + 1] - start[root]) * d
+                            row = Wg + offset[root] + place[a] * mg
+                            for p in range(start[root], start[root + 1]):
+                                j = members[p] * d
+                                for c in range(d):
+                                    row[(p - start[root]) * d + c] = W[a * m + j + c]
+            if code == _G_SOLVED:
+                for i in range(packed):  # W is zero outside its groups' blocks: the rest finite?
+                    if not isfinite(Wg[i]):
+                        code = _G_SINGULAR
+                        break
             if code == _G_SOLVED and solve:
                 tol_group = tol if groups == 1 else tol / sqrt(3.0)
                 for root in range(nc):
@@ -2874,11 +2955,10 @@ cdef int _global_small(
                         continue
                     ncg = start[root + 1] - start[root]
                     mg = ncg * d
+                    for a in range(mg * mg):
+                        Wc[a] = Wg[offset[root] + a]
                     for a in range(mg):
                         i = members[start[root] + a // d] * d + a % d
-                        for b in range(mg):
-                            j = members[start[root] + b // d] * d + b % d
-                            Wc[a * mg + b] = W[i * m + j]
                         qc[a] = q[i]
                         rc[a] = rd[i]
                     for a in range(ncg):
@@ -2917,15 +2997,16 @@ cdef int _global_small(
                     value = 0.0
                     magnitude = 0.0
                     root = parent[a // d]
+                    row = Wg + offset[root] + place[a] * (start[root + 1] - start[root]) * d
                     for p in range(start[root], start[root + 1]):
                         j = members[p] * d
-                        for b in range(j, j + d):
-                            value += W[a * m + b] * rd[b]
-                            magnitude += fabs(W[a * m + b]) * fabs(rd[b])
+                        for c in range(d):
+                            value += row[(p - start[root]) * d + c] * rd[j + c]
+                            magnitude += fabs(row[(p - start[root]) * d + c]) * fabs(rd[j + c])
                     ul[a] = value + q[a]
                     if a % d == 0 or mud[a // d] != 0.0:
                         product += magnitude * magnitude
-                    wdiag = max(wdiag, fabs(W[a * m + a]))
+                    wdiag = max(wdiag, fabs(row[place[a]]))
                 L.per_contact = per_contact
                 _natural_error(&L, rd, ul, &residual, &error)
                 md[5] = error
@@ -3017,6 +3098,8 @@ cdef int _global_small(
                     else:
                         std[i] = 0
     finally:
+        if k == 0:
+            free(Wg)
         free(block)
         free(index)
         free(pivots)

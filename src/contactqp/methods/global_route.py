@@ -17,14 +17,17 @@ diagonal: there ``M^{-1}`` is known exactly and ``W`` is a sparse product.
   costs on the small finite-element files);
 * otherwise the problem's own sparse LU factorisation and condensation.
 
-A small problem (at most :data:`COMPILED_UNKNOWNS` contact unknowns, ``M`` block diagonal or
-of at most :data:`DENSE_FREEDOMS` freedoms) solved by the default method is done in one
-compiled call (:func:`solve_compiled`): the same factorisation of ``M`` (LAPACK's, through
-scipy), the condensation, coulomb's Newton run on each group of contacts that ``W`` couples
-(contacts that share no body are solved apart) and the certificate on the global equations.
-Whatever that call does not finish (a larger group, a singular ``M``, a ``W`` that fails the
-semidefiniteness test, a Newton run that does not converge) is done again by the general
-route, from the start.
+A problem solved by the default method is done in one compiled call (:func:`solve_compiled`)
+when its contacts fall into groups that ``W`` couples of at most
+:data:`~contactqp.core.local_problem.SMALL_UNKNOWNS` unknowns each, and ``M`` is either block
+diagonal (any size: the groups are read from ``H``, contacts that share no body are apart, and
+only the groups' blocks of ``W`` are formed) or of at most :data:`DENSE_FREEDOMS` freedoms with
+at most :data:`COMPILED_UNKNOWNS` contact unknowns. The call makes the same factorisation of
+``M`` (LAPACK's, through scipy) and condensation, runs coulomb's Newton on each group and
+certifies the answer on the global equations. Whatever it does not finish (a larger group, a
+singular ``M``, a ``W`` that fails the semidefiniteness test, a Newton run that does not
+converge) is done again by the general route, from the start; a group too large for it is
+found from ``H`` before ``M`` is factored.
 
 Each factor records the Jacobi scaling ``s = |diag M|^{-1/2}`` and the exact 1-norm condition of
 the scaled ``M``, and refuses a singular ``M`` (a singular block, or an LU pivot below
@@ -87,8 +90,10 @@ __all__ = [
 BLOCK_MAX = 12  #: largest diagonal block of a block-diagonal ``M`` inverted block by block
 DENSE_FREEDOMS = 400  #: a general ``M`` of at most this many freedoms is factored dense
 DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries are read dense
-#: Most contact unknowns ``m`` of a problem that :func:`solve_compiled` takes (``W`` is formed
-#: dense there: 2.9 MB)
+#: Most contact unknowns ``m`` of a problem with a dense ``M`` that :func:`solve_compiled`
+#: takes (``W`` is formed dense there: 2.9 MB). With a block-diagonal ``M`` only the blocks of
+#: the groups of contacts that ``W`` couples are formed: at most ``SMALL_UNKNOWNS`` numbers per
+#: contact unknown when solving, this number squared (or that) when only certifying.
 COMPILED_UNKNOWNS = 600
 _EPS = float(np.finfo(float).eps)
 
@@ -458,7 +463,7 @@ def solve_compiled(
     if global_small is None:
         return None
     ndof, m = problem.H.shape
-    if ndof == 0 or m == 0 or m > COMPILED_UNKNOWNS:
+    if ndof == 0 or m == 0:
         return None
     if not (type(tol) is float and 0.0 < tol < math.inf):
         tol = positive_tolerance(tol)
@@ -489,7 +494,7 @@ def certify_compiled(problem: GlobalProblem, r) -> GlobalCertificate | None:
     global_small = kernels.global_small
     m = problem.H.shape[1]
     rv = np.array(warm_start(r, m, "r"), dtype=float)
-    if global_small is None or problem.H.shape[0] == 0 or m == 0 or m > COMPILED_UNKNOWNS:
+    if global_small is None or problem.H.shape[0] == 0 or m == 0:
         return None
     outputs = _run_kernel(global_small, problem, rv, 1.0, 1, False, False, False)
     if outputs is None:
