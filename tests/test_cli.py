@@ -222,3 +222,56 @@ def test_fclib_table_written_to_a_pipe_keeps_every_figure():
     assert cells[3] == str(row["converged"])
     assert abs(float(cells[4]) - row["error"]) <= 0.01 * row["error"]
     assert sum(map(int, cells[7:10])) == 3
+
+
+TABLE_BOX = set("─━│┃┏┓┗┛┡┩┣┫┳┻╇╋└┘┌┐├┤┬┴┼╸╺╹╻ \n")
+
+
+def test_a_figures_table_folds_its_cells_in_a_narrow_console_and_keeps_every_character():
+    """rich cuts a cell to an ellipsis when a table is wider than the console; a figures table
+    folds it onto more lines: at 40 columns it holds the characters it holds at 200."""
+    import io
+
+    from rich.console import Console
+
+    from contactqp.cli.app import figures_table
+
+    rows = [("sample-with-a-long-name", "-1.000000123456789e-03", "7.25e-08", "0.4860000001")] * 3
+    printed = []
+    for width in (40, 200):
+        table = figures_table("a title", ("name", "uy (mm)", "eps (%)", "force (N)"), left="name")
+        for row in rows:
+            table.add_row(*row)
+        out = io.StringIO()
+        Console(file=out, width=width).print(table)
+        printed.append(out.getvalue())
+    narrow, wide = ([c for c in text if c not in TABLE_BOX] for text in printed)
+    assert "…" not in printed[0] and len(printed[0]) > len(printed[1])
+    assert sorted(narrow) == sorted(wide)
+    assert max(len(line) for line in printed[0].splitlines()) <= 40
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["rod"],
+        ["methods"],
+        ["layers"],
+        ["riveting"],
+        ["rough"],
+        ["springs", "--n", "9", "--stiffness", "1", "--mu", "0.2", "--mass", "2", "--force", "3,9"],
+        ["fclib", str(FCLIB / "FC3D_Example1.dat")],
+    ],
+    ids=lambda argv: argv[0],
+)
+def test_command_tables_in_a_narrow_terminal_show_no_ellipsis(argv, capsys, monkeypatch, tmp_path):
+    """Every command's table, 60 columns wide: no cell cut to an ellipsis, no line wider."""
+    from contactqp.cli import app, main
+
+    monkeypatch.setattr(app, "PIPED_WIDTH", 60)
+    if argv[0] == "riveting":
+        argv = [*argv, "--out", str(tmp_path)]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "│" in printed and "…" not in printed
+    assert max(len(line) for line in printed.splitlines()) <= 60

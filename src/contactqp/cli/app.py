@@ -12,7 +12,7 @@ import importlib
 import sys
 import time
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, TextIO
 
@@ -23,6 +23,7 @@ from ..errors import ContactError, ContactWarning, SolverError
 if TYPE_CHECKING:
     from rich.console import Console
     from rich.progress import Progress, TaskID
+    from rich.table import Table
 
 __all__ = [
     "COMMANDS",
@@ -114,6 +115,24 @@ def console() -> Console:
 
     terminal = Console()
     return terminal if terminal.is_terminal else Console(width=PIPED_WIDTH)
+
+
+def figures_table(
+    title: str,
+    columns: Iterable[str],
+    *,
+    left: Collection[str] = (),
+    caption: str | None = None,
+) -> Table:
+    """A rich table of ``columns``, right-justified but those in ``left``, whose cells fold onto
+    more lines in a narrow terminal instead of ending in an ellipsis: every figure is printed
+    in full."""
+    from rich.table import Table
+
+    table = Table(title=title, caption=caption)
+    for column in columns:
+        table.add_column(column, justify="left" if column in left else "right", overflow="fold")
+    return table
 
 
 @contextmanager

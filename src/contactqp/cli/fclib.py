@@ -13,7 +13,7 @@ import click
 from ..core.result import LocalResult
 from ..core.status import status_counts
 from ..errors import ContactError, SolverError
-from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, console, fail
+from .app import EXIT_BAD_INPUT, EXIT_NOT_SOLVED, EXIT_OK, console, fail, figures_table
 
 STATUSES = tuple(status.label for status in LocalResult.STATUSES)
 COLUMNS = ("file", "dim", "contacts", "converged", "error", "iterations", "seconds", *STATUSES)
@@ -154,12 +154,7 @@ def _refuse(message: str) -> NoReturn:
 
 
 def _fclib_table(rows: list[dict[str, Any]]) -> None:
-    from rich.table import Table
-
-    table = Table(title="FCLIB problems")
-    for column in COLUMNS:
-        # a narrow terminal folds a value onto two lines rather than cut it to an ellipsis
-        table.add_column(column, justify="left" if column == "file" else "right", overflow="fold")
+    table = figures_table("FCLIB problems", COLUMNS, left=("file",))
     for r in rows:
         table.add_row(
             Path(r["file"]).name,

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ..core.history import MAX_STEPS
-from .app import EXIT_NOT_SOLVED, console, fail, progress
+from .app import EXIT_NOT_SOLVED, console, fail, figures_table, progress
 
 
 @click.command()
@@ -74,15 +74,13 @@ def layers(mu: float, cohesion: float, steps: int, as_json: bool, plot: Path | N
 
 
 def _layers_table(result):
-    from rich.table import Table
 
     layers = result.layers
-    table = Table(
-        title=f"Two layers: mu = {layers.mu:g}, cohesion = {layers.cohesion:g} Pa, "
-        f"area = {layers.area:g} m^2, weight = {layers.weight:.6g} N"
+    table = figures_table(
+        f"Two layers: mu = {layers.mu:g}, cohesion = {layers.cohesion:g} Pa, "
+        f"area = {layers.area:g} m^2, weight = {layers.weight:.6g} N",
+        ("step", "travel (mm)", "load (N)", "relative (mm)", "state"),
     )
-    for column in ("step", "travel (mm)", "load (N)", "relative (mm)", "state"):
-        table.add_column(column, justify="right")
     for k in range(len(result.load)):
         state = "onset" if k == result.onset else ("sliding" if result.sliding[k] else "")
         table.add_row(

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from .app import console
+from .app import console, figures_table
 
 
 def _describe(method, installed: bool) -> dict:
@@ -53,11 +53,8 @@ def methods(as_json):
 
 
 def _table(described, kinds):
-    from rich.table import Table
-
-    table = Table(title="contactqp methods")
-    for column in ("method", "kinds", "role", "extra", "installed", "options"):
-        table.add_column(column)
+    columns = ("method", "kinds", "role", "extra", "installed", "options")
+    table = figures_table("contactqp methods", columns, left=columns)
     defaults: dict[str, set[str]] = {k.default: set() for k in kinds.values()}
     for k in kinds.values():
         defaults[k.default].add(k.name)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..core.status import ContactStatus
 from ..methods.registry import default_method, methods_for
-from .app import EXIT_NOT_SOLVED, console, fail
+from .app import EXIT_NOT_SOLVED, console, fail, figures_table
 
 
 @click.command()
@@ -176,12 +176,12 @@ def _progress_bar():
 
 
 def _tables(model, sequence, summary, stats):
-    from rich.table import Table
 
     out = console()
-    table = Table(title=f"Nominal fastening sequence ({model.n_pairs} pairs)")
-    for column in ("step", "x (mm)", "y (mm)", "tension (N)", "contacts", "max gap (mm)"):
-        table.add_column(column, justify="right")
+    table = figures_table(
+        f"Nominal fastening sequence ({model.n_pairs} pairs)",
+        ("step", "x (mm)", "y (mm)", "tension (N)", "contacts", "max gap (mm)"),
+    )
     for n, step in enumerate(sequence.steps, 1):
         pair = step.fasteners[-1]
         table.add_row(

@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..applications.rod import MAX_ELEMENTS
-from .app import EXIT_NOT_SOLVED, console, fail
+from .app import EXIT_NOT_SOLVED, console, fail, figures_table
 
 
 @click.command()
@@ -73,7 +73,6 @@ def rod(elements: int, as_json: bool, plot: Path | None, vtu: Path | None) -> No
 
 
 def _rod_tables(model, comparisons):
-    from rich.table import Table
 
     out = console()
     x = model.frame.coordinates[model.node_indices, 0]
@@ -81,23 +80,22 @@ def _rod_tables(model, comparisons):
         loads = ", ".join(
             f"({load.fx:g}, {load.fy:g}) N at {load.x * 1e3:g} mm" for load in c.case.loads
         )
-        table = Table(
-            title=f"{c.case.name}: {loads}",
+        table = figures_table(
+            f"{c.case.name}: {loads}",
+            (
+                "x (mm)",
+                "gap (mm)",
+                "uy (mm)",
+                "uy ref (mm)",
+                "eps_x (%)",
+                "eps_y (%)",
+                "force (N)",
+            ),
             caption=f"max eps {c.max_eps:.2g} % (same-node reference "
             f"{c.max_eps_same_nodes:.2g} %); reduced {c.t_reduced * 1e3:.3g} "
             f"ms, full FE contact {c.t_full * 1e3:.3g} ms; ux in --json; "
             "* absolute (m)",
         )
-        for column in (
-            "x (mm)",
-            "gap (mm)",
-            "uy (mm)",
-            "uy ref (mm)",
-            "eps_x (%)",
-            "eps_y (%)",
-            "force (N)",
-        ):
-            table.add_column(column, justify="right")
         uy = c.reduced.displacements.reshape(-1, 2)[:, 1]
         uy_ref = c.reference.displacements[model.node_indices, 1]
         for i in range(len(x)):

@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..errors import InvalidInputError
-from .app import EXIT_NOT_SOLVED, console, fail, float_list, progress
+from .app import EXIT_NOT_SOLVED, console, fail, figures_table, float_list, progress
 
 #: The generated surface's defaults (used when no --surface is given).
 GENERATED = {"grid": 128, "hurst": 0.8, "rms_slope": 0.1, "seed": 0}
@@ -238,26 +238,23 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def _table(contact) -> None:
-    from rich.table import Table
 
     surface = contact.surface
     ny, nx = surface.shape
-    table = Table(
-        title=f"Rough contact: {nx} x {ny} cells of {surface.cell:.4g} m, "
-        f"E* = {contact.modulus:.4g} Pa, h'rms = {contact.rms_slope:.4g}"
+    table = figures_table(
+        f"Rough contact: {nx} x {ny} cells of {surface.cell:.4g} m, "
+        f"E* = {contact.modulus:.4g} Pa, h'rms = {contact.rms_slope:.4g}",
+        (
+            "pressure (Pa)",
+            "area fraction",
+            "linear law",
+            "mean gap (m)",
+            "stiffness (Pa/m)",
+            "iterations",
+            "seconds",
+            "certified",
+        ),
     )
-    columns = (
-        "pressure (Pa)",
-        "area fraction",
-        "linear law",
-        "mean gap (m)",
-        "stiffness (Pa/m)",
-        "iterations",
-        "seconds",
-        "certified",
-    )
-    for column in columns:
-        table.add_column(column, justify="right")
     for point in contact.points:
         table.add_row(
             f"{point.pressure:.6g}",
@@ -276,12 +273,11 @@ def _table(contact) -> None:
         "stiffness = -dp/d(mean gap)"
     )
     if contact.mu > 0:
-        shear = Table(
-            title=f"Sheared by Q = {contact.shear:g} mu P along x, mu = {contact.mu:g} (the "
-            "normal-tangential coupling neglected)"
+        shear = figures_table(
+            f"Sheared by Q = {contact.shear:g} mu P along x, mu = {contact.mu:g} (the "
+            "normal-tangential coupling neglected)",
+            ("pressure (Pa)", "stick fraction", "shift (m)", "stiffness Q/(A shift)"),
         )
-        for column in ("pressure (Pa)", "stick fraction", "shift (m)", "stiffness Q/(A shift)"):
-            shear.add_column(column, justify="right")
         for point in contact.points:
             stiffness = point.tangential_stiffness
             shear.add_row(

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .app import EXIT_NOT_SOLVED, console, fail, float_list, progress
+from .app import EXIT_NOT_SOLVED, console, fail, figures_table, float_list, progress
 
 #: Largest chain offered: solved in about a second per force (the output then holds 1e6 numbers
 #: per force).
@@ -87,17 +87,14 @@ def springs(
 
 
 def _springs_table(chain, results):
-    from rich.table import Table
 
     n = chain.n
     shown = list(range(n)) if n <= 8 else [0, 1, 2, None, n - 3, n - 2, n - 1]
-    table = Table(
-        title=f"Spring chain: N={n}, c={chain.stiffness:g} N/m, "
-        f"friction limit mu m g={chain.friction_limit:g} N"
+    table = figures_table(
+        f"Spring chain: N={n}, c={chain.stiffness:g} N/m, "
+        f"friction limit mu m g={chain.friction_limit:g} N",
+        ["F (N)", *("..." if i is None else f"x{i + 1} (m)" for i in shown)],
     )
-    table.add_column("F (N)", justify="right")
-    for i in shown:
-        table.add_column("..." if i is None else f"x{i + 1} (m)", justify="right")
     for r in results:
         table.add_row(f"{r.force:g}", *("..." if i is None else f"{r.x[i]:.6g}" for i in shown))
     console().print(table)
