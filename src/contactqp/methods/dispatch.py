@@ -114,10 +114,12 @@ def solve(problem, method: str | None = None, **options):
     to ``coulomb``. A global problem is condensed by the structure of its ``M``
     (:func:`~contactqp.methods.global_route.condense`: block-diagonal ``M`` inverted exactly,
     small ones factored dense), and the answer certified on the global equations with the same
-    factorisation; a small one, with ``coulomb`` or no method named, goes through all of this
-    in one compiled call first (:func:`~contactqp.methods.global_route.solve_compiled`), before
-    the routes by size. The methods, their kinds and
-    options: :mod:`the registry <contactqp.methods.registry>`, or ``contactqp methods``.
+    factorisation; one whose contacts fall into small groups that ``W`` couples (with a
+    block-diagonal ``M`` of any size, or a small dense one), with ``coulomb`` or no method named,
+    goes through all of this in one compiled call first
+    (:func:`~contactqp.methods.global_route.solve_compiled`), before the routes by size. The
+    methods, their kinds and options: :mod:`the registry <contactqp.methods.registry>`, or
+    ``contactqp methods``.
 
     Parameters
     ----------
