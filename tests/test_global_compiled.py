@@ -543,3 +543,27 @@ def test_two_dimensional_contacts(monkeypatch):
         python_certificate(problem, result.forces),
         problem,
     )
+
+
+@needs_kernels
+def test_groups_whose_newton_run_stops_short_are_solved_again_alone(monkeypatch):
+    """rigid_bodies(100, seed=1): the compiled Newton run of one pair's group stalls (code "not
+    converged"); that group alone is solved again by coulomb's whole route, the other 99 keep
+    their compiled answers, and the whole meets tol on the global equations, judged again by a
+    fresh problem through its own sparse LU; the reactions are the general route's (one route
+    on all of W, the kernel off) to that accuracy."""
+    problem = rigid_bodies(100, seed=1)
+    codes = counting_kernel(monkeypatch)
+    result = cq.solve(fresh(problem), tol=1e-10)
+    not_converged = kernels.GLOBAL_CODES.index("not converged")
+    assert codes == [not_converged, 0]  # the solve, then the certificate of the whole answer
+    assert result.success
+    assert "but those of 3 contacts, whose runs stopped short" in result.message
+    own = fresh(problem).certify(result.forces)
+    assert own.error <= 1e-10 and own.equilibrium <= 1e-10
+    reference = general(problem, monkeypatch, tol=1e-10)
+    assert reference.success
+    np.testing.assert_allclose(
+        result.forces, reference.forces, rtol=0, atol=1e-7 * np.abs(reference.forces).max()
+    )
+    np.testing.assert_array_equal(result.contact_status, reference.contact_status)

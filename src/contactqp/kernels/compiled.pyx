@@ -2754,7 +2754,11 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     :func:`~contactqp.core.local_problem.contact_status_unchecked` (``rtol``) on the condensed
     problem. Returns the index of :data:`GLOBAL_CODES`: 0 when all this was done, else why not
     (the structure or sizes are not the small route's, ``M`` is singular, a group's ``W``
-    fails the test, a Newton run did not converge); the outputs are then not to be read.
+    fails the test, a Newton run did not converge); the outputs are then not to be read, but
+    for "not converged": ``r`` then holds the reactions of the groups whose runs converged (the
+    others' are left as given), ``status`` is -1 on the contacts of the groups whose runs
+    stopped short (0 elsewhere), and ``measures`` holds the iterations (the most of the
+    converged groups') and the number of groups.
     """
     cdef Py_ssize_t smp[1]
     cdef Py_ssize_t smi[1]
@@ -2950,6 +2954,8 @@ cdef int _global_small(
                         break
             if code == _G_SOLVED and solve:
                 tol_group = tol if groups == 1 else tol / sqrt(3.0)
+                for i in range(nc):
+                    std[i] = 0  # -1: a contact of a group whose Newton run stopped short
                 for root in range(nc):
                     if parent[root] != root:
                         continue
@@ -2978,12 +2984,17 @@ cdef int _global_small(
                     reason = _run(&S, rc, tol_group, max_iter, &count, &error)
                     free(work_newton)
                     free(S.rows)
-                    iterations = max(iterations, count)
-                    if reason != _CONVERGED:
+                    if reason == _CONVERGED:
+                        iterations = max(iterations, count)
+                        for a in range(mg):
+                            rd[members[start[root] + a // d] * d + a % d] = rc[a]
+                    else:  # the other groups are still solved; the caller takes this one on
                         code = _G_NOT_CONVERGED
-                        break
-                    for a in range(mg):
-                        rd[members[start[root] + a // d] * d + a % d] = rc[a]
+                        for a in range(ncg):
+                            std[members[start[root] + a]] = -1
+                if code == _G_NOT_CONVERGED:
+                    md[9] = <double> iterations
+                    md[10] = <double> groups
             if code == _G_SOLVED:
                 L.m, L.nc, L.d = m, nc, d
                 L.q, L.mu, L.shift, L.squares = q, mud, zeros, squares

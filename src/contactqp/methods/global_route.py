@@ -65,7 +65,7 @@ from ..core.model import iteration_cap, positive_tolerance, warm_start
 from ..core.operators import PSD_SHIFT
 from ..core.result import LocalResult
 from ..errors import NotPositiveDefiniteError
-from .coulomb import MAX_ITER, RUN_ITERATIONS
+from .coulomb import MAX_ITER, RUN_ITERATIONS, solve_coulomb
 from .local_global import compiled_global_result
 
 if TYPE_CHECKING:
@@ -96,6 +96,7 @@ DENSE_ENTRIES = 1 << 18  #: sparse ``M`` and ``H`` of at most this many entries 
 #: contact unknown when solving, this number squared (or that) when only certifying.
 COMPILED_UNKNOWNS = 600
 _EPS = float(np.finfo(float).eps)
+_SOLVED, _NOT_CONVERGED = 0, 4  # codes of the compiled kernel (kernels.GLOBAL_CODES)
 
 
 class MassFactor:
@@ -469,13 +470,71 @@ def solve_compiled(
         tol = positive_tolerance(tol)
     if not (type(max_iter) is int and max_iter >= 1):
         max_iter = iteration_cap(max_iter)
-    r = np.zeros(m) if r0 is None else np.array(warm_start(r0, m), dtype=float)
-    outputs = _run_kernel(
+    given = np.zeros(m) if r0 is None else np.array(warm_start(r0, m), dtype=float)
+    r = given.copy()
+    code, outputs = _run_kernel(
         global_small, problem, r, tol, min(RUN_ITERATIONS, max_iter), per_contact, check_psd, True
     )
+    if code == _NOT_CONVERGED:
+        restart = None if r0 is None else given
+        return _groups_left(
+            problem, r, restart, outputs, tol, max_iter, check_psd, per_contact, start
+        )
     if outputs is None:
         return None
     return compiled_global_result(problem, r, *outputs, tol, bool(per_contact), start)
+
+
+def _groups_left(
+    problem: GlobalProblem, r, given, outputs, tol, max_iter, check_psd, per_contact, start
+) -> LocalResult | None:
+    """The answer when the compiled Newton runs of some groups of contacts stopped short: those
+    groups (the contacts of ``status`` -1) are solved together by coulomb's whole route (its
+    rounds of Newton, Levenberg-Marquardt and the proximal stage) on their block of the
+    condensed problem, from the caller's start ``given`` (None: coulomb's own), to
+    ``tol / sqrt(3)`` as each group was; the
+    others keep the compiled runs' reactions, and the whole answer is certified by the kernel.
+    None (the general route from the start) when every group stopped short, or the whole does
+    not meet ``tol``."""
+    _, _, status, measures = outputs
+    left = status < 0
+    if left.all():
+        return None
+    d = problem.dim
+    rows = np.flatnonzero(np.repeat(left, d))
+    local = condense(problem).local
+    W = local.W[np.ix_(rows, rows)] if isinstance(local.W, np.ndarray) else local.W[rows][:, rows]
+    part = solve_coulomb(
+        LocalProblem(W, local.q[rows], problem.mu[left], d),
+        r0=None if given is None else given[rows],
+        tol=tol / math.sqrt(3.0),
+        max_iter=max_iter,
+        check_psd=check_psd,
+        per_contact=per_contact,
+    )
+    if not part.success:
+        return None
+    r[rows] = np.asarray(part.forces, dtype=float).reshape(-1)
+    code, certified = _run_kernel(
+        kernels.global_small, problem, r, 1.0, 1, per_contact, False, False
+    )
+    if code or certified is None:
+        return None
+    error, equilibrium = certified[3][:2].tolist()
+    if not (error <= tol and equilibrium <= tol):
+        return None
+    return compiled_global_result(
+        problem,
+        r,
+        *certified,
+        tol,
+        bool(per_contact),
+        start,
+        iterations=max(int(measures[9]), part.iterations),
+        detail=f"newton {int(measures[9])} it. (converged) on the {int(measures[10])} groups of "
+        f"contacts that W does not couple but those of {int(left.sum())} contacts, whose runs "
+        f"stopped short; those solved again together by coulomb: {part.message}",
+    )
 
 
 def certify_compiled(problem: GlobalProblem, r) -> GlobalCertificate | None:
@@ -496,7 +555,7 @@ def certify_compiled(problem: GlobalProblem, r) -> GlobalCertificate | None:
     rv = np.array(warm_start(r, m, "r"), dtype=float)
     if global_small is None or problem.H.shape[0] == 0 or m == 0:
         return None
-    outputs = _run_kernel(global_small, problem, rv, 1.0, 1, False, False, False)
+    _, outputs = _run_kernel(global_small, problem, rv, 1.0, 1, False, False, False)
     if outputs is None:
         return None
     u, v, _, measures = outputs
@@ -509,9 +568,11 @@ def certify_compiled(problem: GlobalProblem, r) -> GlobalCertificate | None:
 
 def _run_kernel(
     global_small, problem: GlobalProblem, r, tol, max_iter, per_contact, check_psd, solve
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
-    """``(u, v, status, measures)`` of :func:`~contactqp.kernels.compiled.global_small` on
-    ``problem`` from ``r`` (overwritten by the reactions), or None when it did not finish."""
+) -> tuple[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None]:
+    """The code of :func:`~contactqp.kernels.compiled.global_small` on ``problem`` from ``r``
+    (overwritten by the reactions), and its outputs ``(u, v, status, measures)``: None when it
+    did not finish, but for "not converged" (then ``status`` and ``measures`` say which
+    groups stopped short)."""
     ndof, m = problem.H.shape
     digits = problem.digits
     rel = (
@@ -547,4 +608,5 @@ def _run_kernel(
         status,
         measures,
     )
-    return None if code else (u, v, status, measures)
+    finished = code in (_SOLVED, _NOT_CONVERGED)
+    return code, (u, v, status, measures) if finished else None

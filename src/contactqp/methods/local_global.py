@@ -477,6 +477,9 @@ def compiled_global_result(
     tol: float,
     per_contact: bool,
     start: float,
+    *,
+    iterations: int | None = None,
+    detail: str | None = None,
 ) -> LocalResult:
     """The :class:`~contactqp.core.result.LocalResult` of the compiled small global route
     (:func:`contactqp.methods.global_route.solve_compiled`), from what
@@ -485,6 +488,8 @@ def compiled_global_result(
 
     ``measures`` holds the figures named by
     :data:`~contactqp.kernels.compiled.GLOBAL_MEASURES`; ``status`` the contact status.
+    ``iterations`` and ``detail`` (how the condensed problem was solved), when given, replace
+    what ``measures`` says of the solve (a certificate computed apart from it).
     """
     (
         error,
@@ -496,17 +501,18 @@ def compiled_global_result(
         local_product,
         local_size_q,
         local_scale,
-        iterations,
+        measured_iterations,
         groups,
         _,
     ) = measures.tolist()
+    k = int(measured_iterations if iterations is None else iterations)
     limits = AccuracyLimits(
         rounding=rounding, data=data, condition=condition, digits=dict(problem.digits)
     )
-    k = int(iterations)
-    detail = f"newton {k} it. (converged)"
-    if groups > 1:
-        detail += f" on {int(groups)} groups of contacts that W does not couple"
+    if detail is None:
+        detail = f"newton {k} it. (converged)"
+        if groups > 1:
+            detail += f" on {int(groups)} groups of contacts that W does not couple"
     local_verdict = "converged" if local_error <= tol else f"not converged to {tol:g}"
     local_message = f"{local_verdict}: {detail}; natural-map error {local_error:.2e}" + (
         " (largest of the problem's and each contact's)" if per_contact else ""
