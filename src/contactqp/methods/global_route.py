@@ -24,10 +24,11 @@ diagonal (any size: the groups are read from ``H``, contacts that share no body 
 only the groups' blocks of ``W`` are formed) or of at most :data:`DENSE_FREEDOMS` freedoms with
 at most :data:`COMPILED_UNKNOWNS` contact unknowns. The call makes the same factorisation of
 ``M`` (LAPACK's, through scipy) and condensation, runs coulomb's Newton on each group and
-certifies the answer on the global equations. Whatever it does not finish (a larger group, a
-singular ``M``, a ``W`` that fails the semidefiniteness test, a Newton run that does not
-converge) is done again by the general route, from the start; a group too large for it is
-found from ``H`` before ``M`` is factored.
+certifies the answer on the global equations. The groups whose Newton runs stop short are
+solved again together by coulomb's whole route, the others keeping their answers. Whatever the
+call does not finish otherwise (a larger group, a singular ``M``, a ``W`` that fails the
+semidefiniteness test, every group's run stopping short) is done again by the general route,
+from the start; a group too large for the call is found from ``H`` before ``M`` is factored.
 
 Each factor records the Jacobi scaling ``s = |diag M|^{-1/2}`` and the exact 1-norm condition of
 the scaled ``M``, and refuses a singular ``M`` (a singular block, or an LU pivot below
@@ -488,14 +489,15 @@ def solve_compiled(
 def _groups_left(
     problem: GlobalProblem, r, given, outputs, tol, max_iter, check_psd, per_contact, start
 ) -> LocalResult | None:
-    """The answer when the compiled Newton runs of some groups of contacts stopped short: those
-    groups (the contacts of ``status`` -1) are solved together by coulomb's whole route (its
-    rounds of Newton, Levenberg-Marquardt and the proximal stage) on their block of the
+    """The answer when the compiled Newton runs of some groups of contacts stopped short.
+
+    Those groups (the contacts of ``status`` -1) are solved together by coulomb's whole route
+    (its rounds of Newton, Levenberg-Marquardt and the proximal stage) on their block of the
     condensed problem, from the caller's start ``given`` (None: coulomb's own), to
-    ``tol / sqrt(3)`` as each group was; the
-    others keep the compiled runs' reactions, and the whole answer is certified by the kernel.
-    None (the general route from the start) when every group stopped short, or the whole does
-    not meet ``tol``."""
+    ``tol / sqrt(3)`` as each group was; the others keep the compiled runs' reactions, and the
+    whole answer is certified by the kernel. None (the general route from the start) when
+    every group stopped short, or the whole does not meet ``tol``.
+    """
     _, _, status, measures = outputs
     left = status < 0
     if left.all():
