@@ -74,7 +74,6 @@ def layers(mu: float, cohesion: float, steps: int, as_json: bool, plot: Path | N
 
 
 def _layers_table(result):
-
     layers = result.layers
     table = figures_table(
         f"Two layers: mu = {layers.mu:g}, cohesion = {layers.cohesion:g} Pa, "

@@ -176,7 +176,6 @@ def _progress_bar():
 
 
 def _tables(model, sequence, summary, stats):
-
     out = console()
     table = figures_table(
         f"Nominal fastening sequence ({model.n_pairs} pairs)",

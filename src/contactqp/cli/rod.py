@@ -73,7 +73,6 @@ def rod(elements: int, as_json: bool, plot: Path | None, vtu: Path | None) -> No
 
 
 def _rod_tables(model, comparisons):
-
     out = console()
     x = model.frame.coordinates[model.node_indices, 0]
     for c in comparisons:

@@ -238,7 +238,6 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def _table(contact) -> None:
-
     surface = contact.surface
     ny, nx = surface.shape
     table = figures_table(

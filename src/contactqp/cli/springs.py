@@ -87,7 +87,6 @@ def springs(
 
 
 def _springs_table(chain, results):
-
     n = chain.n
     shown = list(range(n)) if n <= 8 else [0, 1, 2, None, n - 3, n - 2, n - 1]
     table = figures_table(
