@@ -173,3 +173,22 @@ def test_scaled_selections_stay_exactly_symmetric():
     np.testing.assert_allclose(W, A @ R @ A.T, rtol=1e-14)
     np.testing.assert_allclose(influence, R @ A.T, rtol=1e-14)
     np.testing.assert_array_equal(W, W.T)
+
+
+def test_displacements_from_the_solvers_product_are_those_of_r():
+    """With ``A`` the identity the default solver takes ``U = R P - W lambda`` from its last
+    gradient instead of a product with ``R``: the displacements equal ``R (P - lambda)``
+    formed here, to rounding, and the certificate (which forms ``R f`` itself) passes."""
+    n = 40
+    R = spd(n, seed=4) * 1e-3
+    loads = np.zeros(n)
+    gaps = np.linspace(-2e-3, 2e-3, n)  # about half the nodes pressed
+    problem = ContactProblem(
+        cq.ReducedModel(flexibility=R), loads, [cq.GapObstacle(np.arange(n), gaps, (1.0,))]
+    )
+    assert problem.dual().influence is problem.dual().W  # the identity: the shared product
+    result = cq.solve(problem)
+    assert result.success and 0 < np.count_nonzero(result.forces) < n
+    expected = R @ (loads - result.forces)
+    scale = np.abs(R).max() * np.abs(result.forces).sum()
+    np.testing.assert_allclose(result.displacements, expected, rtol=0, atol=1e-12 * scale)

@@ -193,10 +193,14 @@ class DualForm:
         self.free_displacements = _sparse_product(model, loads)
         self.b = A @ self.free_displacements - constraints.gaps
 
-    def displacements(self, forces: np.ndarray) -> np.ndarray:
-        """``U = R (P - A^T lambda)`` for contact forces ``lambda``."""
+    def displacements(self, forces: np.ndarray, W_forces: np.ndarray | None = None) -> np.ndarray:
+        """``U = R (P - A^T lambda)`` for contact forces ``lambda``; ``W_forces`` is
+        ``W lambda`` when the caller has it (a solver's last product), which is ``R A^T lambda``
+        when ``A`` is the identity and then saves a product with ``R``."""
         if self.influence is self.W:  # A = I: R A^T is R, exactly symmetric
-            return self.free_displacements - symmetric_product(self.W, forces)
+            if W_forces is None:
+                W_forces = symmetric_product(self.W, forces)
+            return self.free_displacements - W_forces
         return self.free_displacements - self.influence @ forces
 
 

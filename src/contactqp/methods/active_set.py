@@ -100,7 +100,8 @@ def solve_active_set(problem, *, r0=None, tol: float = 1e-10, max_iter: int = 50
             W, -dual.b, lower=0.0, x0=r0, tol=tol, max_iter=max_iter, check_finite=False
         )  # W: validated model
     forces = solution.x
-    displacements = dual.displacements(forces)
+    # the solver's gradient W x - b gives W x: no product with R for the displacements
+    displacements = dual.displacements(forces, W_forces=solution.gradient + dual.b)
     elapsed = time.perf_counter() - start
     return problem.make_result(
         displacements,
