@@ -429,27 +429,18 @@ def test_problems_it_does_not_take_go_to_the_general_route(monkeypatch):
         np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-12 * size)
 
 
-@needs_kernels
-def test_spheres_i099_is_solved_group_by_group(monkeypatch):
-    """Spheres-i099 (356 contacts, 1,068 unknowns, 2,000 rigid bodies: M diagonal of 12,000
-    freedoms) falls into 137 groups of at most 13 contacts: the compiled route takes it and
-    meets 1e-8 on the global equations, judged again by a fresh problem through its own sparse
-    LU; its reactions and statuses are the general route's (one Newton run on all of W) to
-    that accuracy. Its iteration count is the most any group's Newton run took, each to
-    ``tol / sqrt(3)`` of the group's own scale (10 here, against the general route's 9)."""
-    problem = read_any(FCLIB / "Spheres-i099-356-679.hdf5")
-    assert problem.H.shape[1] > global_route.COMPILED_UNKNOWNS
-    codes = counting_kernel(monkeypatch)
-    result = cq.solve(fresh(problem), tol=1e-8)
-    assert codes == [0]
-    assert "on 137 groups of contacts that W does not couple" in result.message
+def assert_certified_as_the_general_route(problem, result, monkeypatch, tol, agreement):
+    """``result`` meets ``tol`` on the global equations as judged again by a fresh problem
+    through its own sparse LU, and its reactions are the general route's (the kernel off) to
+    ``agreement`` of the largest, its statuses the same."""
+    assert result.success
     own = fresh(problem).certify(result.forces)
-    assert own.error <= 1e-8 and own.equilibrium <= 1e-8
+    assert own.error <= tol and own.equilibrium <= tol
     assert abs(own.error - result.certificate.natural_map) <= 100 * own.limits.rounding + 1e-15
-    reference = general(problem, monkeypatch, tol=1e-8)
+    reference = general(problem, monkeypatch, tol=tol)
     assert reference.success
     size = np.abs(reference.forces).max()
-    np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-6 * size)
+    np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=agreement * size)
     np.testing.assert_array_equal(result.contact_status, reference.contact_status)
 
 
@@ -476,26 +467,33 @@ def rigid_bodies(n_pairs: int, seed: int = 0) -> GlobalProblem:
     )
 
 
+@pytest.mark.parametrize(
+    "case", ["Spheres-i099", "rigid-bodies"], ids=["Spheres-i099", "200-rigid-body-pairs"]
+)
 @needs_kernels
-def test_block_diagonal_m_beyond_compiled_unknowns_is_solved_by_groups(monkeypatch):
+def test_block_diagonal_m_beyond_compiled_unknowns_is_solved_by_groups(case, monkeypatch):
     """With a block-diagonal ``M`` the compiled route takes any number of contact unknowns
-    whose groups are small (here 1,800 > COMPILED_UNKNOWNS, groups of 9): each group solved
-    apart, the whole certified, and judged again by a fresh problem through its own sparse LU;
-    the general route (the kernel switched off) finds the same reactions."""
-    problem = rigid_bodies(200)
+    whose groups are small, each group solved apart and the whole certified (both cases have
+    more than COMPILED_UNKNOWNS):
+
+    * Spheres-i099: 356 contacts, 1,068 unknowns, 2,000 rigid spheres (``M`` diagonal of 12,000
+      freedoms) in 137 groups of at most 13 contacts. Its iteration count is the most any
+      group's Newton run took, each to ``tol / sqrt(3)`` of the group's own scale (10 here,
+      against the general route's 9);
+    * 200 rigid-body pairs, 1,800 unknowns in groups of 9.
+
+    Judged again by a fresh problem through its own sparse LU, and the general route (the
+    kernel off) finds the same reactions; the compiled certificate is the Python one."""
+    if case == "Spheres-i099":
+        problem, tol, agreement, groups = read_any(FCLIB / f"{case}-356-679.hdf5"), 1e-8, 1e-6, 137
+    else:
+        problem, tol, agreement, groups = rigid_bodies(200), 1e-10, 1e-8, 200
     assert problem.H.shape[1] > global_route.COMPILED_UNKNOWNS
     codes = counting_kernel(monkeypatch)
-    result = cq.solve(fresh(problem), tol=1e-10)
+    result = cq.solve(fresh(problem), tol=tol)
     assert codes == [0]
-    assert result.success and "on 200 groups of contacts that W does not couple" in result.message
-    own = fresh(problem).certify(result.forces)
-    assert own.error <= 1e-10 and own.equilibrium <= 1e-10
-    reference = general(problem, monkeypatch, tol=1e-10)
-    assert reference.success
-    np.testing.assert_allclose(
-        result.forces, reference.forces, rtol=0, atol=1e-8 * np.abs(reference.forces).max()
-    )
-    np.testing.assert_array_equal(result.contact_status, reference.contact_status)
+    assert f"on {groups} groups of contacts that W does not couple" in result.message
+    assert_certified_as_the_general_route(problem, result, monkeypatch, tol, agreement)
     compiled = certify_compiled(fresh(problem), result.forces)
     assert compiled is not None
     assert_same_certificate(compiled, python_certificate(problem, result.forces), problem)
@@ -557,13 +555,5 @@ def test_groups_whose_newton_run_stops_short_are_solved_again_alone(monkeypatch)
     result = cq.solve(fresh(problem), tol=1e-10)
     not_converged = kernels.GLOBAL_CODES.index("not converged")
     assert codes == [not_converged, 0]  # the solve, then the certificate of the whole answer
-    assert result.success
     assert "but those of 3 contacts, whose runs stopped short" in result.message
-    own = fresh(problem).certify(result.forces)
-    assert own.error <= 1e-10 and own.equilibrium <= 1e-10
-    reference = general(problem, monkeypatch, tol=1e-10)
-    assert reference.success
-    np.testing.assert_allclose(
-        result.forces, reference.forces, rtol=0, atol=1e-7 * np.abs(reference.forces).max()
-    )
-    np.testing.assert_array_equal(result.contact_status, reference.contact_status)
+    assert_certified_as_the_general_route(problem, result, monkeypatch, 1e-10, 1e-7)
