@@ -108,6 +108,20 @@ def python_factor(problem):
     return condense(fresh(problem)).factor
 
 
+def counting_kernel(monkeypatch) -> list[int]:
+    """The codes the compiled kernel returns from now on (the kernel itself still runs)."""
+    codes: list[int] = []
+    real = kernels.global_small
+    assert real is not None
+
+    def counted(*args):
+        codes.append(real(*args))
+        return codes[-1]
+
+    monkeypatch.setattr(kernels, "global_small", counted)
+    return codes
+
+
 def assert_same_certificate(compiled, reference, problem):
     """The figures of two certificates of the same ``r`` agree to their rounding: ``u`` to that
     of ``|H^T| |v| + |w|`` (its terms, which cancel at a solution), ``v`` to ``cond(M)`` ulps
@@ -142,17 +156,8 @@ def assert_same_certificate(compiled, reference, problem):
 @needs_kernels
 def test_shared_files_are_solved_as_by_the_general_route(name, files, monkeypatch):
     problem = files[name]
-    calls = []
-    real = kernels.global_small
-
-    def counted(*args):
-        code = real(*args)
-        calls.append(code)
-        return code
-
-    monkeypatch.setattr(kernels, "global_small", counted)
+    calls = counting_kernel(monkeypatch)
     result = cq.solve(fresh(problem), tol=1e-8)
-    monkeypatch.setattr(kernels, "global_small", real)
     assert calls == [0]  # the compiled route gave the answer
     reference = general(problem, monkeypatch, tol=1e-8)
     assert result.success and reference.success
@@ -389,20 +394,6 @@ def test_warm_start_and_per_contact(monkeypatch):
     reference = general(problem, monkeypatch, tol=1e-10, per_contact=True)
     assert strict.success and strict.iterations == reference.iterations
     assert "each contact's" in strict.message
-
-
-def counting_kernel(monkeypatch) -> list[int]:
-    """The codes the compiled kernel returns from now on (the kernel itself still runs)."""
-    codes: list[int] = []
-    real = kernels.global_small
-    assert real is not None
-
-    def counted(*args):
-        codes.append(real(*args))
-        return codes[-1]
-
-    monkeypatch.setattr(kernels, "global_small", counted)
-    return codes
 
 
 @needs_kernels

@@ -2588,6 +2588,14 @@ cdef void _group_by_entries(Py_ssize_t* parent, const double* W, Py_ssize_t m, P
                 _join(parent, a // d, b // d)
 
 
+cdef inline double* _group_row(double* packed, const Py_ssize_t* parent,
+                               const Py_ssize_t* start, const Py_ssize_t* offset,
+                               const Py_ssize_t* place, Py_ssize_t d, Py_ssize_t a) noexcept nogil:
+    """Row of unknown ``a`` in its group's block of the packed ``W`` (:func:`_group_layout`)."""
+    cdef Py_ssize_t root = parent[a // d]
+    return packed + offset[root] + place[a] * (start[root + 1] - start[root]) * d
+
+
 cdef Py_ssize_t _group_layout(Py_ssize_t* parent, Py_ssize_t* start, Py_ssize_t* members,
                               Py_ssize_t* cursor, Py_ssize_t* offset, Py_ssize_t* place,
                               Py_ssize_t nc, Py_ssize_t d, Py_ssize_t* groups,
@@ -2674,7 +2682,7 @@ cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, co
     gives the blocks of the groups of :func:`_group_by_blocks` only, packed as
     :func:`_group_layout` lays them out (``n_w`` numbers; W is zero elsewhere).
     ``_G_SINGULAR`` when ``q`` is not finite (``W``'s entries are checked by the caller)."""
-    cdef Py_ssize_t n = F.n, k = F.k, i, i1, i2, p1, p2, b, a, root
+    cdef Py_ssize_t n = F.n, k = F.k, i, i1, i2, p1, p2, b, a
     cdef double value
     cdef const double* inverse
     cdef double* row
@@ -2702,9 +2710,7 @@ cdef int _condense(const Mass* F, const Py_ssize_t* Hp, const Py_ssize_t* Hi, co
             inverse = F.inverse + b * k * k
             for i1 in range(b * k, b * k + k):
                 for p1 in range(Hp[i1], Hp[i1 + 1]):
-                    a = Hi[p1]
-                    root = parent[a // d]
-                    row = W + offset[root] + place[a] * (start[root + 1] - start[root]) * d
+                    row = _group_row(W, parent, start, offset, place, d, Hi[p1])
                     for i2 in range(b * k, b * k + k):
                         value = Hx[p1] * inverse[(i1 - b * k) * k + i2 - b * k]
                         for p2 in range(Hp[i2], Hp[i2 + 1]):
@@ -2739,8 +2745,7 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     puts on one block, found before ``M`` is factored, and only the groups' blocks of ``W`` are
     formed (at most ``max(max_unknowns**2, m max_group)`` numbers in all).
     ``q = H^T M^-1 f + w``. With ``solve`` every group must have at most ``max_group``
-    unknowns, and
-    each group is solved from ``r`` by coulomb's first Newton run (that of
+    unknowns, and each group is solved from ``r`` by coulomb's first Newton run (that of
     :func:`small_newton`, to ``tol`` for one group, else ``tol / sqrt(3)``, which bounds the
     whole problem's error by ``tol``), after the semidefiniteness test of
     :func:`small_semidefinite` on each group's ``W`` (``check_psd``, unless ``M`` was found
@@ -2910,7 +2915,7 @@ cdef int _global_small(
     cdef double* forcing = v_scaled + n  # n
     cdef double* row
     cdef int code = _G_SOLVED, reason
-    cdef Py_ssize_t a, b, c, p, j, size, mg, ncg, iterations = 0, count, root, first
+    cdef Py_ssize_t a, c, p, j, mg, ncg, iterations = 0, count, root
     cdef double tol_group, value, error, residual, eq, sizes, product, magnitude, rr, uu, qq
     cdef double size_h, size_y, transported, scale, largest, force, wdiag, carry, slip
     cdef double rel_m = dg[0], rel_h = dg[1], rel_f = dg[2], rel_w = dg[3], data = 0.0
@@ -2941,8 +2946,7 @@ cdef int _global_small(
                     else:
                         for a in range(m):
                             root = parent[a // d]
-                            mg = (start[root + 1] - start[root]) * d
-                            row = Wg + offset[root] + place[a] * mg
+                            row = _group_row(Wg, parent, start, offset, place, d, a)
                             for p in range(start[root], start[root + 1]):
                                 j = members[p] * d
                                 for c in range(d):
@@ -3008,7 +3012,7 @@ cdef int _global_small(
                     value = 0.0
                     magnitude = 0.0
                     root = parent[a // d]
-                    row = Wg + offset[root] + place[a] * (start[root + 1] - start[root]) * d
+                    row = _group_row(Wg, parent, start, offset, place, d, a)
                     for p in range(start[root], start[root + 1]):
                         j = members[p] * d
                         for c in range(d):
