@@ -482,6 +482,14 @@ cdef struct Small:
     bint per_contact
     double floor  # CONTACT_FLOOR
     double qq  # q . q
+    double rr  # r . r and u . u at the point last measured
+    double uu
+    # one group of a larger problem that W does not couple: the rest's q . q, r . r and u . u,
+    # by which its Newton steps are regularised as the whole problem's run would regularise them
+    bint grouped
+    double rest_qq
+    double rest_rr
+    double rest_uu
     double* qt  # q - W shift: the problem from the cone apex
     double* rho
     double* scale  # mean diagonal of each contact block (1 where not positive)
@@ -541,6 +549,7 @@ cdef void _natural_error(Small* S, const double* r, const double* u, double* res
         rr += r[i] * r[i]
         uu += u[i] * u[i]
     residual[0] = sqrt(total)
+    S.rr, S.uu = rr, uu
     scale = sqrt(max(S.qq, max(rr, uu)))
     if scale == 0.0:
         scale = 1.0
@@ -698,6 +707,18 @@ cdef bint _direction(Small* S, const double* r, const double* u, double eta) noe
     return True
 
 
+cdef inline double _regulariser(const Small* S, double residual, double error) noexcept nogil:
+    """The relative size of a Newton step's regularisation (capped at REGULARISATION by the
+    caller): the error; for one group of a larger problem, once its own error is below the cap,
+    its residual on the whole problem's scale (the rest's sizes as last known), as the whole
+    problem's run would regularise it."""
+    cdef double whole
+    if not S.grouped or error >= REGULARISATION:
+        return error
+    whole = sqrt(max(S.qq + S.rest_qq, max(S.rr + S.rest_rr, S.uu + S.rest_uu)))
+    return residual / whole if whole > 0.0 else error
+
+
 cdef int _run(Small* S, double* r, double tol, Py_ssize_t max_iter, Py_ssize_t* iterations,
               double* out_error) noexcept nogil:
     """Coulomb's Newton run (``_Newton.run``, ``adaptive=False``) from ``r`` (apex coordinates,
@@ -733,7 +754,7 @@ cdef int _run(Small* S, double* r, double tol, Py_ssize_t max_iter, Py_ssize_t* 
         reference = S.history[first]
         for i in range(first, k + 1):
             reference = max(reference, S.history[i])
-        if not _direction(S, r, S.u, min(REGULARISATION, error)):
+        if not _direction(S, r, S.u, min(REGULARISATION, _regulariser(S, residual, error))):
             iterations[0] = k
             out_error[0] = best_error
             for i in range(m):
@@ -825,6 +846,7 @@ cdef void _problem(Small* S, const double* W, const double* q, const double* mu,
     cdef Py_ssize_t i, k, d = S.d, m = S.m
     cdef double mean
     S.W, S.q, S.mu, S.shift = W, q, mu, shift
+    S.grouped = False
     S.qq = _dot(q, q, m)
     for i in range(m):  # q~ = q - W shift
         S.qt[i] = q[i] - _dot(W + i * m, shift, m)
@@ -2747,7 +2769,10 @@ def global_small(M_indptr, M_indices, M_data, H_indptr, H_indices, H_data, f, w,
     ``q = H^T M^-1 f + w``. With ``solve`` every group must have at most ``max_group``
     unknowns, and each group is solved from ``r`` by coulomb's first Newton run (that of
     :func:`small_newton`, to ``tol`` for one group, else ``tol / sqrt(3)``, which bounds the
-    whole problem's error by ``tol``), after the semidefiniteness test of
+    whole problem's error by ``tol``; but once a group's own error is below the
+    regularisation's cap, its steps are regularised by its residual on the whole problem's
+    scale, as one run on the whole problem would regularise them), after the semidefiniteness
+    test of
     :func:`small_semidefinite` on each group's ``W`` (``check_psd``, unless ``M`` was found
     symmetric positive definite). ``r`` receives the reactions.
 
@@ -2919,7 +2944,8 @@ cdef int _global_small(
     cdef double tol_group, value, error, residual, eq, sizes, product, magnitude, rr, uu, qq
     cdef double size_h, size_y, transported, scale, largest, force, wdiag, carry, slip
     cdef double rel_m = dg[0], rel_h = dg[1], rel_f = dg[2], rel_w = dg[3], data = 0.0
-    cdef double sm, shr, sf2
+    cdef double sm, shr, sf2, whole_qq = 0.0, whole_rr = 0.0, whole_uu = 0.0
+    cdef double group_qq, group_rr, group_uu
     cdef Small S
     cdef Small L
     cdef double* work_newton
@@ -2960,6 +2986,18 @@ cdef int _global_small(
                 tol_group = tol if groups == 1 else tol / sqrt(3.0)
                 for i in range(nc):
                     std[i] = 0  # -1: a contact of a group whose Newton run stopped short
+                for a in range(m):  # the whole problem's sizes at the start, u = W r + q
+                    value = 0.0
+                    root = parent[a // d]
+                    row = _group_row(Wg, parent, start, offset, place, d, a)
+                    for p in range(start[root], start[root + 1]):
+                        j = members[p] * d
+                        for c in range(d):
+                            value += row[(p - start[root]) * d + c] * rd[j + c]
+                    ul[a] = value + q[a]
+                    whole_qq += q[a] * q[a]
+                    whole_rr += rd[a] * rd[a]
+                    whole_uu += ul[a] * ul[a]
                 for root in range(nc):
                     if parent[root] != root:
                         continue
@@ -2967,10 +3005,16 @@ cdef int _global_small(
                     mg = ncg * d
                     for a in range(mg * mg):
                         Wc[a] = Wg[offset[root] + a]
+                    group_qq = 0.0
+                    group_rr = 0.0
+                    group_uu = 0.0
                     for a in range(mg):
                         i = members[start[root] + a // d] * d + a % d
                         qc[a] = q[i]
                         rc[a] = rd[i]
+                        group_qq += q[i] * q[i]
+                        group_rr += rd[i] * rd[i]
+                        group_uu += ul[i] * ul[i]
                     for a in range(ncg):
                         muc[a] = mud[members[start[root] + a]]
                     if check_psd and not F.positive_definite and not _semidefinite(
@@ -2985,11 +3029,17 @@ cdef int _global_small(
                     S.per_contact = per_contact
                     S.floor = floor
                     _problem(&S, Wc, qc, muc, zeros)
+                    S.grouped = groups > 1
+                    S.rest_qq = max(whole_qq - group_qq, 0.0)
+                    S.rest_rr = max(whole_rr - group_rr, 0.0)  # the groups solved before at
+                    S.rest_uu = max(whole_uu - group_uu, 0.0)  # their answers, the rest as given
                     reason = _run(&S, rc, tol_group, max_iter, &count, &error)
                     free(work_newton)
                     free(S.rows)
                     if reason == _CONVERGED:
                         iterations = max(iterations, count)
+                        whole_rr += S.rr - group_rr
+                        whole_uu += S.uu - group_uu
                         for a in range(mg):
                             rd[members[start[root] + a // d] * d + a % d] = rc[a]
                     else:  # the other groups are still solved; the caller takes this one on
