@@ -35,6 +35,14 @@ budget. From the point where the rounds stopped, 6 of the 9 converged (before th
 (:func:`~contactqp.methods.coulomb.solve_coulomb` therefore starts its proximal stage from
 zero).
 
+Where ``W`` is dense and of low rank (rigid bodies: at most 6 per body, far below the contact
+unknowns), :func:`low_rank_factor` finds ``G`` with ``W = G G^T`` once, and each inner Newton
+step is solved through it (the Woodbury identity on ``A + B (G G^T + rho D)``: ``2 m k^2``
+flops for rank ``k``, against ``2 m^3 / 3`` for the LU of the block), with the same steps to
+rounding. On a wall of 48 boxes (1,080 unknowns, rank 288) the 182 inner iterations took
+1.3 s against 5.3 s; on one of 80 boxes (1,824 unknowns, rank 480) 2,000 took 46 s against
+151 s (both with one BLAS thread).
+
 Convergence and the best point are decided by the caller's ``measure`` of the problem as
 given, never by the inner problems' errors.
 
@@ -67,6 +75,35 @@ FAST, SLOW = 3, 10  # inner problems solved in at most FAST (more than SLOW) ite
 LOWER, RAISE, FAIL = 0.3, 3.0, 10.0  # rho's factors then, and when an inner problem fails
 # (RAISE times the failed rho is then rho's floor)
 RELAX = 1.5  # over-relaxation of the outer step (Eckstein and Bertsekas 1992)
+LOW_RANK_MIN = 500  # unknowns of a dense W from which its rank is looked for (below, the
+# Woodbury steps measured no faster than the LU: 336 unknowns of rank 96, 0.12 s against 0.06 s)
+LOW_RANK_SHARE = 1 / 3  # rank at most this share of the unknowns: steps through the factor
+
+
+def low_rank_factor(W) -> np.ndarray | None:
+    """``G`` (m x k) with ``W = G G^T`` to rounding, for a dense symmetric positive
+    semidefinite ``W`` of rank ``k <= LOW_RANK_SHARE m`` (rigid bodies: ``W = H M^-1 H^T`` has
+    the rank of the bodies' freedoms), else None (also for a sparse ``W``, one of fewer than
+    LOW_RANK_MIN rows, or one not symmetric to 1e-14 of its largest entry).
+
+    LAPACK's Cholesky with complete pivoting (``dpstrf``) stops at the rank, where the largest
+    diagonal entry left is below ``m`` ulps of the largest: the entries left out are then below
+    that too (``W`` semidefinite), at a cost of about ``m^2 k`` flops.
+    """
+    if is_sparse(W) or W.shape[0] < LOW_RANK_MIN:
+        return None
+    from scipy.linalg import lapack
+
+    W = np.asarray(W, dtype=float)
+    size = float(np.abs(W).max(initial=0.0))
+    if size == 0.0 or float(np.abs(W - W.T).max()) > 1e-14 * size:
+        return None
+    factor, pivots, rank, info = lapack.dpstrf(np.array(W, order="F"), lower=1, tol=-1.0)
+    if info < 0 or rank > LOW_RANK_SHARE * W.shape[0]:
+        return None
+    G = np.empty((W.shape[0], rank))
+    G[pivots - 1] = np.tril(factor[:, :rank])
+    return G
 
 
 def _regularised(W, weights: np.ndarray):  # -> the type of W
@@ -110,8 +147,9 @@ def proximal_point(
         ``measure(r, u) -> (residual, error)`` of the problem as given (``u = W r + q``): the
         only test of convergence and of the best point.
     newton : callable
-        ``newton(W, q, mu, dim, measure)``: a runner of Newton iterations on the problem
-        ``(W, q, mu)`` (coulomb's ``_Newton``), whose
+        ``newton(W, q, mu, dim, measure, low_rank)``: a runner of Newton iterations on the
+        problem ``(W, q, mu)`` (coulomb's ``_Newton``; ``low_rank`` is None, or ``(G, weights)``
+        with ``W = G G^T + diag(weights)`` when :func:`low_rank_factor` finds ``G``), whose
         ``run(r, tol, max_iter, adaptive) -> (r, error, iterations, reason)`` brings
         ``measure``'s error to ``tol`` and whose ``with_q(q, measure)`` is the same runner on
         another ``q`` (the factorisation's ordering kept).
@@ -135,11 +173,13 @@ def proximal_point(
     best = (r, error)
     iterations = outer = 0
     runner = None  # the inner problems' Newton runner for the current rho
+    G = low_rank_factor(W)
     floor = RHO_MIN  # raised above a rho whose inner problem failed
     while error > tol and iterations < max_iter:
         if runner is None:  # a new rho: a new inner operator
             weights = rho * scale
-            runner = newton(_regularised(W, weights), q, mu, dim, measure)
+            low_rank = None if G is None else (G, weights)
+            runner = newton(_regularised(W, weights), q, mu, dim, measure, low_rank)
         q_k = q - weights * r
 
         def inner_measure(x, u, q_k=q_k):
