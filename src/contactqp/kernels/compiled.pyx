@@ -2618,6 +2618,26 @@ cdef inline double* _group_row(double* packed, const Py_ssize_t* parent,
     return packed + offset[root] + place[a] * (start[root + 1] - start[root]) * d
 
 
+cdef inline double _group_product(double* packed, const Py_ssize_t* parent,
+                                  const Py_ssize_t* start, const Py_ssize_t* offset,
+                                  const Py_ssize_t* place, const Py_ssize_t* members,
+                                  Py_ssize_t d, Py_ssize_t a, const double* r,
+                                  double* magnitude) noexcept nogil:
+    """``(W r)_a`` over the columns of ``a``'s group (``W`` is zero elsewhere), and
+    ``(|W| |r|)_a`` in ``magnitude``."""
+    cdef Py_ssize_t root = parent[a // d], p, j, c
+    cdef const double* row = _group_row(packed, parent, start, offset, place, d, a)
+    cdef double value = 0.0, size = 0.0, entry
+    for p in range(start[root], start[root + 1]):
+        j = members[p] * d
+        for c in range(d):
+            entry = row[(p - start[root]) * d + c]
+            value += entry * r[j + c]
+            size += fabs(entry) * fabs(r[j + c])
+    magnitude[0] = size
+    return value
+
+
 cdef Py_ssize_t _group_layout(Py_ssize_t* parent, Py_ssize_t* start, Py_ssize_t* members,
                               Py_ssize_t* cursor, Py_ssize_t* offset, Py_ssize_t* place,
                               Py_ssize_t nc, Py_ssize_t d, Py_ssize_t* groups,
@@ -2987,14 +3007,8 @@ cdef int _global_small(
                 for i in range(nc):
                     std[i] = 0  # -1: a contact of a group whose Newton run stopped short
                 for a in range(m):  # the whole problem's sizes at the start, u = W r + q
-                    value = 0.0
-                    root = parent[a // d]
-                    row = _group_row(Wg, parent, start, offset, place, d, a)
-                    for p in range(start[root], start[root + 1]):
-                        j = members[p] * d
-                        for c in range(d):
-                            value += row[(p - start[root]) * d + c] * rd[j + c]
-                    ul[a] = value + q[a]
+                    ul[a] = _group_product(Wg, parent, start, offset, place, members, d, a, rd,
+                                           &magnitude) + q[a]
                     whole_qq += q[a] * q[a]
                     whole_rr += rd[a] * rd[a]
                     whole_uu += ul[a] * ul[a]
@@ -3058,19 +3072,12 @@ cdef int _global_small(
                 # the condensed problem's certificate (the route's local message)
                 product = 0.0
                 wdiag = 0.0
-                for a in range(m):  # over the columns of a's group: W is zero elsewhere
-                    value = 0.0
-                    magnitude = 0.0
-                    root = parent[a // d]
-                    row = _group_row(Wg, parent, start, offset, place, d, a)
-                    for p in range(start[root], start[root + 1]):
-                        j = members[p] * d
-                        for c in range(d):
-                            value += row[(p - start[root]) * d + c] * rd[j + c]
-                            magnitude += fabs(row[(p - start[root]) * d + c]) * fabs(rd[j + c])
-                    ul[a] = value + q[a]
+                for a in range(m):
+                    ul[a] = _group_product(Wg, parent, start, offset, place, members, d, a, rd,
+                                           &magnitude) + q[a]
                     if a % d == 0 or mud[a // d] != 0.0:
                         product += magnitude * magnitude
+                    row = _group_row(Wg, parent, start, offset, place, d, a)
                     wdiag = max(wdiag, fabs(row[place[a]]))
                 L.per_contact = per_contact
                 _natural_error(&L, rd, ul, &residual, &error)
