@@ -237,7 +237,10 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--tol", type=float, default=1e-8, help="natural-map error (1e-8)")
     parser.add_argument(
-        "--repeats", type=int, default=5, help="rounds of timed solves after the first, 3 of each file in a row (5)"
+        "--repeats",
+        type=int,
+        default=5,
+        help="rounds of timed solves after the first, 3 of each file in a row (5)",
     )
     parser.add_argument(
         "--perturbed",

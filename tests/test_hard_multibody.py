@@ -152,7 +152,7 @@ def test_low_rank_factor_of_a_wall_is_its_w_and_none_where_w_is_not_low_rank():
 
 def test_low_rank_newton_step_is_the_lu_step():
     """On a proximal operator ``W + diag(w)`` of a wall, the step through ``G`` (Woodbury) is
-    the LU's to 1e-9 of its size, at a point with open, stick and slip contacts."""
+    the LU's to 1e-9 of its size, at a point where a third of the contacts carry no force."""
     problem = box_wall(6, 4, points=4, seed=1)
     W = np.asarray(problem.W)
     G = low_rank_factor(W)
