@@ -184,3 +184,21 @@ def test_proximal_stage_through_the_low_rank_factor_takes_the_same_steps(monkeyp
     assert with_factor.iterations == without.iterations
     size = np.abs(without.forces).max()
     np.testing.assert_allclose(with_factor.forces, without.forces, rtol=0, atol=1e-7 * size)
+
+
+def test_a_failed_first_round_on_a_low_rank_w_goes_to_the_proximal_stage(monkeypatch):
+    """On the whole problem (not the candidate sets' subproblems, which have no proximal
+    stage), a first round that failed (here cut to 2 iterations a run) on a ``W`` of low rank
+    goes straight to the proximal stage, which converges; with the factor switched off the
+    later rounds of Gauss-Seidel and Newton run first, as before."""
+    problem = box_wall(6, 4, points=4, seed=0)
+    monkeypatch.setattr(coulomb, "RUN_ITERATIONS", 2)
+    for low_rank in (True, False):
+        if not low_rank:
+            monkeypatch.setattr(proximal, "LOW_RANK_MIN", 10**9)
+        result = solve_coulomb(problem, tol=1e-8)
+        assert result.success and natural_map_error(problem, result.forces) <= 1e-8
+        whole = result.message.split("whole problem:")[-1]
+        assert ("no more rounds (W of low rank)" in whole) is low_rank
+        assert ("gauss-seidel" in whole) is not low_rank
+        assert "proximal from r = 0" in whole

@@ -78,7 +78,7 @@ from ..core.operators import Operator, is_sparse
 from ..errors import InvalidInputError
 from .local_global import certified_result, finish
 from .pgs import GaussSeidel
-from .proximal import proximal_point
+from .proximal import low_rank_factor, proximal_point
 
 __all__ = [
     "solve_coulomb",
@@ -398,7 +398,9 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None, proximal=True):
     """Newton, Levenberg-Marquardt, then (Gauss-Seidel, both Newton runs) up to 3 rounds on
     the FCLIB problem ``(W, q, mu)`` from ``r``, then, only if they all failed, proximal-point
     iterations from ``r = 0`` (:func:`~contactqp.methods.proximal.proximal_point`);
-    ``(r, iterations, stages)``.
+    ``(r, iterations, stages)``. With the proximal stage and a ``W`` of low rank
+    (:func:`~contactqp.methods.proximal.low_rank_factor`), a failed first round goes to it
+    directly.
 
     ``measure(r, u)`` is ``(residual, error)``, the convergence test (error <= ``tol``).
     ``first``: what the first Newton run returned when it was run already (by the compiled
@@ -438,6 +440,12 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None, proximal=True):
             break
         if iterations >= max_iter:
             stages.append(f"max_iter = {max_iter} reached")
+            break
+        if not round_ and proximal and low_rank_factor(W) is not None:
+            # a dense W of low rank (rigid bodies) whose first round failed: on the walls of
+            # tests/multibody_problems.py of 500 unknowns and more the later rounds never
+            # converged where the first had not, and cost the proximal stage's time again
+            stages.append("no more rounds (W of low rank)")
             break
     if proximal and error > tol and iterations < max_iter:
         # the last stage: proximal-point iterations from a cold start (the point where the
