@@ -32,7 +32,9 @@ freedoms):
 * a run stops when its best error has not halved in 20 iterations; a Levenberg-Marquardt run
   (``eta`` adapted to the success of full steps) then continues from the best point;
 * if that fails too, 100 nonsmooth Gauss-Seidel sweeps (:mod:`contactqp.methods.pgs`) and both
-  Newton runs again, in at most 3 rounds;
+  Newton runs again, in at most 3 rounds (one only on a dense ``W`` of low rank,
+  :func:`~contactqp.methods.proximal.low_rank_factor`: rigid bodies, where the later rounds
+  were not seen to converge where the first had not);
 * if every round failed, proximal-point iterations (:mod:`contactqp.methods.proximal`: Newton
   runs on ``W + rho D``, up to 1000 inner iterations) from a cold start ``r = 0`` (on walls of
   rigid boxes where the rounds failed, it converged from there on 7 of 9, from where the

@@ -65,7 +65,14 @@ import numpy as np
 from ..core.local_problem import cone_residual
 from ..core.operators import is_sparse
 
-__all__ = ["proximal_point", "RHO_START", "RHO_MIN", "RHO_MAX", "INNER_ITERATIONS"]
+__all__ = [
+    "proximal_point",
+    "low_rank_factor",
+    "RHO_START",
+    "RHO_MIN",
+    "RHO_MAX",
+    "INNER_ITERATIONS",
+]
 
 RHO_START = 1.0  # first weight of the proximal term, relative to the contacts' diagonal scale
 RHO_MIN, RHO_MAX = 1e-4, 1e6  # range of rho: W + rho D stays positive definite
