@@ -412,6 +412,7 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None, proximal=True):
     """
     newton = _Newton(W, q, mu, d, measure)
     gauss_seidel = None
+    factor = None  # W's low-rank factor, looked for once the first round has failed
     error, iterations, stages = math.inf, 0, []
     for round_ in range(ROUNDS):
         if round_:
@@ -443,19 +444,24 @@ def _rounds(W, q, mu, d, r, tol, max_iter, measure, first=None, proximal=True):
         if iterations >= max_iter:
             stages.append(f"max_iter = {max_iter} reached")
             break
-        if not round_ and proximal and low_rank_factor(W) is not None:
-            # a dense W of low rank (rigid bodies) whose first round failed: on the walls of
-            # tests/multibody_problems.py of 500 unknowns and more the later rounds never
-            # converged where the first had not, and cost the proximal stage's time again
-            stages.append("no more rounds (W of low rank)")
-            break
+        if not round_ and proximal:
+            factor = low_rank_factor(W)
+            if factor is not None:
+                # a dense W of low rank (rigid bodies) whose first round failed: on the walls
+                # of tests/multibody_problems.py of 500 unknowns and more the later rounds
+                # never converged where the first had not, and cost the proximal stage's
+                # time again
+                stages.append("no more rounds (W of low rank)")
+                break
     if proximal and error > tol and iterations < max_iter:
         # the last stage: proximal-point iterations from a cold start (the point where the
         # Newton runs stalled attracts them too, measured on the walls of rigid boxes of
         # tests/multibody_problems.py); the better of the two points is kept
         budget = min(PROXIMAL_ITERATIONS, max_iter - iterations)
         cold = np.zeros_like(r)
-        x, new, k, reason = proximal_point(W, q, mu, d, cold, tol, budget, measure, _Newton)
+        x, new, k, reason = proximal_point(
+            W, q, mu, d, cold, tol, budget, measure, _Newton, low_rank=factor
+        )  # the stage runs only after a failed first round, which looked for the factor
         iterations += k
         stages.append(f"proximal from r = 0 {k} it. ({_reached(new, tol, reason)})")
         if new < error:  # error: that of r, the best point of the last run
@@ -661,7 +667,16 @@ def solve_proximal(
     W = _working_W(problem, check_psd)
     shift, q, measure = _apex_form(problem, W, per_contact)
     r, _, iterations, reason = proximal_point(
-        W, q, problem.mu, problem.dim, r + shift, tol, max_iter, measure, _Newton
+        W,
+        q,
+        problem.mu,
+        problem.dim,
+        r + shift,
+        tol,
+        max_iter,
+        measure,
+        _Newton,
+        low_rank=low_rank_factor(W),
     )
     return finish(
         problem,

@@ -36,12 +36,12 @@ budget. From the point where the rounds stopped, 6 of the 9 converged (before th
 zero).
 
 Where ``W`` is dense and of low rank (rigid bodies: at most 6 per body, far below the contact
-unknowns), :func:`low_rank_factor` finds ``G`` with ``W = G G^T`` once, and each inner Newton
-step is solved through it (the Woodbury identity on ``A + B (G G^T + rho D)``: ``2 m k^2``
-flops for rank ``k``, against ``2 m^3 / 3`` for the LU of the block), with the same steps to
-rounding. On a wall of 48 boxes (1,080 unknowns, rank 288) the 182 inner iterations took
-1.3 s against 5.3 s; on one of 80 boxes (1,824 unknowns, rank 480) 2,000 took 46 s against
-151 s (both with one BLAS thread).
+unknowns), :func:`low_rank_factor` finds ``G`` with ``W = G G^T`` once (the caller passes it),
+and each inner Newton step is solved through it (the Woodbury identity on
+``A + B (G G^T + rho D)``: ``2 m k^2`` flops for rank ``k``, against ``2 m^3 / 3`` for the LU
+of the block), with the same steps to rounding. On a wall of 48 boxes (1,080 unknowns, rank
+288) the 182 inner iterations took 1.3 s against 5.3 s; on one of 80 boxes (1,824 unknowns,
+rank 480) 2,000 took 46 s against 151 s (both with one BLAS thread).
 
 Convergence and the best point are decided by the caller's ``measure`` of the problem as
 given, never by the inner problems' errors.
@@ -134,6 +134,8 @@ def proximal_point(
     max_iter: int,
     measure: Callable[[np.ndarray, np.ndarray], tuple[float, float]],
     newton: Callable,
+    *,
+    low_rank: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float, int, str]:
     """Proximal-point iterations on the FCLIB problem ``(W, q, mu)`` (no cohesion) from ``r``.
 
@@ -156,10 +158,13 @@ def proximal_point(
     newton : callable
         ``newton(W, q, mu, dim, measure, low_rank)``: a runner of Newton iterations on the
         problem ``(W, q, mu)`` (coulomb's ``_Newton``; ``low_rank`` is None, or ``(G, weights)``
-        with ``W = G G^T + diag(weights)`` when :func:`low_rank_factor` finds ``G``), whose
+        with ``W = G G^T + diag(weights)`` when ``low_rank`` is given here), whose
         ``run(r, tol, max_iter, adaptive) -> (r, error, iterations, reason)`` brings
         ``measure``'s error to ``tol`` and whose ``with_q(q, measure)`` is the same runner on
         another ``q`` (the factorisation's ordering kept).
+    low_rank : numpy.ndarray, optional
+        ``G`` with ``W = G G^T`` (:func:`low_rank_factor`): the inner steps are solved through
+        it; None, through the LU of their blocks.
 
     Returns
     -------
@@ -180,13 +185,12 @@ def proximal_point(
     best = (r, error)
     iterations = outer = 0
     runner = None  # the inner problems' Newton runner for the current rho
-    G = low_rank_factor(W)
     floor = RHO_MIN  # raised above a rho whose inner problem failed
     while error > tol and iterations < max_iter:
         if runner is None:  # a new rho: a new inner operator
             weights = rho * scale
-            low_rank = None if G is None else (G, weights)
-            runner = newton(_regularised(W, weights), q, mu, dim, measure, low_rank)
+            factor = None if low_rank is None else (low_rank, weights)
+            runner = newton(_regularised(W, weights), q, mu, dim, measure, factor)
         q_k = q - weights * r
 
         def inner_measure(x, u, q_k=q_k):
